@@ -1,0 +1,252 @@
+"""Physical effects the simulator can add, to make data with a hidden effect.
+
+Each effect stands for something real that a 3-DOF Abkowitz model fitted on calm-water data
+does not contain.  Names, units and direction conventions are those of the ``simulate``
+command's ``--effect NAME=VALUE`` option:
+
+``load``, ``load_dir``, ``load_arm``
+    A steady earth-fixed force (wind on the superstructure, a towline, a mooring) of magnitude
+    ``load`` (Prime II: force / (0.5 rho L d U0^2)) coming FROM the direction ``load_dir`` [deg,
+    clockwise from north], acting at ``load_arm`` x/L from midship.  In the body frame it
+    rotates with the heading, so the forces it causes vary with psi.
+``current``, ``current_dir``
+    A uniform steady current of ``current`` [m/s] flowing TOWARD ``current_dir`` [deg].  The hull
+    sees the velocity relative to the water, the record is over ground (as a GPS logs it): the
+    recorded u, v, x and y include the drift.
+``crossflow``
+    Quadratic cross-flow drag with drag coefficient C_D along the hull (strip theory):
+    Y' = -C_D int (v' + x' r') |v' + x' r'| dx', N' = -C_D int x' (v' + x' r') |...| dx' over
+    x' in [-1/2, 1/2].
+``prop_side_force``
+    A constant side force Y' (Prime II) at the propeller position x'_P, as a single-screw
+    propeller makes; it gives a yaw moment x'_P Y'.
+``rudder_offset``
+    A rudder-angle indicator offset [deg]: recorded angle = true angle + offset.  The rudder
+    programme is flown on the indicator (an autopilot commanding 10 deg gets 10 - offset deg).
+``noise``
+    Gaussian measurement noise with a standard deviation of ``noise`` times each channel's RMS
+    for u, v, r and delta (positions and heading get their own levels through
+    :func:`add_noise`), from ``numpy.random.default_rng(seed)``.
+``quantise``
+    Every recorded channel but time rounded to ``quantise`` significant figures (the MARIN
+    files carry three).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from .errors import SindyshipInputError
+from .mmg import MMGModel
+from .ships import Ship
+from .trajectory import Trajectory
+
+# Gauss-Legendre nodes for the cross-flow integral over x' in [-1/2, 1/2].
+_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(12)
+_NODES = 0.5 * _NODES
+_WEIGHTS = 0.5 * _WEIGHTS
+
+
+@dataclass(frozen=True)
+class Effects:
+    """Settings of the optional physical effects (all off by default).
+
+    Examples
+    --------
+    >>> effects = parse_effects(["load=0.002", "load_dir=90"])
+    >>> effects.load, effects.load_dir
+    (0.002, 90.0)
+    """
+
+    load: float = 0.0
+    load_dir: float = 0.0
+    load_arm: float = 0.0
+    current: float = 0.0
+    current_dir: float = 0.0
+    crossflow: float = 0.0
+    prop_side_force: float = 0.0
+    rudder_offset: float = 0.0
+    noise: float = 0.0
+    quantise: int = 0
+    seed: int = 0
+
+    def active(self) -> list[str]:
+        """Names of the effects switched on."""
+        main = ("load", "current", "crossflow", "prop_side_force", "rudder_offset", "noise",
+                "quantise")
+        return [name for name in main if getattr(self, name)]
+
+    def dynamics(self, ship: Ship) -> MMGModel:
+        """The MMG model of ``ship`` with the physical effects in its right-hand side."""
+        extra = []
+        if self.load:
+            extra.append(_steady_load(self.load, self.load_dir, self.load_arm))
+        if self.crossflow:
+            extra.append(_crossflow(self.crossflow))
+        if self.prop_side_force:
+            extra.append(_side_force(self.prop_side_force, ship.propeller.x_P))
+        current = (0.0, 0.0)
+        if self.current:
+            to = math.radians(self.current_dir)
+            current = (self.current * math.cos(to), self.current * math.sin(to))
+        return MMGModel(ship, extra_forces=tuple(extra),
+                        rudder_offset=math.radians(self.rudder_offset), current=current)
+
+    def record(self, trajectory: Trajectory, ship: Ship) -> Trajectory:
+        """What an instrument records of a simulated run: over-ground velocities, noise,
+        quantisation."""
+        data = trajectory.data.copy()
+        if self.current:
+            to = math.radians(self.current_dir)
+            north, east = self.current * math.cos(to), self.current * math.sin(to)
+            psi = data["psi"].to_numpy()
+            data["u"] = data["u"] + north * np.cos(psi) + east * np.sin(psi)
+            data["v"] = data["v"] - north * np.sin(psi) + east * np.cos(psi)
+        out = Trajectory(data, name=trajectory.name,
+                         meta={**trajectory.meta, "effects": self.as_dict()})
+        if self.noise:
+            levels = {c: self.noise * float(np.sqrt(np.nanmean(data[c] ** 2)))
+                      for c in ("u", "v", "r", "delta")}
+            out = add_noise(out, levels, seed=self.seed)
+        if self.quantise:
+            out = quantise(out, self.quantise)
+        return out
+
+    def as_dict(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)
+                if getattr(self, f.name) != f.default}
+
+
+def parse_effects(items: Iterable[str] | Mapping[str, float]) -> Effects:
+    """Effects from ``NAME=VALUE`` strings (the command line) or a mapping.
+
+    Raises
+    ------
+    SindyshipInputError
+        For an unknown name or a value that is not a finite number.
+    """
+    valid = {f.name: f.type for f in fields(Effects)}
+    pairs = items.items() if isinstance(items, Mapping) else (
+        _split(item) for item in items)
+    values: dict[str, float] = {}
+    for name, raw in pairs:
+        if name not in valid:
+            raise SindyshipInputError(
+                f"unknown effect {name!r}; choose from {', '.join(valid)} (e.g. --effect load=0.002)."
+            )
+        try:
+            value = float(raw)
+        except (TypeError, ValueError):
+            raise SindyshipInputError(
+                f"effect {name} needs a number, not {raw!r} (e.g. --effect {name}=0.5)."
+            ) from None
+        if not math.isfinite(value):
+            raise SindyshipInputError(f"effect {name} must be finite, not {raw!r}.")
+        if name in ("quantise", "seed"):
+            if value != int(value) or value < 0:
+                raise SindyshipInputError(f"effect {name} must be a whole number >= 0.")
+            value = int(value)
+        if name in ("noise", "crossflow") and value < 0:
+            raise SindyshipInputError(f"effect {name} must not be negative.")
+        values[name] = value
+    return Effects(**values)
+
+
+def _split(item: str) -> tuple[str, str]:
+    if "=" not in item:
+        raise SindyshipInputError(
+            f"effect {item!r} must be written NAME=VALUE (e.g. --effect current=0.5)."
+        )
+    name, raw = item.split("=", 1)
+    return name.strip(), raw.strip()
+
+
+def _steady_load(magnitude: float, from_deg: float, arm: float):
+    come_from = math.radians(from_deg)
+    north = -magnitude * math.cos(come_from)  # the force pushes away from where it comes from
+    east = -magnitude * math.sin(come_from)
+
+    def force(u, v, r, delta, psi):
+        c, s = np.cos(psi), np.sin(psi)
+        X = north * c + east * s
+        Y = -north * s + east * c
+        return X, Y, arm * Y
+
+    return force
+
+
+def _crossflow(c_d: float):
+    def force(u, v, r, delta, psi):
+        local = np.multiply.outer(_NODES, r) + v  # (nodes, ...) local sway velocity
+        drag = -c_d * local * np.abs(local)
+        Y = np.tensordot(_WEIGHTS, drag, axes=1)
+        N = np.tensordot(_WEIGHTS * _NODES, drag, axes=1)
+        return 0.0 * u, Y, N
+
+    return force
+
+
+def _side_force(Y_prop: float, x_P: float):
+    def force(u, v, r, delta, psi):
+        zero = 0.0 * u
+        return zero, zero + Y_prop, zero + Y_prop * x_P
+
+    return force
+
+
+def add_noise(trajectory: Trajectory, std: Mapping[str, float], *, seed: int) -> Trajectory:
+    """Gaussian noise with the given standard deviation per channel (SI), reproducible by seed.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> frame = pd.DataFrame({"t": [0.0, 1.0, 2.0], "u": [1.0, 1.0, 1.0]})
+    >>> a = add_noise(Trajectory(frame), {"u": 0.1}, seed=3)["u"]
+    >>> b = add_noise(Trajectory(frame), {"u": 0.1}, seed=3)["u"]
+    >>> bool((a == b).all()) and bool((a != 1.0).any())
+    True
+    """
+    rng = np.random.default_rng(seed)
+    data = trajectory.data.copy()
+    for column in sorted(std):
+        if column in data.columns and std[column] > 0:
+            data[column] = data[column] + rng.normal(0.0, std[column], len(data))
+    return Trajectory(data, name=trajectory.name, meta=dict(trajectory.meta))
+
+
+def quantise(trajectory: Trajectory, digits: int) -> Trajectory:
+    """Round every channel except time to ``digits`` significant figures."""
+    data = trajectory.data.copy()
+    for column in data.columns:
+        if column == "t":
+            continue
+        values = data[column].to_numpy(dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            mag = np.where(values == 0, 0, np.floor(np.log10(np.abs(values))))
+        factor = 10.0 ** (digits - 1 - mag)
+        data[column] = np.round(values * factor) / factor
+    return Trajectory(data, name=trajectory.name, meta=dict(trajectory.meta))
+
+
+def simulate_with_effects(ship: Ship, manoeuvres, effects: Effects | None = None, *,
+                          step: float | None = None) -> list[Trajectory]:
+    """Fly manoeuvres with the MMG model of ``ship`` and the given effects; return the records.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> from sindyship.manoeuvres import Manoeuvre
+    >>> (run,) = simulate_with_effects(load_ship("kcs"), [Manoeuvre("straight", duration=60)],
+    ...                                parse_effects(["current=1", "current_dir=90"]))
+    >>> round(float(run["y"][-1]), 3)  # 59 s drifting east at 1 m/s
+    59.0
+    """
+    from .manoeuvres import fly
+
+    effects = effects or Effects()
+    runs = fly(effects.dynamics(ship), manoeuvres, step=step)
+    return [effects.record(run, ship) for run in runs]

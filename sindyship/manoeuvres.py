@@ -1,0 +1,342 @@
+"""Standard manoeuvres, flying them, and their standard figures.
+
+A :class:`Manoeuvre` names a rudder programme (turning circle, zig-zag flown closed loop,
+stepped spiral, pull-out, straight run, seeded random rudder) and makes the
+:class:`~sindyship.simulation.RudderCommand` that the integrator follows.  :func:`fly` flies
+manoeuvres with any dynamics (the MMG model or an identified one) and returns
+:class:`~sindyship.trajectory.Trajectory` records in the measurement-CSV layout.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .errors import SindyshipInputError
+from .simulation import (
+    ConstantCommand,
+    RudderCommand,
+    SimulationResult,
+    StepCommand,
+    ZigZagCommand,
+    simulate_batch,
+)
+from .trajectory import Trajectory
+
+MANOEUVRE_KINDS = ("turning-circle", "zigzag", "spiral", "pull-out", "straight", "random")
+
+
+@dataclass(frozen=True)
+class Manoeuvre:
+    """A standard manoeuvre.
+
+    Parameters
+    ----------
+    kind : str
+        One of ``MANOEUVRE_KINDS``.
+    rudder : float
+        Rudder angle [deg]: the turning-circle or pull-out angle (sign gives the side), the
+        zig-zag amplitude, the largest spiral angle, the random sequence's largest angle.
+    check : float
+        Zig-zag heading check angle [deg].
+    first_sign : int
+        Zig-zag first rudder side: +1 starboard, -1 port.  For a spiral: +1 an inward spiral to
+        starboard (5, 10, ..., rudder deg), -1 an outward spiral to port (-rudder, ..., -5 deg).
+    duration : float
+        Length of the record [s]; samples at t = 0, dt, ..., duration - dt.
+    dt : float
+        Sample interval [s].
+    steps : int
+        Spiral: number of rudder steps; pull-out: ignored.
+    pull_out_time : float
+        Pull-out: time at which the rudder returns to zero [s].
+    hold : tuple of float
+        Random rudder: range of hold times [s].
+    seed : int
+        Random rudder: seed of ``numpy.random.default_rng``.
+    name : str
+        Name of the record (default: made from kind and angles).
+
+    Examples
+    --------
+    >>> Manoeuvre("zigzag", rudder=20, check=20).label
+    'zz20_20'
+    """
+
+    kind: str
+    rudder: float = 0.0
+    check: float = 0.0
+    first_sign: int = 1
+    duration: float = 3200.0
+    dt: float = 1.0
+    steps: int = 7
+    pull_out_time: float = 1000.0
+    hold: tuple[float, float] = (30.0, 120.0)
+    seed: int = 0
+    name: str = ""
+    meta: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        if self.kind not in MANOEUVRE_KINDS:
+            raise SindyshipInputError(
+                f"unknown manoeuvre {self.kind!r}; choose one of {', '.join(MANOEUVRE_KINDS)}."
+            )
+        if not (self.duration > 0 and self.dt > 0 and self.duration >= 2 * self.dt):
+            raise SindyshipInputError(
+                f"duration {self.duration} s and dt {self.dt} s must be positive with at least "
+                "two samples."
+            )
+        if self.kind == "zigzag" and (self.rudder <= 0 or self.check <= 0):
+            raise SindyshipInputError(
+                "a zig-zag needs a positive rudder amplitude and check angle (e.g. --rudder 20 "
+                "--check 20)."
+            )
+
+    @property
+    def label(self) -> str:
+        """A short name such as ``tc35_stbd``, ``zz10_10``, ``spiral_stbd``."""
+        if self.name:
+            return self.name
+        side = "stbd" if (self.rudder if self.kind in ("turning-circle", "pull-out")
+                          else self.first_sign) >= 0 else "port"
+        a = f"{abs(self.rudder):g}"
+        if self.kind == "turning-circle":
+            return f"tc{a}_{side}"
+        if self.kind == "zigzag":
+            suffix = "" if self.first_sign >= 0 else "_port"
+            return f"zz{a}_{self.check:g}{suffix}"
+        if self.kind == "spiral":
+            return f"spiral_{side}"
+        if self.kind == "pull-out":
+            return f"pullout{a}_{side}"
+        if self.kind == "random":
+            return f"random{a}_seed{self.seed}"
+        return "straight"
+
+    @property
+    def times(self) -> np.ndarray:
+        """Sample times [s]."""
+        return np.arange(int(round(self.duration / self.dt))) * self.dt
+
+    def command(self) -> RudderCommand:
+        """The commanded rudder programme (paper section 3.1 for the protocol's manoeuvres)."""
+        rad = math.radians
+        if self.kind == "straight":
+            return ConstantCommand(0.0)
+        if self.kind == "turning-circle":
+            return ConstantCommand(rad(self.rudder))
+        if self.kind == "zigzag":
+            return ZigZagCommand(rad(self.rudder), rad(self.check), self.first_sign)
+        if self.kind == "pull-out":
+            return StepCommand([0.0, self.pull_out_time], [rad(self.rudder), 0.0])
+        if self.kind == "spiral":
+            n = self.steps
+            angles = np.linspace(abs(self.rudder) / n, abs(self.rudder), n)
+            if self.first_sign < 0:
+                angles = -angles[::-1]
+            times = np.arange(n) * self.duration / n
+            return StepCommand(times, np.radians(angles))
+        rng = np.random.default_rng(self.seed)
+        times = [0.0]
+        while times[-1] < self.duration:
+            times.append(times[-1] + rng.uniform(*self.hold))
+        angles = rng.uniform(-abs(self.rudder), abs(self.rudder), len(times))
+        return StepCommand(times, np.radians(angles))
+
+
+def protocol_manoeuvres() -> dict[str, list[Manoeuvre]]:
+    """The reproduction protocol's training and held-out manoeuvres (paper section 3.1).
+
+    Returns
+    -------
+    dict
+        ``{"train": [8 manoeuvres], "test": [tc15_port, tc15_stbd, zz10_10]}``.
+    """
+    train = [
+        Manoeuvre("straight"),
+        Manoeuvre("turning-circle", rudder=35),
+        Manoeuvre("turning-circle", rudder=-35),
+        Manoeuvre("zigzag", rudder=35, check=10),
+        Manoeuvre("zigzag", rudder=20, check=20),
+        Manoeuvre("zigzag", rudder=15, check=15),
+        Manoeuvre("spiral", rudder=35, first_sign=1),
+        Manoeuvre("spiral", rudder=35, first_sign=-1),
+    ]
+    test = [
+        Manoeuvre("turning-circle", rudder=-15),
+        Manoeuvre("turning-circle", rudder=15),
+        Manoeuvre("zigzag", rudder=10, check=10),
+    ]
+    return {"train": train, "test": test}
+
+
+def initial_state(ship, u0: float | None = None) -> np.ndarray:
+    """The protocol's initial state: u = U0 (or ``u0``), everything else zero."""
+    return np.array([ship.U0 if u0 is None else u0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+
+
+def result_to_trajectory(result: SimulationResult, name: str, meta: dict | None = None
+                         ) -> Trajectory:
+    """A simulation result in the measurement-CSV layout (``delta`` and ``delta_c``)."""
+    s = result.states
+    frame = pd.DataFrame({
+        "t": result.t, "u": s[0], "v": s[1], "r": s[2], "x": s[3], "y": s[4], "psi": s[5],
+        "delta": s[6], "delta_c": result.delta_c,
+    })
+    info = dict(meta or {})
+    info["diverged_at"] = result.diverged_at
+    return Trajectory(frame, name=name, meta=info)
+
+
+def fly(dynamics, manoeuvres: Sequence[Manoeuvre], *, state0: np.ndarray | None = None,
+        step: float | None = None, check_divergence: bool = True) -> list[Trajectory]:
+    """Fly manoeuvres with a model (MMG or identified) and return their records.
+
+    Manoeuvres with equal sample times are integrated together as one batch.
+
+    Parameters
+    ----------
+    dynamics : object
+        Simulator dynamics (see :func:`sindyship.simulation.simulate_batch`).
+    manoeuvres : sequence of Manoeuvre
+    state0 : ndarray, optional
+        Initial state; default :func:`initial_state`.
+    step : float, optional
+        Runge-Kutta step [s].
+    check_divergence : bool
+        Stop and flag a diverging member (``meta["diverged_at"]``).
+
+    Returns
+    -------
+    list of Trajectory
+        In the order of ``manoeuvres``; a record whose simulation diverged holds NaN after
+        ``meta["diverged_at"]``.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> from sindyship.mmg import MMGModel
+    >>> (run,) = fly(MMGModel(load_ship("kcs")), [Manoeuvre("straight", duration=100)])
+    >>> round(float(run["u"][-1] / 12.348), 4)  # the straight-run equilibrium u' = 1.0001
+    1.0001
+    """
+    ship = dynamics.ship
+    s0 = initial_state(ship) if state0 is None else np.asarray(state0, dtype=float)
+    groups: dict[tuple, list[int]] = {}
+    for i, m in enumerate(manoeuvres):
+        groups.setdefault((m.duration, m.dt), []).append(i)
+    records: list[Trajectory | None] = [None] * len(manoeuvres)
+    for idx in groups.values():
+        t = manoeuvres[idx[0]].times
+        results = simulate_batch(dynamics, [manoeuvres[i].command() for i in idx], t, s0,
+                                 step=step, check_divergence=check_divergence)
+        for i, res in zip(idx, results, strict=True):
+            m = manoeuvres[i]
+            meta = {"manoeuvre": m.kind, "rudder_deg": m.rudder, "check_deg": m.check,
+                    "first_sign": m.first_sign, **m.meta}
+            records[i] = result_to_trajectory(res, m.label, meta)
+    return records  # type: ignore[return-value]
+
+
+# ---------------------------------------------------------------------------------------------
+# Standard figures
+# ---------------------------------------------------------------------------------------------
+def _execute_index(traj: Trajectory) -> int:
+    delta = traj.rudder
+    moved = np.flatnonzero(np.abs(delta - delta[0]) > math.radians(1.0))
+    cmd = traj["delta_c"] if traj.has("delta_c") else None
+    if cmd is not None:
+        moved_c = np.flatnonzero(np.abs(cmd - cmd[0]) > math.radians(1.0))
+        if moved_c.size and (not moved.size or moved_c[0] < moved[0]):
+            return int(moved_c[0])
+        if cmd[0] != 0.0 and abs(cmd[0]) > math.radians(1.0):
+            return 0
+    return int(moved[0]) if moved.size else 0
+
+
+def turning_figures(traj: Trajectory, L: float, *, execute: int | None = None) -> dict:
+    """Advance, transfer, tactical diameter, steady diameter, speed loss, time to 90 deg.
+
+    All measured from the rudder execute point (the first sample where the commanded, else
+    the actual, rudder differs from its initial value by more than 1 deg; sample 0 when the
+    command is already applied there), in ship lengths, for a turn to either side.
+
+    Returns
+    -------
+    dict
+        ``advance_L``, ``transfer_L``, ``tactical_diameter_L``, ``steady_diameter_L``,
+        ``speed_loss`` (1 - steady U / approach U), ``time_to_90_s``; NaN where the turn
+        never reached the heading change that defines a figure.
+    """
+    k0 = _execute_index(traj) if execute is None else execute
+    x, y, psi = traj["x"][k0:], traj["y"][k0:], traj["psi"][k0:]
+    t = traj.t[k0:]
+    psi0 = psi[0]
+    turn = np.sign(psi[-1] - psi0) or 1.0
+    dpsi = turn * (psi - psi0)
+    c, s = math.cos(psi0), math.sin(psi0)
+    along = (x - x[0]) * c + (y - y[0]) * s
+    across = turn * (-(x - x[0]) * s + (y - y[0]) * c)
+
+    def at(angle_deg: float, values: np.ndarray) -> float:
+        target = math.radians(angle_deg)
+        k = np.flatnonzero(dpsi >= target)
+        if not k.size:
+            return math.nan
+        k = int(k[0])
+        if k == 0:
+            return float(values[0])
+        w = (target - dpsi[k - 1]) / (dpsi[k] - dpsi[k - 1])
+        return float(values[k - 1] + w * (values[k] - values[k - 1]))
+
+    U = np.hypot(traj["u"][k0:], traj["v"][k0:])
+    steady = dpsi >= dpsi[-1] - 2 * math.pi if dpsi[-1] > 3 * math.pi else np.zeros_like(dpsi, bool)
+    if steady.any():
+        xs, ys = x[steady], y[steady]
+        diameter = float(np.hypot(xs.max() - xs.min(), ys.max() - ys.min()) / math.sqrt(2))
+        d_x = xs.max() - xs.min()
+        d_y = ys.max() - ys.min()
+        diameter = float(0.5 * (d_x + d_y))
+        speed_loss = float(1.0 - U[steady].mean() / U[0])
+    else:
+        diameter = math.nan
+        speed_loss = math.nan
+    return {
+        "advance_L": at(90.0, along) / L,
+        "transfer_L": at(90.0, across) / L,
+        "tactical_diameter_L": at(180.0, across) / L,
+        "steady_diameter_L": diameter / L,
+        "speed_loss": speed_loss,
+        "time_to_90_s": at(90.0, t - t[0]),
+    }
+
+
+def zigzag_figures(traj: Trajectory) -> dict:
+    """First and second overshoot angles [deg] and the period of a zig-zag [s].
+
+    The overshoot is the heading excursion beyond the check angle after each rudder
+    reversal; the period is the time between the first and third reversals.
+    """
+    psi = np.degrees(traj["psi"] - traj["psi"][0])
+    cmd = traj["delta_c"] if traj.has("delta_c") else traj.rudder
+    sign = np.sign(cmd)
+    reversals = np.flatnonzero(np.diff(sign) != 0) + 1
+    reversals = reversals[sign[reversals - 1] != 0]
+    overshoots = []
+    for a, b in zip(reversals[:-1], reversals[1:], strict=False):
+        seg = psi[a:b]
+        if sign[a - 1] > 0:
+            overshoots.append(float(seg.max() - psi[a]))
+        else:
+            overshoots.append(float(psi[a] - seg.min()))
+    t = traj.t
+    period = float(t[reversals[2]] - t[reversals[0]]) if len(reversals) >= 3 else math.nan
+    return {
+        "first_overshoot_deg": overshoots[0] if overshoots else math.nan,
+        "second_overshoot_deg": overshoots[1] if len(overshoots) > 1 else math.nan,
+        "period_s": period,
+    }

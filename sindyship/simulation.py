@@ -1,0 +1,515 @@
+"""Time integration of a manoeuvring model with a rudder servo and rudder commands.
+
+One integrator flies every model (the MMG simulator and every identified Abkowitz model) and
+every manoeuvre, so that a comparison between them differs only in the dynamics.  The state is
+``[u, v, r, x, y, psi, delta]`` in SI units (body-fixed u, v [m/s], yaw rate r [rad/s],
+earth-fixed x north and y east [m], heading psi [rad], actual rudder angle delta [rad]).
+
+Dynamics are any object with ``accelerations(u, v, r, delta, psi) -> (du/dt, dv/dt, dr/dt)``
+(vectorised over numpy arrays), a ``ship`` (for L, U0 and the servo) and optionally a
+``current`` (north, east) [m/s].  Several manoeuvres of one model are integrated together as
+a batch: the right-hand side is evaluated on arrays, one column per manoeuvre.
+
+The scheme is the classical fourth-order Runge-Kutta method on a fixed step that divides the
+sample interval.  Rudder commands are piecewise constant: a step is split exactly at a
+scheduled change (spiral steps, a random sequence, a pull-out) and at a heading event (the
+zig-zag check angle), located by cubic Hermite interpolation of the heading inside the step.
+A member whose state leaves the plausible range stops, and the time it diverged is reported
+(see :func:`diverged`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+N_STATE = 7
+
+
+# ---------------------------------------------------------------------------------------------
+# Rudder commands
+# ---------------------------------------------------------------------------------------------
+class RudderCommand:
+    """A piecewise-constant commanded rudder angle, possibly closed loop.
+
+    Subclasses implement :meth:`value`; scheduled changes are announced by
+    :meth:`next_change`, heading events by :meth:`event` and :meth:`on_event`.  A command is
+    reset at the start of every simulation, so one object can fly several times.
+    """
+
+    #: If True the rudder angle itself is prescribed (no servo): see :class:`PrescribedRudder`.
+    prescribed = False
+
+    def reset(self, state0: np.ndarray) -> None:
+        """Prepare for a new simulation starting from ``state0``."""
+
+    def value(self, t: float, state: np.ndarray) -> float:
+        """Commanded angle [rad] held from time ``t`` on."""
+        raise NotImplementedError
+
+    def next_change(self, t: float) -> float:
+        """The next scheduled time > t at which the command changes (inf if none)."""
+        return math.inf
+
+    def event(self, state: np.ndarray) -> float | None:
+        """A state function whose crossing of zero from below switches the command."""
+        return None
+
+    def on_event(self) -> None:
+        """Switch after an event."""
+
+
+@dataclass
+class ConstantCommand(RudderCommand):
+    """A constant commanded angle [rad] from t = 0 (a turning circle or a straight run)."""
+
+    angle: float
+
+    def value(self, t, state):
+        return self.angle
+
+
+@dataclass
+class StepCommand(RudderCommand):
+    """Commanded angles ``angles[k]`` [rad] held from ``times[k]`` [s] (times[0] is the start)."""
+
+    times: Sequence[float]
+    angles: Sequence[float]
+
+    def __post_init__(self):
+        self.times = np.asarray(self.times, dtype=float)
+        self.angles = np.asarray(self.angles, dtype=float)
+
+    def value(self, t, state):
+        k = int(np.searchsorted(self.times, t + 1e-9, side="right")) - 1
+        return float(self.angles[max(k, 0)])
+
+    def next_change(self, t):
+        k = int(np.searchsorted(self.times, t + 1e-9, side="right"))
+        return float(self.times[k]) if k < len(self.times) else math.inf
+
+
+@dataclass
+class ZigZagCommand(RudderCommand):
+    """Closed-loop zig-zag: rudder +-A, reversed when the heading change reaches +-C.
+
+    Parameters
+    ----------
+    rudder : float
+        Rudder amplitude A [rad].
+    check : float
+        Heading check angle C [rad].
+    first_sign : int
+        +1: first rudder to starboard (the heading then grows to +C); -1: to port.
+    """
+
+    rudder: float
+    check: float
+    first_sign: int = 1
+    _sign: int = field(default=1, init=False, repr=False)
+    _psi0: float = field(default=0.0, init=False, repr=False)
+
+    def reset(self, state0):
+        self._sign = 1 if self.first_sign >= 0 else -1
+        self._psi0 = float(state0[5])
+
+    def value(self, t, state):
+        return self._sign * self.rudder
+
+    def event(self, state):
+        return self._sign * (state[5] - self._psi0) - self.check
+
+    def on_event(self):
+        self._sign = -self._sign
+
+
+@dataclass
+class FeedbackCommand(RudderCommand):
+    """A command from a function ``f(t, state) -> angle [rad]``, held over each integration step."""
+
+    function: Callable[[float, np.ndarray], float]
+
+    def value(self, t, state):
+        return float(self.function(t, state))
+
+
+@dataclass
+class PrescribedRudder(RudderCommand):
+    """The rudder angle itself follows a record (linear interpolation), bypassing the servo."""
+
+    times: np.ndarray
+    angles: np.ndarray
+    prescribed = True
+
+    def __post_init__(self):
+        self.times = np.asarray(self.times, dtype=float)
+        self.angles = np.asarray(self.angles, dtype=float)
+        self._rate = np.diff(self.angles) / np.diff(self.times)
+
+    def value(self, t, state):
+        return float(np.interp(t, self.times, self.angles))
+
+    def rate(self, t: float) -> float:
+        k = int(np.clip(np.searchsorted(self.times, t + 1e-9, side="right") - 1, 0,
+                        len(self._rate) - 1))
+        return float(self._rate[k])
+
+    def next_change(self, t):
+        k = int(np.searchsorted(self.times, t + 1e-9, side="right"))
+        return float(self.times[k]) if k < len(self.times) else math.inf
+
+
+# ---------------------------------------------------------------------------------------------
+# Results
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class SimulationResult:
+    """States at the output times of one simulated manoeuvre.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Output times [s] (all requested times, also after a divergence).
+    states : ndarray, shape (7, N)
+        ``[u, v, r, x, y, psi, delta]``; NaN after a divergence.
+    delta_c : ndarray, shape (N,)
+        Commanded rudder angle held at each output time [rad].
+    diverged_at : float or None
+        Time of the first output sample where the state left the plausible range.
+    """
+
+    t: np.ndarray
+    states: np.ndarray
+    delta_c: np.ndarray
+    diverged_at: float | None = None
+
+    @property
+    def valid(self) -> np.ndarray:
+        """Mask of the samples before any divergence."""
+        if self.diverged_at is None:
+            return np.ones(self.t.shape, dtype=bool)
+        return self.t < self.diverged_at
+
+
+def diverged(state: np.ndarray, L: float, U0: float) -> np.ndarray:
+    """Whether each member's state is implausible (protocol's divergence rule).
+
+    A state has diverged when it is not finite, u' = u / U0 leaves (0, 2), |v'| > 1 or
+    |r'| = |r| L / U0 > 2.
+    """
+    u = state[0] / U0
+    v = state[1] / U0
+    r = state[2] * L / U0
+    finite = np.all(np.isfinite(state), axis=0)
+    with np.errstate(invalid="ignore"):
+        bad = (u <= 0.0) | (u >= 2.0) | (np.abs(v) > 1.0) | (np.abs(r) > 2.0)
+    return ~finite | bad
+
+
+# ---------------------------------------------------------------------------------------------
+# Integration
+# ---------------------------------------------------------------------------------------------
+def _hermite(y0, f0, y1, f1, h, theta):
+    """Cubic Hermite interpolation on a step of length h at fraction theta."""
+    t2 = theta * theta
+    t3 = t2 * theta
+    return ((2 * t3 - 3 * t2 + 1) * y0 + (t3 - 2 * t2 + theta) * h * f0
+            + (-2 * t3 + 3 * t2) * y1 + (t3 - t2) * h * f1)
+
+
+class _Integrator:
+    """Classical RK4 for one dynamics object and a batch of rudder commands.
+
+    Discontinuities are never stepped over: a step is split at scheduled command changes, at
+    command events (zig-zag check angles) and where the dynamics change branch (the MMG rudder's
+    port/starboard flow straightening factor, switching with the sign of beta_R).  Inside a
+    (sub)step the command and the branch are frozen, so every piece is smooth and the scheme
+    keeps its fourth order.
+    """
+
+    def __init__(self, dynamics, commands: Sequence[RudderCommand]):
+        self.dynamics = dynamics
+        ship = dynamics.ship
+        self.T = max(ship.servo.T_R * ship.time_scale, 1e-9)
+        self.rate_max = math.radians(ship.servo.rate_max)
+        self.delta_max = math.radians(ship.servo.delta_max)
+        cur = getattr(dynamics, "current", (0.0, 0.0))
+        self.current = (float(cur[0]), float(cur[1]))
+        self.switching = getattr(dynamics, "switching", None)
+        self.commands = list(commands)
+        self.prescribed = np.array([c.prescribed for c in self.commands])
+
+    def branch(self, y):
+        """Sign branch of the dynamics' switching function (None if it has none)."""
+        if self.switching is None:
+            return None
+        return self.switching(y) > 0.0
+
+    def rhs(self, t, y, delta_c, members, branch):
+        """Time derivative of the state columns ``y`` (7, k) for the given members."""
+        u, v, r, _x, _y, psi, delta = y
+        a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, delta, psi, branch=branch)
+        c, s = np.cos(psi), np.sin(psi)
+        target = np.minimum(np.maximum(delta_c, -self.delta_max), self.delta_max)
+        ddelta = np.minimum(np.maximum((target - delta) / self.T, -self.rate_max), self.rate_max)
+        if self.prescribed[members].any():
+            for j, m in enumerate(members):
+                if self.prescribed[m]:
+                    ddelta[j] = self.commands[m].rate(t)
+        out = np.empty_like(y)
+        out[0] = a_u
+        out[1] = a_v
+        out[2] = a_r
+        out[3] = u * c - v * s + self.current[0]
+        out[4] = u * s + v * c + self.current[1]
+        out[5] = r
+        out[6] = ddelta
+        return out
+
+    def step(self, t, y, h, delta_c, members, branch, f0=None):
+        k1 = self.rhs(t, y, delta_c, members, branch) if f0 is None else f0
+        k2 = self.rhs(t + 0.5 * h, y + 0.5 * h * k1, delta_c, members, branch)
+        k3 = self.rhs(t + 0.5 * h, y + 0.5 * h * k2, delta_c, members, branch)
+        k4 = self.rhs(t + h, y + h * k3, delta_c, members, branch)
+        return y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4), k1
+
+
+def default_step(ship) -> float:
+    """Default Runge-Kutta step [s]: 0.2 L / U0 (3.7 s for the KCS).
+
+    With it, halving the step moves no position of the protocol's manoeuvres by more than
+    1e-4 L (``benchmarks/bench_simulate.py`` measures it).
+    """
+    return 0.2 * ship.time_scale
+
+
+def simulate_batch(
+    dynamics,
+    commands: Sequence[RudderCommand],
+    t: np.ndarray,
+    state0: np.ndarray,
+    *,
+    step: float | None = None,
+    check_divergence: bool = True,
+) -> list[SimulationResult]:
+    """Fly several manoeuvres of one model together.
+
+    Parameters
+    ----------
+    dynamics : object
+        Provides ``ship`` and ``accelerations(u, v, r, delta, psi, branch=None)``; optionally
+        ``switching(state)`` (a function whose sign selects a branch of a discontinuous
+        right-hand side) and ``current`` (north, east) [m/s].
+    commands : sequence of RudderCommand
+        One per manoeuvre.
+    t : ndarray
+        Increasing output times [s]; the first is the initial time.
+    state0 : ndarray, shape (7,) or (7, B)
+        Initial state(s), SI.
+    step : float, optional
+        Runge-Kutta step [s]; default :func:`default_step`.  States at output times inside a
+        step come from the step's cubic Hermite interpolant.
+    check_divergence : bool
+        Stop a member whose state leaves the plausible range (:func:`diverged`) at an output
+        time; its later samples are NaN and ``diverged_at`` holds that time.
+
+    Returns
+    -------
+    list of SimulationResult
+        One per command, in order.
+    """
+    t = np.asarray(t, dtype=float)
+    n_out = len(t)
+    n_members = len(commands)
+    y = np.array(state0, dtype=float).reshape(N_STATE, -1)
+    if y.shape[1] == 1 and n_members > 1:
+        y = np.repeat(y, n_members, axis=1)
+    if y.shape[1] != n_members:
+        raise ValueError("state0 must have one column per command")
+    if n_out > 1 and np.any(np.diff(t) <= 0):
+        raise ValueError("output times must increase")
+    integ = _Integrator(dynamics, commands)
+    ship = dynamics.ship
+    h_max = float(step) if step is not None else default_step(ship)
+    for j, cmd in enumerate(commands):
+        cmd.reset(y[:, j])
+        if cmd.prescribed:
+            y[6, j] = cmd.value(t[0], y[:, j])
+    out = np.full((N_STATE, n_out, n_members), np.nan)
+    out_cmd = np.full((n_out, n_members), np.nan)
+    diverged_at: list[float | None] = [None] * n_members
+    active = np.ones(n_members, dtype=bool)
+    out[:, 0, :] = y
+    out_cmd[0] = [c.value(t[0], y[:, j]) for j, c in enumerate(commands)]
+    if check_divergence:
+        for j in np.flatnonzero(diverged(y, ship.L, ship.U0)):
+            diverged_at[j] = float(t[0])
+            active[j] = False
+    time = float(t[0])
+    t_end = float(t[-1])
+    k_next = 1
+    fsal = _FirstSameAsLast(n_members)
+    with np.errstate(all="ignore"):
+        while k_next < n_out and active.any():
+            h = min(h_max, t_end - time)
+            members = np.flatnonzero(active)
+            t_new = time + h
+            k_stop = int(np.searchsorted(t, t_new + 1e-9 * max(1.0, h), side="right"))
+            samples = range(k_next, k_stop)
+            y = _advance(integ, commands, time, y, h, members, t, samples, out, out_cmd, fsal)
+            time = t_new
+            k_next = k_stop
+            if check_divergence and len(samples):
+                block = out[:, samples.start:samples.stop][:, :, members]
+                bad = diverged(block.reshape(N_STATE, -1), ship.L, ship.U0).reshape(
+                    len(samples), len(members))
+                for idx in np.flatnonzero(bad.any(axis=0)):
+                    j = members[idx]
+                    k_bad = samples.start + int(np.argmax(bad[:, idx]))
+                    diverged_at[j] = float(t[k_bad])
+                    out[:, k_bad:, j] = np.nan
+                    out_cmd[k_bad:, j] = np.nan
+                    active[j] = False
+    return [SimulationResult(t=t.copy(), states=out[:, :, j], delta_c=out_cmd[:, j],
+                             diverged_at=diverged_at[j]) for j in range(n_members)]
+
+
+class _FirstSameAsLast:
+    """Right-hand sides at the end of the last step, reused at the start of the next one."""
+
+    def __init__(self, n_members: int):
+        self.f = np.zeros((N_STATE, n_members))
+        self.delta_c = np.full(n_members, np.nan)
+        self.branch = np.zeros(n_members, dtype=bool)
+        self.valid = np.zeros(n_members, dtype=bool)
+
+    def start(self, integ, time, y_start, delta_c, members, branch):
+        """Derivatives at the step start, computing only those not cached."""
+        ok = self.valid[members] & (self.delta_c[members] == delta_c)
+        if branch is not None:
+            ok &= self.branch[members] == branch
+        f0 = self.f[:, members]
+        if not ok.all():
+            need = ~ok
+            f0[:, need] = integ.rhs(time, y_start[:, need], delta_c[need], members[need],
+                                    None if branch is None else branch[need])
+        return f0
+
+    def store(self, members, f_end, delta_c, branch):
+        self.f[:, members] = f_end
+        self.delta_c[members] = delta_c
+        if branch is not None:
+            self.branch[members] = branch
+        self.valid[members] = True
+
+
+def _advance(integ: _Integrator, commands, time, y, h, members, t_out, samples, out, out_cmd,
+             fsal):
+    """One RK4 step of length h for the active members, splitting at discontinuities.
+
+    Writes the states at the output times ``t_out[samples]`` (inside the step) into ``out``.
+    """
+    y_start = y[:, members]
+    delta_c = np.array([commands[j].value(time, y[:, j]) for j in members])
+    branch = integ.branch(y_start)
+    f_start = fsal.start(integ, time, y_start, delta_c, members, branch)
+    y_end, _ = integ.step(time, y_start, h, delta_c, members, branch, f0=f_start)
+    y = y.copy()
+    y[:, members] = y_end
+    tol = 1e-9 * max(1.0, h)
+    flipped = None if branch is None else integ.branch(y_end) != branch
+    split = []
+    for idx, j in enumerate(members):
+        cmd = commands[j]
+        if flipped is not None and flipped[idx]:
+            split.append(idx)
+            continue
+        if cmd.next_change(time) < time + h - tol:
+            split.append(idx)
+            continue
+        g_end = cmd.event(y_end[:, idx])
+        if g_end is not None and g_end >= 0.0:
+            split.append(idx)
+    smooth = np.setdiff1d(np.arange(len(members)), split)
+    if smooth.size:
+        sub_branch = None if branch is None else branch[smooth]
+        f_end = integ.rhs(time + h, y_end[:, smooth], delta_c[smooth], members[smooth],
+                          sub_branch)
+        fsal.store(members[smooth], f_end, delta_c[smooth], sub_branch)
+        for k in samples:
+            theta = (t_out[k] - time) / h
+            out[:, k, members[smooth]] = _hermite(y_start[:, smooth], f_start[:, smooth],
+                                                  y_end[:, smooth], f_end, h, theta)
+            out_cmd[k, members[smooth]] = delta_c[smooth]
+    for idx in split:
+        j = members[idx]
+        y[:, j] = _advance_one(integ, commands[j], j, time, h, y_start[:, idx], t_out, samples,
+                               out, out_cmd)
+        fsal.valid[j] = False
+    return y
+
+
+def _advance_one(integ, cmd, j, time, h, y0, t_out, samples, out, out_cmd):
+    """Advance one member over [time, time + h], stopping at every discontinuity."""
+    col = np.array([j])
+    t_end = time + h
+    tol = 1e-9 * max(1.0, h)
+    y = y0.reshape(N_STATE, 1)
+    for _ in range(64):  # a bounded number of switches per step
+        remaining = t_end - time
+        if remaining <= tol:
+            break
+        delta_c = np.array([cmd.value(time, y[:, 0])])
+        branch = integ.branch(y)
+        t_change = cmd.next_change(time)
+        h_try = min(remaining, t_change - time) if t_change < t_end - tol else remaining
+        y_try, f0 = integ.step(time, y, h_try, delta_c, col, branch)
+        f1 = integ.rhs(time + h_try, y_try, delta_c, col, branch)
+        theta, kind = 1.0, "change" if h_try < remaining else None
+        g_end = cmd.event(y_try[:, 0])
+        if g_end is not None and g_end >= 0.0:
+            theta = _bisect(lambda s: cmd.event(s) >= 0.0, y, f0, y_try, f1, h_try)
+            kind = "event"
+        if branch is not None:
+            def flipped(s, b=bool(branch[0])):
+                return bool(integ.branch(s.reshape(N_STATE, 1))[0]) != b
+
+            if flipped(y_try[:, 0]):
+                theta_b = _bisect(flipped, y, f0, y_try, f1, h_try)
+                if theta_b < theta:
+                    theta, kind = theta_b, "branch"
+        h_taken = theta * h_try
+        if theta < 1.0:
+            y_new, _ = integ.step(time, y, h_taken, delta_c, col, branch, f0=f0)
+            f1 = integ.rhs(time + h_taken, y_new, delta_c, col, branch)
+        else:
+            y_new = y_try
+        for k in samples:
+            if time - tol <= t_out[k] <= time + h_taken + tol and h_taken > 0:
+                s = (t_out[k] - time) / h_taken
+                out[:, k, j] = _hermite(y[:, 0], f0[:, 0], y_new[:, 0], f1[:, 0], h_taken, s)
+                out_cmd[k, j] = delta_c[0]
+        time += h_taken
+        y = y_new
+        if kind == "event":
+            cmd.on_event()
+        if kind is None:
+            break
+    return y[:, 0]
+
+
+def _bisect(crossed, y0, f0, y1, f1, h) -> float:
+    """Smallest fraction of a step at which ``crossed(state)`` becomes true (Hermite states)."""
+    if crossed(y0[:, 0]):
+        return 0.0
+    lo, hi = 0.0, 1.0
+    while hi - lo > 1e-12:
+        mid = 0.5 * (lo + hi)
+        if crossed(_hermite(y0[:, 0], f0[:, 0], y1[:, 0], f1[:, 0], h, mid)):
+            hi = mid
+        else:
+            lo = mid
+    return hi

@@ -1,0 +1,162 @@
+"""Regression targets by inverse dynamics (paper eq. 14 and 16).
+
+The Abkowitz model (eq. 14) in Prime I units is
+
+    M a' = F'(du, v', r', delta) + C'(u', v', r')
+
+with the mass matrix M of added-mass derivatives (Table 6) and the Coriolis terms C' of the
+reproduction protocol (rigid body plus added mass, with the Munk moment, on the right-hand
+side).  Given measured velocities, the accelerations a' come from finite differences, and the
+hydrodynamic forces F' = M a' - C' are the regression targets of eq. 16, one per degree of
+freedom.  Everything here is non-dimensional in Prime I with the constant design speed U0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import SindyshipInputError
+from .ships import Ship
+from .trajectory import Trajectory
+
+DOFS = ("X", "Y", "N")
+DERIVATIVE_METHODS = ("five-point", "savgol")
+
+
+def abkowitz_mass_matrix(ship: Ship) -> np.ndarray:
+    """Mass matrix of paper eq. 14, Prime I.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> M = abkowitz_mass_matrix(load_ship("kcs"))
+    >>> [round(float(x) * 1e5, 2) for x in M.diagonal()]
+    [885.32, 1587.92, 96.68]
+    """
+    p = ship.prime_i_inertia()
+    m, mxg = p["m"], p["m"] * p["x_G"]
+    return np.array([
+        [m - p["X_udot"], 0.0, 0.0],
+        [0.0, m - p["Y_vdot"], mxg - p["Y_rdot"]],
+        [0.0, mxg - p["N_vdot"], p["I_zz"] - p["N_rdot"]],
+    ])
+
+
+def coriolis(ship: Ship, u, v, r) -> tuple:
+    """Right-hand-side Coriolis and centripetal terms, rigid body plus added mass (Prime I).
+
+    X'_C = (m' - Y'_vdot) v' r' + (m'x'_G - Y'_rdot) r'^2,
+    Y'_C = -(m' - X'_udot) u' r',
+    N'_C = -(m'x'_G - Y'_rdot) u' r' - (X'_udot - Y'_vdot) u' v'  (Fossen 2011, with the Munk
+    moment), with u' the total surge speed over U0.
+    """
+    p = ship.prime_i_inertia()
+    m, mxg = p["m"], p["m"] * p["x_G"]
+    X = (m - p["Y_vdot"]) * v * r + (mxg - p["Y_rdot"]) * r * r
+    Y = -(m - p["X_udot"]) * u * r
+    N = -(mxg - p["Y_rdot"]) * u * r - (p["X_udot"] - p["Y_vdot"]) * u * v
+    return X, Y, N
+
+
+def five_point_derivative(y: np.ndarray, dt: float) -> np.ndarray:
+    """Derivative by 5-point finite differences: forward at the first two samples, central
+    inside, backward at the last two (paper section 3.2); fourth-order accurate.
+
+    Examples
+    --------
+    >>> t = np.arange(10.0)
+    >>> np.allclose(five_point_derivative(t**3, 1.0), 3 * t**2)
+    True
+    """
+    y = np.asarray(y, dtype=float)
+    n = len(y)
+    if n < 5:
+        raise SindyshipInputError(
+            f"a record needs at least 5 samples for 5-point differences, not {n}."
+        )
+    d = np.empty(n)
+    d[2:-2] = (y[:-4] - 8 * y[1:-3] + 8 * y[3:-1] - y[4:]) / 12.0
+    d[0] = (-25 * y[0] + 48 * y[1] - 36 * y[2] + 16 * y[3] - 3 * y[4]) / 12.0
+    d[1] = (-3 * y[0] - 10 * y[1] + 18 * y[2] - 6 * y[3] + y[4]) / 12.0
+    d[-1] = (25 * y[-1] - 48 * y[-2] + 36 * y[-3] - 16 * y[-4] + 3 * y[-5]) / 12.0
+    d[-2] = (3 * y[-1] + 10 * y[-2] - 18 * y[-3] + 6 * y[-4] - y[-5]) / 12.0
+    return d / dt
+
+
+def derivative(y: np.ndarray, dt: float, method: str = "five-point", window: float = 21.0,
+               order: int = 3) -> np.ndarray:
+    """Time derivative of a uniformly sampled channel.
+
+    Parameters
+    ----------
+    method : {"five-point", "savgol"}
+        5-point differences (noise-free data), or a Savitzky-Golay smoothed derivative
+        (noisy data) over ``window`` seconds with polynomial ``order``.
+    """
+    if method == "five-point":
+        return five_point_derivative(y, dt)
+    if method == "savgol":
+        from scipy.signal import savgol_filter
+
+        n = max(int(round(window / dt)) | 1, order + 2 | 1)
+        n = min(n, len(y) - (1 - len(y) % 2))
+        if n <= order:
+            raise SindyshipInputError(
+                f"the Savitzky-Golay window of {window} s is too short for order {order}."
+            )
+        return savgol_filter(np.asarray(y, dtype=float), n, order, deriv=1, delta=dt,
+                             mode="interp")
+    raise SindyshipInputError(
+        f"unknown derivative method {method!r}; choose one of {', '.join(DERIVATIVE_METHODS)}."
+    )
+
+
+def smoothed_states(traj: Trajectory, method: str = "five-point", window: float = 21.0,
+                    order: int = 3) -> dict[str, np.ndarray]:
+    """u, v, r smoothed consistently with their derivative (unchanged for five-point)."""
+    out = {c: traj[c] for c in ("u", "v", "r")}
+    if method == "savgol":
+        from scipy.signal import savgol_filter
+
+        dt = traj.dt
+        n = max(int(round(window / dt)) | 1, order + 2 | 1)
+        n = min(n, traj.n_samples - (1 - traj.n_samples % 2))
+        out = {c: savgol_filter(v, n, order, mode="interp") for c, v in out.items()}
+    return out
+
+
+def regression_targets(traj: Trajectory, ship: Ship, *, method: str = "five-point",
+                       window: float = 21.0, order: int = 3) -> dict[str, np.ndarray]:
+    """Hydrodynamic forces F' = M a' - C' of paper eq. 16 for one record (Prime I).
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A uniformly sampled record (SI).
+    ship : Ship
+        Gives L, U0 and the Prime I inertia (paper Table 6).
+    method, window, order
+        Derivative estimate (:func:`derivative`).
+
+    Returns
+    -------
+    dict
+        ``{"X": ..., "Y": ..., "N": ...}`` arrays over the samples.
+    """
+    L, U0 = ship.L, ship.U0
+    dt = traj.dt
+    states = smoothed_states(traj, method, window, order)
+    u = states["u"] / U0
+    v = states["v"] / U0
+    r = states["r"] * L / U0
+    t_scale = L / U0
+    du = derivative(traj["u"] / U0, dt / t_scale, method, window / t_scale, order)
+    dv = derivative(traj["v"] / U0, dt / t_scale, method, window / t_scale, order)
+    dr = derivative(traj["r"] * L / U0, dt / t_scale, method, window / t_scale, order)
+    M = abkowitz_mass_matrix(ship)
+    X_C, Y_C, N_C = coriolis(ship, u, v, r)
+    return {
+        "X": M[0, 0] * du - X_C,
+        "Y": M[1, 1] * dv + M[1, 2] * dr - Y_C,
+        "N": M[2, 1] * dv + M[2, 2] * dr - N_C,
+    }
