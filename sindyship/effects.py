@@ -136,7 +136,8 @@ def parse_effects(items: Iterable[str] | Mapping[str, float]) -> Effects:
     for name, raw in pairs:
         if name not in valid:
             raise SindyshipInputError(
-                f"unknown effect {name!r}; choose from {', '.join(valid)} (e.g. --effect load=0.002)."
+                f"unknown effect {name!r}; choose from {', '.join(valid)} "
+                "(e.g. --effect load=0.002)."
             )
         try:
             value = float(raw)

@@ -96,7 +96,8 @@ class Propeller:
     x_P : float
         Longitudinal position x/L (where a propeller side force acts).
     wake_model : str
-        ``"constant"`` (w = w_P0) or ``"drift"`` (w = w_P0 exp(-4 beta_P^2), beta_P = beta - x'_P r').
+        ``"constant"`` (w = w_P0) or ``"drift"`` (w = w_P0 exp(-4 beta_P^2) with
+        beta_P = beta - x'_P r').
     K_T : tuple of float
         Open-water thrust coefficient K_T = a0 + a1 J + a2 J^2 (eq. 5).
     """
@@ -327,7 +328,8 @@ def _group(cls: type, table: Any, section: str, source: str) -> Any:
                     f"{source}: [{section}] K_T must be a list of three numbers [a0, a1, a2]."
                 )
             continue
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        number = isinstance(value, int | float) and not isinstance(value, bool)
+        if not number or not math.isfinite(value):
             raise SindyshipInputError(
                 f"{source}: [{section}] {key} must be a finite number, not {value!r}."
             )

@@ -239,6 +239,8 @@ class _Integrator:
         cur = getattr(dynamics, "current", (0.0, 0.0))
         self.current = (float(cur[0]), float(cur[1]))
         self.switching = getattr(dynamics, "switching", None)
+        # A model identified on the commanded angle takes the command as its rudder input.
+        self.rudder_input = getattr(dynamics, "rudder_input", "actual")
         self.commands = list(commands)
         self.prescribed = np.array([c.prescribed for c in self.commands])
 
@@ -251,7 +253,8 @@ class _Integrator:
     def rhs(self, t, y, delta_c, members, branch):
         """Time derivative of the state columns ``y`` (7, k) for the given members."""
         u, v, r, _x, _y, psi, delta = y
-        a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, delta, psi, branch=branch)
+        rudder = delta_c if self.rudder_input == "commanded" else delta
+        a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, rudder, psi, branch=branch)
         c, s = np.cos(psi), np.sin(psi)
         target = np.minimum(np.maximum(delta_c, -self.delta_max), self.delta_max)
         ddelta = np.minimum(np.maximum((target - delta) / self.T, -self.rate_max), self.rate_max)
@@ -278,12 +281,13 @@ class _Integrator:
 
 
 def default_step(ship) -> float:
-    """Default Runge-Kutta step [s]: 0.2 L / U0 (3.7 s for the KCS).
+    """Default Runge-Kutta step [s]: 0.1 L / U0 (1.86 s for the KCS), and at most a quarter of
+    the rudder servo's time constant.
 
     With it, halving the step moves no position of the protocol's manoeuvres by more than
     1e-4 L (``benchmarks/bench_simulate.py`` measures it).
     """
-    return 0.2 * ship.time_scale
+    return min(0.1, 0.25 * ship.servo.T_R) * ship.time_scale
 
 
 def simulate_batch(

@@ -1,0 +1,153 @@
+"""Fly a model the way a record was flown, and measure how far apart they end (Table 10).
+
+A record is recognised as a zig-zag when its commanded rudder (else its rudder) takes values
++-A (|A| >= 1 deg, spread <= 0.5 deg) with at least two reversals, each at a sample where
+|psi - psi(0)| is within 1 deg of a common check angle C; it is then flown closed loop with A
+and C rounded to 0.1 deg and the recorded first rudder sign (replaying a zig-zag's rudder
+open loop is not a zig-zag test: small heading errors grow without bound).  Any other record
+replays its commanded rudder through the servo, or its actual rudder directly if that is all
+it has.  Every flight starts from the record's first row.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from .manoeuvres import result_to_trajectory
+from .simulation import PrescribedRudder, StepCommand, ZigZagCommand, simulate_batch
+from .trajectory import Trajectory
+
+
+def detect_zigzag(record: Trajectory) -> tuple[float, float, int] | None:
+    """``(rudder_deg, check_deg, first_sign)`` if the record is a zig-zag, else None.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> from sindyship.mmg import MMGModel
+    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> (run,) = fly(MMGModel(load_ship("kcs")), [Manoeuvre("zigzag", rudder=20, check=20,
+    ...                                                        duration=600)])
+    >>> detect_zigzag(run)
+    (20.0, 20.0, 1)
+    """
+    command = record["delta_c"] if record.has("delta_c") else record.rudder
+    cmd = np.degrees(command)
+    moving = np.flatnonzero(np.abs(cmd) >= 1.0)
+    if moving.size == 0:
+        return None
+    values = cmd[moving[0]:]
+    magnitude = np.abs(values)
+    if magnitude.min() < 1.0 or magnitude.max() - magnitude.min() > 0.5:
+        return None
+    sign = np.sign(values)
+    reversals = np.flatnonzero(np.diff(sign) != 0) + 1 + moving[0]
+    if len(reversals) < 2:
+        return None
+    psi = np.degrees(record["psi"] - record["psi"][0])
+    at_reversal = np.abs(psi[reversals])
+    before = np.abs(psi[reversals - 1])
+    if at_reversal.max() - at_reversal.min() > 2.0:
+        return None
+    rudder = round(float(magnitude.mean()), 1)
+    return rudder, _check_angle(before.max(), at_reversal.min()), int(sign[0])
+
+
+def _check_angle(low: float, high: float) -> float:
+    """The check angle the samples allow: the roundest value in (low, high], to 0.1 deg.
+
+    The rudder reverses at the first sample past the check angle C, so C lies between the
+    heading change one sample before each reversal and the one at it.
+    """
+    if high <= low:
+        return round(0.5 * (low + high), 1)
+    for step in (5.0, 1.0, 0.5, 0.1):
+        candidate = math.ceil(low / step + 1e-9) * step
+        if candidate <= high:
+            return round(candidate, 1)
+    return round(0.5 * (low + high), 1)
+
+
+def command_for(record: Trajectory):
+    """The rudder command that re-flies a record (see the module docstring)."""
+    zigzag = detect_zigzag(record)
+    if zigzag is not None:
+        rudder, check, first = zigzag
+        return ZigZagCommand(math.radians(rudder), math.radians(check), first)
+    if record.has("delta_c"):
+        return StepCommand(record.t, record["delta_c"])
+    return PrescribedRudder(record.t, record["delta"])
+
+
+def fly_like(dynamics, records: Sequence[Trajectory], *, step: float | None = None
+             ) -> list[Trajectory]:
+    """Fly ``dynamics`` the way each record was flown, from each record's first row."""
+    out = []
+    for record in records:
+        state0 = record.state()[:, 0]
+        (result,) = simulate_batch(dynamics, [command_for(record)], record.t, state0, step=step)
+        out.append(result_to_trajectory(result, record.name))
+    return out
+
+
+def fly_like_batch(dynamics, records: Sequence[Trajectory], *, step: float | None = None
+                   ) -> list[Trajectory]:
+    """As :func:`fly_like`, integrating records with identical sample times together."""
+    groups: dict[tuple, list[int]] = {}
+    for i, rec in enumerate(records):
+        t = rec.t
+        groups.setdefault((len(t), float(t[0]), float(t[-1])), []).append(i)
+    out: list[Trajectory | None] = [None] * len(records)
+    for idx in groups.values():
+        t = records[idx[0]].t
+        state0 = np.column_stack([records[i].state()[:, 0] for i in idx])
+        results = simulate_batch(dynamics, [command_for(records[i]) for i in idx], t, state0,
+                                 step=step)
+        for i, res in zip(idx, results, strict=True):
+            out[i] = result_to_trajectory(res, records[i].name)
+    return out  # type: ignore[return-value]
+
+
+def distance_errors(flown: Trajectory, reference: Trajectory, L: float) -> dict:
+    """Table-10 metric: mean and maximum Euclidean distance [ship lengths] between tracks.
+
+    The mean is over every sample up to a divergence (which is reported with its time, never
+    dropped).
+
+    Returns
+    -------
+    dict
+        ``mean_distance_L``, ``max_distance_L``, ``diverged_at_s`` (None if it did not).
+    """
+    dist = np.hypot(flown["x"] - reference["x"], flown["y"] - reference["y"]) / L
+    diverged_at = flown.meta.get("diverged_at")
+    valid = np.isfinite(dist)
+    if not valid.any():
+        return {"mean_distance_L": math.nan, "max_distance_L": math.nan,
+                "diverged_at_s": diverged_at}
+    return {
+        "mean_distance_L": float(dist[valid].mean()),
+        "max_distance_L": float(dist[valid].max()),
+        "diverged_at_s": diverged_at,
+    }
+
+
+def error_summary(flown: Trajectory, reference: Trajectory, L: float) -> dict:
+    """Distance errors plus RMS heading [deg] and speed [m/s] errors."""
+    out = distance_errors(flown, reference, L)
+    dpsi = np.degrees(flown["psi"] - reference["psi"])
+    du = np.hypot(flown["u"], flown["v"]) - np.hypot(reference["u"], reference["v"])
+    ok = np.isfinite(dpsi)
+    out["rms_heading_deg"] = float(np.sqrt(np.mean(dpsi[ok] ** 2))) if ok.any() else math.nan
+    out["rms_speed_m_s"] = float(np.sqrt(np.mean(du[ok] ** 2))) if ok.any() else math.nan
+    return out
+
+
+def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None) -> dict:
+    """Fly a model like each record and report the Table-10 distances per record name."""
+    flown = fly_like_batch(model.dynamics(), records, step=step)
+    return {rec.name: distance_errors(f, rec, model.ship.L)
+            for f, rec in zip(flown, records, strict=True)}

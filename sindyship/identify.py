@@ -1,0 +1,160 @@
+"""Identification: from records to a fitted Abkowitz model (paper sections 3.2-3.5).
+
+:func:`design` turns records into one regression problem per degree of freedom (the feature
+matrix of the library's terms, the eq. 16 target and the record each sample comes from);
+:func:`fit` solves them with any optimizer of :mod:`sindyship.optimizers` behind one interface
+and returns an :class:`~sindyship.model.AbkowitzModel`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import SindyshipInputError
+from .library import TermLibrary, feature_matrix, load_effect, load_library
+from .model import AbkowitzModel
+from .ships import Ship
+from .targets import DOFS, regression_targets
+from .trajectory import Trajectory
+
+
+@dataclass(frozen=True)
+class Design:
+    """The regression problem of one degree of freedom.
+
+    Attributes
+    ----------
+    features : ndarray, shape (n_samples, n_terms)
+        Library terms evaluated on every sample of every record (stacked).
+    target : ndarray, shape (n_samples,)
+        Forces of eq. 16 (Prime I).
+    groups : ndarray, shape (n_samples,)
+        Index of the record each sample comes from (for leave-one-manoeuvre-out CV).
+    terms : tuple of str
+        Term texts, the columns of ``features``.
+    """
+
+    features: np.ndarray
+    target: np.ndarray
+    groups: np.ndarray
+    terms: tuple[str, ...]
+
+
+def resolve_library(library: str | TermLibrary = "abkowitz", effects: Sequence[str] = ()
+                    ) -> TermLibrary:
+    """A library by name or path, extended by named effects of the catalogue."""
+    lib = library if isinstance(library, TermLibrary) else load_library(library)
+    if effects:
+        lib = lib.extended(*[load_effect(name) for name in effects])
+    return lib
+
+
+def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
+           rudder_signal: str = "actual", derivative: str = "five-point",
+           window: float = 21.0) -> dict[str, Design]:
+    """Regression problems per degree of freedom from records (paper eq. 16-17).
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> from sindyship.mmg import MMGModel
+    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> ship = load_ship("kcs")
+    >>> runs = fly(MMGModel(ship), [Manoeuvre("turning-circle", rudder=35, duration=300)])
+    >>> problems = design(runs, ship, load_library("abkowitz"))
+    >>> problems["Y"].features.shape
+    (300, 22)
+    """
+    if not records:
+        raise SindyshipInputError("no records to fit; pass at least one measurement CSV.")
+    shell = AbkowitzModel(ship=ship, library=library, coefficients={},
+                          rudder_signal=rudder_signal)
+    parts: dict[str, list] = {dof: [] for dof in DOFS}
+    targets: dict[str, list] = {dof: [] for dof in DOFS}
+    groups = []
+    for index, record in enumerate(records):
+        values = shell.variables(record)
+        forces = regression_targets(record, ship, method=derivative, window=window)
+        for dof in DOFS:
+            parts[dof].append(feature_matrix(library.terms[dof], values))
+            targets[dof].append(forces[dof])
+        groups.append(np.full(record.n_samples, index))
+    group_array = np.concatenate(groups)
+    return {
+        dof: Design(features=np.vstack(parts[dof]), target=np.concatenate(targets[dof]),
+                    groups=group_array,
+                    terms=tuple(t.text for t in library.terms[dof]))
+        for dof in DOFS
+    }
+
+
+def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary = "abkowitz",
+        effects: Sequence[str] = (), optimizer: str = "ls", params: dict | None = None,
+        rudder_signal: str = "actual", derivative: str = "five-point", window: float = 21.0,
+        problems: dict[str, Design] | None = None) -> AbkowitzModel:
+    """Identify an Abkowitz model from records.
+
+    Parameters
+    ----------
+    records : sequence of Trajectory
+        Training records (SI), each uniformly sampled.
+    ship : Ship
+        Gives L, U0 and the Prime I inertia (paper Table 6); its MMG coefficients are not used.
+    library : str or TermLibrary
+        Term library (default the paper's ``abkowitz``).
+    effects : sequence of str
+        Catalogue effects whose terms are added to the library.
+    optimizer : {"ls", "stlsq", "lasso", "svr"}
+        Regression method; ``params`` go to its constructor.
+    rudder_signal : {"actual", "commanded"}
+        Rudder angle used in the features (the protocol uses the actual angle).
+    derivative, window
+        Acceleration estimate (:func:`sindyship.targets.derivative`).
+    problems : dict, optional
+        Precomputed :func:`design` output for the same records and library (saves time when
+        several optimizers are fitted to one data set).
+
+    Returns
+    -------
+    AbkowitzModel
+    """
+    from .optimizers import make_optimizer
+
+    lib = resolve_library(library, effects)
+    if problems is None:
+        problems = design(records, ship, lib, rudder_signal=rudder_signal,
+                          derivative=derivative, window=window)
+    coefficients = {}
+    fitted = {}
+    for dof in DOFS:
+        problem = problems[dof]
+        estimator = make_optimizer(optimizer, **(params or {}))
+        estimator.fit(problem.features, problem.target, groups=problem.groups)
+        coef = np.asarray(estimator.coef_, dtype=float).reshape(-1)
+        coefficients[dof] = dict(zip(problem.terms, coef.tolist(), strict=True))
+        fitted[dof] = estimator
+    info = {
+        "training": [r.name for r in records],
+        "n_samples": int(len(problems["X"].target)),
+        "derivative": derivative,
+        "window_s": window if derivative != "five-point" else None,
+        "selected": {dof: _selected(est) for dof, est in fitted.items()},
+    }
+    model = AbkowitzModel(ship=ship, library=lib, coefficients=coefficients,
+                          optimizer={"name": optimizer, "params": fitted["X"].get_params()},
+                          rudder_signal=rudder_signal, info=info)
+    model.estimators_ = fitted
+    return model
+
+
+def _selected(estimator) -> dict:
+    """Hyper-parameters an optimizer chose by cross-validation (for reports)."""
+    out = {}
+    for name in ("alpha_", "threshold_", "C_", "epsilon_"):
+        value = getattr(estimator, name, None)
+        if value is not None:
+            out[name.rstrip("_")] = np.asarray(value).reshape(-1).tolist()
+    return out

@@ -1,0 +1,679 @@
+"""Measurement CSV: read, validate, convert to SI and write manoeuvre records.
+
+A measurement CSV has one header row of column names and one row per sample (the contract in
+DESIGN.md, "Measurement CSV").  Required columns are ``t, u, v, r, x, y, psi`` and at least one
+of ``delta`` (actual rudder angle) and ``delta_c`` (commanded rudder angle); any other named
+channel is kept.  A header may carry its unit in brackets, ``psi [deg]``; recognised units are
+converted to SI on load (see ``UNITS``), so a :class:`~sindyship.trajectory.Trajectory` always
+holds angles in rad, angular rates in rad/s, speeds in m/s, lengths in m, time in s,
+propeller revolutions in rps and forces in N.  Files written by :func:`write_csv` have bare SI
+headers.
+
+Bad input raises :class:`~sindyship.errors.SindyshipInputError` with one sentence that names
+the file (or ``source``), the column and the row, and says how to fix it.  Rows are numbered as
+a spreadsheet numbers them: the header is row 1 and the first sample is row 2 (this is also
+the line number in a text editor).  For an in-memory DataFrame the row is named by its index
+label.
+
+Plausibility thresholds (module constants):
+
+- ``MAX_RUDDER_ANGLE = 1.0`` rad (57 deg).  No conventional rudder turns that far (hard over
+  is 35 to 45 deg), so a larger value in a radian column is taken for degrees.
+- ``MAX_YAW_RATE = 0.5`` rad/s (29 deg/s).  A steady turn has r' = r L / U below about 1 (a
+  turning diameter of at least two ship lengths), so r stays below U / L: about 0.02 rad/s for
+  a full-scale tanker, about 0.2 rad/s for a 7 m model at 1.2 m/s and about 0.35 rad/s for a
+  2 m model at 0.7 m/s.  Values above 0.5 are taken for deg/s.  The test misses degrees when
+  a full-scale ship never yaws faster than 0.5 deg/s; the rudder test covers most such records.
+- ``MAX_SPEED = 100`` m/s for ``u`` and ``v`` (194 kn) and ``MAX_REVOLUTIONS = 100`` rps for
+  ``n`` (6000 rpm): larger values are no ship's and point at a wrong unit.
+- ``SAMPLING_TOLERANCE = 0.01``: the sampling is irregular when some time step differs from
+  the median step by more than 1 % of it.  Pass ``resample`` to interpolate onto a regular grid.
+
+The checks of ``delta``, ``delta_c`` and ``r`` (never of the unwrapped heading ``psi``, which
+may legitimately exceed 2 pi) can be switched off with ``rudder_check=False`` for unusual craft.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import re
+import secrets
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from sindyship.errors import SindyshipInputError
+from sindyship.trajectory import REQUIRED_COLUMNS, RUDDER_COLUMNS, Trajectory
+
+__all__ = [
+    "MAX_REVOLUTIONS",
+    "MAX_RUDDER_ANGLE",
+    "MAX_SPEED",
+    "MAX_YAW_RATE",
+    "SAMPLING_TOLERANCE",
+    "UNITS",
+    "read_csv",
+    "trajectory_from_frame",
+    "write_csv",
+]
+
+MAX_RUDDER_ANGLE = 1.0  # rad
+MAX_YAW_RATE = 0.5  # rad/s
+MAX_SPEED = 100.0  # m/s
+MAX_REVOLUTIONS = 100.0  # rps
+SAMPLING_TOLERANCE = 0.01  # fraction of the median time step
+
+_DEG = math.pi / 180.0
+
+#: Recognised units: spelling -> (quantity, factor to the SI unit of that quantity).  Spaces in
+#: a unit are ignored; the case must match unless only one entry matches case-insensitively
+#: (``KN`` is refused because it could be knots ``kn`` or kilonewtons ``kN``).
+UNITS: dict[str, tuple[str, float]] = {
+    "-": ("dimensionless", 1.0),
+    "1": ("dimensionless", 1.0),
+    "rad": ("angle", 1.0),
+    "deg": ("angle", _DEG),
+    "degree": ("angle", _DEG),
+    "degrees": ("angle", _DEG),
+    "\u00b0": ("angle", _DEG),
+    "rad/s": ("angular rate", 1.0),
+    "deg/s": ("angular rate", _DEG),
+    "\u00b0/s": ("angular rate", _DEG),
+    "deg/min": ("angular rate", _DEG / 60.0),
+    "m/s": ("speed", 1.0),
+    "kn": ("speed", 1852.0 / 3600.0),
+    "kt": ("speed", 1852.0 / 3600.0),
+    "kts": ("speed", 1852.0 / 3600.0),
+    "knot": ("speed", 1852.0 / 3600.0),
+    "knots": ("speed", 1852.0 / 3600.0),
+    "km/h": ("speed", 1.0 / 3.6),
+    "m": ("length", 1.0),
+    "km": ("length", 1000.0),
+    "cm": ("length", 0.01),
+    "mm": ("length", 0.001),
+    "nmi": ("length", 1852.0),
+    "s": ("time", 1.0),
+    "ms": ("time", 0.001),
+    "min": ("time", 60.0),
+    "h": ("time", 3600.0),
+    "rps": ("revolutions", 1.0),
+    "rev/s": ("revolutions", 1.0),
+    "1/s": ("revolutions", 1.0),
+    "Hz": ("revolutions", 1.0),
+    "rpm": ("revolutions", 1.0 / 60.0),
+    "rev/min": ("revolutions", 1.0 / 60.0),
+    "N": ("force", 1.0),
+    "kN": ("force", 1000.0),
+    "MN": ("force", 1.0e6),
+    "Nm": ("moment", 1.0),
+    "N*m": ("moment", 1.0),
+    "kNm": ("moment", 1000.0),
+    "kN*m": ("moment", 1000.0),
+}
+
+_SI_UNIT = {
+    "dimensionless": "-",
+    "angle": "rad",
+    "angular rate": "rad/s",
+    "speed": "m/s",
+    "length": "m",
+    "time": "s",
+    "revolutions": "rps",
+    "force": "N",
+    "moment": "Nm",
+}
+
+# The quantity of the channels the contract names; other channels accept any recognised unit.
+_QUANTITY = {
+    "t": "time",
+    "u": "speed",
+    "v": "speed",
+    "r": "angular rate",
+    "p": "angular rate",
+    "x": "length",
+    "y": "length",
+    "psi": "angle",
+    "phi": "angle",
+    "delta": "angle",
+    "delta_c": "angle",
+    "n": "revolutions",
+    "wind_speed": "speed",
+    "wind_dir": "angle",
+    "depth": "length",
+}
+
+_HEADER = re.compile(r"^(?P<name>[^\[\]]*?)\s*(?:\[(?P<unit>[^\[\]]*)\])?$")
+
+# Index name that read_csv gives its frame, so that messages say "row 7 (...)" for files.
+_FILE_ROW = "spreadsheet row"
+
+_REQUIRED_TEXT = "t, u, v, r, x, y, psi and delta and/or delta_c"
+
+
+@dataclass(frozen=True)
+class _Column:
+    header: str  # as written, e.g. "psi [deg]"
+    name: str  # bare name, e.g. "psi"
+    unit: str | None  # as written, e.g. "deg", or None when the header has no unit
+    factor: float  # multiplies the values to give SI
+
+
+def read_csv(
+    path: str | os.PathLike[str], *, resample: float | None = None, rudder_check: bool = True
+) -> Trajectory:
+    """Read a measurement CSV into a validated :class:`Trajectory` in SI units.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file: comma-separated, UTF-8, one header row of column names (optionally with
+        a unit in brackets, ``psi [deg]``), then one row per sample.  Blank rows are ignored.
+    resample : float, optional
+        A time step [s].  When given, every column is linearly interpolated onto the grid
+        ``t0 + k * resample`` (k = 0, 1, ... up to the last sample time) instead of raising on
+        irregular sampling.  Interpolation is linear in each column, including the unwrapped
+        heading ``psi``; the last sample is dropped when it does not fall on the grid.
+    rudder_check : bool, default True
+        Refuse ``delta``/``delta_c`` beyond 1 rad and ``r`` beyond 0.5 rad/s, which look like
+        degrees or deg/s in a radian column.  Switch off only for craft that really turn
+        their rudder past 57 deg or yaw faster than 29 deg/s.
+
+    Returns
+    -------
+    Trajectory
+        Named after the file stem; ``meta`` holds ``source`` (the path), ``units`` (the units
+        the headers gave, by column) and ``resampled`` (the step, or None).
+
+    Raises
+    ------
+    SindyshipInputError
+        For any problem with the file or its contents: missing or unreadable file, empty file,
+        header only or one data row, missing or duplicate column, unknown unit, text, NaN or
+        inf in a column, non-increasing time, irregular sampling, degree-like rudder angles or
+        yaw rates, absurd values.  The message names the file, the column and the row
+        (numbered as in a spreadsheet: the header is row 1).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> text = ("t,u [kn],v,r [deg/s],x,y,psi [deg],delta [deg]\\n"
+    ...         "0,15,0,0,0,0,90,0\\n"
+    ...         "1,15,0,0,0,7.7,90,0\\n")
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "straight.csv"
+    ...     _ = path.write_text(text)
+    ...     record = read_csv(path)
+    >>> record.name
+    'straight'
+    >>> round(float(record["u"][0]), 4), round(float(record["psi"][0]), 4)
+    (7.7167, 1.5708)
+    """
+    source = str(path)
+    frame = _parse_csv_text(_read_text(Path(path), source), source)
+    return trajectory_from_frame(
+        frame, Path(path).stem, source=source, resample=resample, rudder_check=rudder_check
+    )
+
+
+def trajectory_from_frame(
+    frame: pd.DataFrame,
+    name: str = "",
+    *,
+    source: str = "<data>",
+    resample: float | None = None,
+    rudder_check: bool = True,
+) -> Trajectory:
+    """Validate an in-memory table and return it as a :class:`Trajectory` in SI units.
+
+    The same checks and unit conversions as :func:`read_csv`, which delegates to this
+    function.  Column names may carry units in brackets; values may be numbers or numeric text.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        One row per sample.  Rows are named in messages by their index label.
+    name : str, optional
+        The trajectory's name.
+    source : str, optional
+        What to call the data in error messages (a file name, or ``"<data>"``).
+    resample : float, optional
+        Time step [s] of a regular grid to interpolate onto; see :func:`read_csv`.
+    rudder_check : bool, default True
+        Refuse degree-like ``delta``, ``delta_c`` and ``r``; see :func:`read_csv`.
+
+    Returns
+    -------
+    Trajectory
+        With bare column names in the order given, float values in SI units and a fresh
+        integer index.
+
+    Raises
+    ------
+    SindyshipInputError
+        As described in :func:`read_csv`.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> frame = pd.DataFrame({"t": [0.0, 0.5, 1.0], "u": [8.0, 8.0, 8.0], "v": 0.0,
+    ...                       "r [deg/s]": [0.0, 0.1, 0.2], "x": [0.0, 4.0, 8.0], "y": 0.0,
+    ...                       "psi": 0.0, "delta [deg]": [0.0, 5.0, 10.0]})
+    >>> record = trajectory_from_frame(frame, "demo")
+    >>> [round(float(value), 4) for value in record["delta"]]
+    [0.0, 0.0873, 0.1745]
+    >>> frame.loc[2, "delta [deg]"] = float("nan")
+    >>> trajectory_from_frame(frame, "demo")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: <data>: column 'delta [deg]' has no value (NaN) ...
+    """
+    if not isinstance(frame, pd.DataFrame):
+        raise TypeError(f"expected a pandas DataFrame, got {type(frame).__name__}")
+    columns = _parse_headers([str(header) for header in frame.columns], source)
+    _check_required(columns, frame, source)
+    if len(frame) < 2:
+        raise SindyshipInputError(
+            f"{source}: "
+            + ("has no data rows" if len(frame) == 0 else "has only one data row")
+            + "; a trajectory needs at least two samples, one per row after the header."
+        )
+    if resample is not None:
+        _check_step(resample, source)
+
+    index = frame.index
+    raw: dict[str, np.ndarray] = {}
+    for position, column in enumerate(columns):
+        values = _as_float(frame.iloc[:, position].to_numpy(), column, index, source)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            value = values[bad[0]]
+            what = "no value (NaN)" if np.isnan(value) else f"an infinite value ({value})"
+            raise SindyshipInputError(
+                f"{source}: column '{column.header}' has {what} in {_row(index, bad[0])}; "
+                "fill in the value or delete the row."
+            )
+        raw[column.name] = values
+    si = {column.name: raw[column.name] * column.factor for column in columns}
+
+    _check_time(si["t"], columns, index, source, resample)
+    _check_plausible(si, raw, columns, index, source, rudder_check)
+    if resample is not None:
+        si = _resample(si, resample, source)
+
+    data = pd.DataFrame(si)
+    meta = {
+        "source": source,
+        "units": {column.name: column.unit for column in columns if column.unit is not None},
+        "resampled": None if resample is None else float(resample),
+    }
+    return Trajectory(data, name=name, meta=meta)
+
+
+def write_csv(trajectory: Trajectory, path: str | os.PathLike[str]) -> Path:
+    """Write a trajectory as a measurement CSV with bare SI headers, atomically.
+
+    Values are written with ``repr``, the shortest text that reads back to the identical
+    float, so ``read_csv(write_csv(x, p))`` reproduces the data of ``x`` exactly.  The file is
+    first written to a hidden temporary file in the same folder and then renamed over
+    ``path`` with :func:`os.replace`, so a failure never leaves a half-written file.
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        The record to write (its ``data``; ``name`` and ``meta`` are not written).
+    path : str or os.PathLike
+        Destination; an existing file is replaced.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    SindyshipInputError
+        When the file cannot be written (missing folder, no permission, ...).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import pandas as pd
+    >>> from pathlib import Path
+    >>> frame = pd.DataFrame({"t": [0.0, 0.1], "u": [1.0, 1.0], "v": 0.0, "r": 0.0,
+    ...                       "x": [0.0, 0.1], "y": 0.0, "psi": 0.0, "delta": 0.0})
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = write_csv(Trajectory(frame, "run"), Path(folder) / "run.csv")
+    ...     print(path.read_text().splitlines()[:2])
+    ...     again = read_csv(path)
+    ['t,u,v,r,x,y,psi,delta', '0.0,1.0,0.0,0.0,0.0,0.0,0.0,0.0']
+    >>> again.data.equals(frame)
+    True
+    """
+    target = Path(path)
+    data = trajectory.data
+    header = [str(column) for column in data.columns]
+    columns = [
+        [repr(value) for value in data.iloc[:, position].to_numpy(dtype=float).tolist()]
+        for position in range(data.shape[1])
+    ]
+    temporary = target.with_name(f".{target.name}.{secrets.token_hex(6)}.tmp")
+    try:
+        with open(temporary, "x", newline="", encoding="utf-8") as handle:
+            writer = csv.writer(handle, lineterminator="\n")
+            writer.writerow(header)
+            writer.writerows(zip(*columns, strict=True))
+        os.replace(temporary, target)
+    except OSError as error:
+        temporary.unlink(missing_ok=True)
+        reason = error.strerror or str(error)
+        raise SindyshipInputError(
+            f"{target}: cannot write the file ({reason}); "
+            "check that the folder exists and is writable."
+        ) from error
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+    return target
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading the file
+
+
+def _read_text(path: Path, source: str) -> str:
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        problem = "file not found; check the path and the file name"
+    except IsADirectoryError:
+        problem = "is a folder, not a file; give the path of a CSV file"
+    except PermissionError:
+        problem = "cannot be read (permission denied); check the file's permissions"
+    except UnicodeDecodeError:
+        problem = "is not UTF-8 text; save it as a UTF-8 (or plain ASCII) CSV file"
+    except OSError as error:
+        problem = f"cannot be read ({error.strerror or error}); check the path"
+    raise SindyshipInputError(f"{source}: {problem}.")
+
+
+def _parse_csv_text(text: str, source: str) -> pd.DataFrame:
+    """Split CSV text into a frame of strings indexed by spreadsheet row number."""
+    reader = csv.reader(io.StringIO(text))
+    header: list[str] | None = None
+    rows: list[list[str]] = []
+    numbers: list[int] = []
+    try:
+        for record in reader:
+            if not any(cell.strip() for cell in record):
+                continue  # a blank row carries no sample
+            if header is None:
+                header = record
+                continue
+            if len(record) != len(header):
+                raise SindyshipInputError(
+                    f"{source}: row {reader.line_num} (counting the header as row 1) has "
+                    f"{len(record)} values but the header names {len(header)} columns; "
+                    "give every row one value per column."
+                )
+            rows.append(record)
+            numbers.append(reader.line_num)
+    except csv.Error as error:
+        raise SindyshipInputError(
+            f"{source}: row {reader.line_num} is not valid CSV ({error}); fix the quoting."
+        ) from error
+    if header is None:
+        raise SindyshipInputError(
+            f"{source}: the file is empty; a measurement CSV needs a header row "
+            f"({_REQUIRED_TEXT}) and at least two rows of samples."
+        )
+    if len(header) == 1 and (";" in header[0] or "\t" in header[0]):
+        raise SindyshipInputError(
+            f"{source}: the header has a single column '{header[0].strip()}'; "
+            "separate the columns with commas, not semicolons or tabs."
+        )
+    index = pd.Index(numbers, name=_FILE_ROW)
+    return pd.DataFrame(rows, columns=header, index=index, dtype=object)
+
+
+# ---------------------------------------------------------------------------------------------
+# Validation
+
+
+def _parse_headers(headers: list[str], source: str) -> list[_Column]:
+    columns: list[_Column] = []
+    seen: dict[str, str] = {}
+    for position, text in enumerate(headers, start=1):
+        header = text.strip()
+        match = _HEADER.match(header)
+        if match is None:
+            raise SindyshipInputError(
+                f"{source}: column {position} has the malformed header '{header}'; write a "
+                "name optionally followed by one unit in brackets, e.g. 'psi [deg]'."
+            )
+        name = match["name"].strip()
+        unit = match["unit"]
+        if not name:
+            raise SindyshipInputError(
+                f"{source}: column {position} has no name; give every column a name in the "
+                "header row."
+            )
+        if name in seen:
+            raise SindyshipInputError(
+                f"{source}: the columns '{seen[name]}' and '{header}' are both '{name}'; "
+                "keep one of them or rename the other."
+            )
+        seen[name] = header
+        factor = 1.0
+        if unit is not None:
+            unit = unit.strip()
+            factor = _unit_factor(name, header, unit, source)
+        columns.append(_Column(header=header, name=name, unit=unit, factor=factor))
+    return columns
+
+
+def _unit_factor(name: str, header: str, unit: str, source: str) -> float:
+    key = unit.replace(" ", "")
+    if key not in UNITS:
+        matches = [spelling for spelling in UNITS if spelling.lower() == key.lower()]
+        if len(matches) > 1:
+            raise SindyshipInputError(
+                f"{source}: column '{header}' has the ambiguous unit '{unit}' (it could be "
+                f"{' or '.join(matches)}); write the unit with the right upper and lower case."
+            )
+        key = matches[0] if matches else ""
+    if not key:
+        known = _units_for(_QUANTITY.get(name))
+        raise SindyshipInputError(
+            f"{source}: column '{header}' has the unknown unit '{unit}'; use one of {known}."
+        )
+    quantity, factor = UNITS[key]
+    expected = _QUANTITY.get(name)
+    if expected is not None and quantity != expected:
+        raise SindyshipInputError(
+            f"{source}: column '{header}' gives a unit of {quantity} but '{name}' is "
+            f"{_article(expected)} {expected}; use one of {_units_for(expected)}."
+        )
+    return factor
+
+
+def _units_for(quantity: str | None) -> str:
+    spellings = [key for key, (kind, _) in UNITS.items() if quantity in (None, kind)]
+    return ", ".join(spellings)
+
+
+def _article(word: str) -> str:
+    return "an" if word[0] in "aeiou" else "a"
+
+
+def _check_required(columns: list[_Column], frame: pd.DataFrame, source: str) -> None:
+    names = [column.name for column in columns]
+    missing = [f"'{name}'" for name in REQUIRED_COLUMNS if name not in names]
+    wanted = [name for name in REQUIRED_COLUMNS if name not in names]
+    if not any(name in names for name in RUDDER_COLUMNS):
+        missing.append("'delta' or 'delta_c'")
+        wanted.extend(RUDDER_COLUMNS)
+    if not missing:
+        return
+    hint = ""
+    lower = {name.lower(): name for name in names}
+    for name in wanted:
+        if name.lower() in lower:
+            hint = f" (there is '{lower[name.lower()]}'; names are case-sensitive)"
+            break
+    if "t" in wanted and frame.index.name in ("t", "time"):
+        hint = " (time is the frame's index; call frame.reset_index() first)"
+    noun = "column" if len(missing) == 1 else "columns"
+    raise SindyshipInputError(
+        f"{source}: missing {noun} {', '.join(missing)}{hint}; a measurement needs the "
+        f"columns {_REQUIRED_TEXT}."
+    )
+
+
+def _row(index: pd.Index, position: int) -> str:
+    """Name a row for a message: spreadsheet row for files, index label for frames."""
+    label = index[position]
+    if index.name == _FILE_ROW:
+        return f"row {label} (counting the header as row 1)"
+    return f"the row with index label {label}"
+
+
+def _as_float(values: np.ndarray, column: _Column, index: pd.Index, source: str) -> np.ndarray:
+    try:
+        return np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        pass
+    for position, value in enumerate(values):
+        try:
+            float(value)
+        except (TypeError, ValueError):
+            if value is None or value is pd.NA or (isinstance(value, str) and not value.strip()):
+                what = "an empty cell"
+            else:
+                what = f"the text '{str(value).strip()}'"
+            raise SindyshipInputError(
+                f"{source}: column '{column.header}' has {what} in {_row(index, position)} "
+                "where a number is expected; write a number there or delete the row."
+            ) from None
+    raise SindyshipInputError(  # pragma: no cover - numpy refused what float() accepts
+        f"{source}: column '{column.header}' cannot be read as numbers; write plain numbers."
+    )
+
+
+def _check_step(step: float, source: str) -> None:
+    try:
+        ok = math.isfinite(step) and step > 0
+    except TypeError:
+        ok = False
+    if not ok:
+        raise SindyshipInputError(
+            f"{source}: the resampling step {step!r} is not a positive number of seconds; "
+            "pass resample=DT (--resample DT) with DT > 0."
+        )
+
+
+def _check_time(
+    t: np.ndarray,
+    columns: list[_Column],
+    index: pd.Index,
+    source: str,
+    resample: float | None,
+) -> None:
+    header = next(column.header for column in columns if column.name == "t")
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
+    if bad.size:
+        i = bad[0] + 1
+        kind = "repeats" if steps[bad[0]] == 0 else "goes back"
+        raise SindyshipInputError(
+            f"{source}: time in column '{header}' {kind} in {_row(index, i)}, where "
+            f"t = {t[i]:.10g} s follows t = {t[i - 1]:.10g} s; sort the rows by time and "
+            "remove duplicate samples."
+        )
+    if resample is not None:
+        return
+    median = float(np.median(steps))
+    deviation = np.abs(steps - median)
+    worst = int(np.argmax(deviation))
+    if deviation[worst] > SAMPLING_TOLERANCE * median:
+        raise SindyshipInputError(
+            f"{source}: the sampling is irregular: the time step into {_row(index, worst + 1)} "
+            f"is {steps[worst]:.6g} s while the median step is {median:.6g} s (more than "
+            f"{SAMPLING_TOLERANCE:.0%} apart); pass resample=DT (--resample DT on the command "
+            "line) to resample onto a regular grid."
+        )
+
+
+def _check_plausible(
+    si: dict[str, np.ndarray],
+    raw: dict[str, np.ndarray],
+    columns: list[_Column],
+    index: pd.Index,
+    source: str,
+    rudder_check: bool,
+) -> None:
+    by_name = {column.name: column for column in columns}
+
+    def refuse(name: str, limit: str, fix_unitless: str, fix_with_unit: str) -> None:
+        column = by_name[name]
+        position = int(np.argmax(np.abs(si[name])))
+        value = f"{raw[name][position]:.6g}" + (f" {column.unit}" if column.unit else "")
+        fix = fix_unitless if column.unit is None else fix_with_unit
+        raise SindyshipInputError(
+            f"{source}: column '{column.header}' reaches {value} in {_row(index, position)}, "
+            f"beyond {limit}; {fix}."
+        )
+
+    bypass = " (or pass rudder_check=False if the values are right)"
+    for name in ("u", "v"):
+        if np.max(np.abs(si[name])) > MAX_SPEED:
+            refuse(
+                name,
+                f"any ship speed ({MAX_SPEED:.0f} m/s)",
+                f"check the values and give their unit in the header, e.g. '{name} [kn]'",
+                f"check the values and the unit '{by_name[name].unit}'",
+            )
+    if "n" in si and np.max(np.abs(si["n"])) > MAX_REVOLUTIONS:
+        refuse(
+            "n",
+            f"any propeller ({MAX_REVOLUTIONS:.0f} rps)",
+            "the values look like rpm, so write the header as 'n [rpm]'",
+            f"check the values and the unit '{by_name['n'].unit}'",
+        )
+    if not rudder_check:
+        return
+    for name in RUDDER_COLUMNS:
+        if name in si and np.max(np.abs(si[name])) > MAX_RUDDER_ANGLE:
+            refuse(
+                name,
+                f"any rudder angle ({MAX_RUDDER_ANGLE:g} rad = 57 deg)",
+                f"the values look like degrees, so write the header as '{name} [deg]'" + bypass,
+                f"check the values and the unit '{by_name[name].unit}'" + bypass,
+            )
+    if np.max(np.abs(si["r"])) > MAX_YAW_RATE:
+        refuse(
+            "r",
+            f"any ship's yaw rate ({MAX_YAW_RATE:g} rad/s = 29 deg/s)",
+            "the values look like deg/s, so write the header as 'r [deg/s]'" + bypass,
+            f"check the values and the unit '{by_name['r'].unit}'" + bypass,
+        )
+
+
+def _resample(si: dict[str, np.ndarray], step: float, source: str) -> dict[str, np.ndarray]:
+    t = si["t"]
+    count = int(math.floor((t[-1] - t[0]) / step * (1.0 + 1e-12))) + 1
+    if count < 2:
+        raise SindyshipInputError(
+            f"{source}: the resampling step {step:g} s is longer than the record "
+            f"({t[-1] - t[0]:g} s); choose a smaller step."
+        )
+    grid = t[0] + step * np.arange(count)
+    return {
+        name: grid.copy() if name == "t" else np.interp(grid, t, values)
+        for name, values in si.items()
+    }

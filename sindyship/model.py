@@ -1,0 +1,331 @@
+"""The fitted Abkowitz model: coefficients, force prediction, simulation and saving.
+
+An :class:`AbkowitzModel` holds the ship (for L, U0, the Prime I inertia of Table 6 and the
+rudder servo), the term library and one coefficient per term and degree of freedom (Prime I,
+keyed by the term as written).  It predicts the hydrodynamic forces of eq. 15 term by term and
+flies eq. 14 with the same integrator, servo and closed-loop manoeuvre logic as the MMG
+simulator.  Saved models are JSON text (never pickle).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import __version__
+from .errors import SindyshipInputError
+from .library import TermLibrary, nondimensional_variables
+from .ships import Ship, load_ship
+from .targets import DOFS, abkowitz_mass_matrix, coriolis
+from .trajectory import Trajectory
+
+FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class AbkowitzDynamics:
+    """Simulator dynamics of an identified model (paper eq. 14), evaluated term by term.
+
+    Parameters
+    ----------
+    model : AbkowitzModel
+    channels : dict, optional
+        Values of the library's extra channels (e.g. ``n``) held constant during a flight, in
+        the library's non-dimensional form.
+    """
+
+    model: AbkowitzModel
+    channels: Mapping[str, float] = field(default_factory=dict)
+
+    @property
+    def ship(self) -> Ship:
+        return self.model.ship
+
+    @property
+    def rudder_input(self) -> str:
+        return "commanded" if self.model.rudder_signal == "commanded" else "actual"
+
+    def accelerations(self, u, v, r, delta, psi, branch=None):
+        """Accelerations (du/dt, dv/dt, dr/dt) in SI from SI state values."""
+        model = self.model
+        ship = model.ship
+        U0, L = ship.U0, ship.L
+        un = u / U0
+        values = {"du": un - 1.0, "v": v / U0, "r": r * L / U0, "delta": delta, "psi": psi}
+        values.update(self.channels)
+        forces = model.forces_from_values(values)
+        X_C, Y_C, N_C = coriolis(ship, un, values["v"], values["r"])
+        Minv = model.inverse_mass
+        X = forces["X"] + X_C
+        Y = forces["Y"] + Y_C
+        N = forces["N"] + N_C
+        a_u = Minv[0, 0] * X
+        a_v = Minv[1, 1] * Y + Minv[1, 2] * N
+        a_r = Minv[2, 1] * Y + Minv[2, 2] * N
+        scale = U0 * U0 / L
+        return a_u * scale, a_v * scale, a_r * scale / L
+
+
+@dataclass
+class AbkowitzModel:
+    """An identified Abkowitz model (paper eq. 14-15).
+
+    Parameters
+    ----------
+    ship : Ship
+        The ship the data belongs to.
+    library : TermLibrary
+        The terms per degree of freedom.
+    coefficients : dict
+        ``{"X": {term: value}, "Y": ..., "N": ...}`` in Prime I.
+    optimizer : dict
+        ``{"name": ..., "params": {...}}`` as used in the fit.
+    rudder_signal : {"actual", "commanded"}
+        The rudder angle in the features.
+    info : dict
+        Free facts about the fit (training records, derivative method, ...).
+    """
+
+    ship: Ship
+    library: TermLibrary
+    coefficients: dict[str, dict[str, float]]
+    optimizer: dict = field(default_factory=lambda: {"name": "given", "params": {}})
+    rudder_signal: str = "actual"
+    info: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for dof in DOFS:
+            terms = [t.text for t in self.library.terms[dof]]
+            given = self.coefficients.get(dof, {})
+            unknown = sorted(set(given) - set(terms))
+            if unknown:
+                raise SindyshipInputError(
+                    f"coefficient {dof}[{unknown[0]!r}] has no term in library "
+                    f"{self.library.name!r}; use the library's term strings."
+                )
+            self.coefficients[dof] = {t: float(given.get(t, 0.0)) for t in terms}
+        if self.rudder_signal not in ("actual", "commanded"):
+            raise SindyshipInputError(
+                f"rudder_signal must be 'actual' or 'commanded', not {self.rudder_signal!r}."
+            )
+        self.inverse_mass = np.linalg.inv(abkowitz_mass_matrix(self.ship))
+        self._active = {
+            dof: [(term, self.coefficients[dof][term.text]) for term in self.library.terms[dof]
+                  if self.coefficients[dof][term.text] != 0.0]
+            for dof in DOFS
+        }
+
+    # ----------------------------------------------------------------------------------------
+    def coefficient_vector(self, dof: str) -> np.ndarray:
+        """Coefficients of one degree of freedom in the library's term order."""
+        return np.array([self.coefficients[dof][t.text] for t in self.library.terms[dof]])
+
+    def n_active(self) -> dict[str, int]:
+        """Number of non-zero coefficients per degree of freedom."""
+        return {dof: len(self._active[dof]) for dof in DOFS}
+
+    def forces_from_values(self, values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """Forces of eq. 15 (Prime I) from non-dimensional variables, term by term."""
+        zero = 0.0 * values["du"]
+        out = {}
+        for dof in DOFS:
+            total = zero
+            for term, coef in self._active[dof]:
+                total = total + coef * term.evaluate(values)
+            out[dof] = total
+        return out
+
+    def variables(self, traj: Trajectory) -> dict[str, np.ndarray]:
+        """The library's non-dimensional variables of a record (with this model's rudder)."""
+        rudder = None
+        if self.rudder_signal == "commanded":
+            if not traj.has("delta_c"):
+                raise SindyshipInputError(
+                    f"{traj.name}: the model uses the commanded rudder but the record has no "
+                    "delta_c column; record it or fit with --rudder-signal actual."
+                )
+            rudder = traj["delta_c"]
+        elif not traj.has("delta"):
+            rudder = traj["delta_c"]
+        needed = set(self.library.variables) | {"du", "v", "r", "delta"}
+        return nondimensional_variables(traj, self.ship.L, self.ship.U0, needed=needed,
+                                        rudder=rudder)
+
+    def predict_forces(self, traj: Trajectory) -> dict[str, np.ndarray]:
+        """Forces of eq. 15 predicted for a record (Prime I), one array per degree of freedom."""
+        return self.forces_from_values(self.variables(traj))
+
+    def dynamics(self, channels: Mapping[str, float] | None = None) -> AbkowitzDynamics:
+        """Simulator dynamics of eq. 14 (see :mod:`sindyship.simulation`)."""
+        missing = sorted(set(self.library.channels) - {"psi"} - set(channels or {}))
+        if missing:
+            raise SindyshipInputError(
+                f"the model's library uses the channel {missing[0]!r}; pass its value to fly "
+                "the model (channels={...})."
+            )
+        return AbkowitzDynamics(self, dict(channels or {}))
+
+    # ----------------------------------------------------------------------------------------
+    def table(self) -> pd.DataFrame:
+        """Coefficients as a table, Prime I and x 1e-5 (the units of paper Tables 7-9)."""
+        rows = []
+        for dof in DOFS:
+            for term in self.library.terms[dof]:
+                value = self.coefficients[dof][term.text]
+                rows.append({"equation": dof, "term": term.text, "name": term.identifier(dof),
+                             "value": value, "value_1e-5": value * 1e5})
+        return pd.DataFrame(rows)
+
+    def __repr__(self) -> str:
+        counts = ", ".join(f"{d}: {n}/{len(self.library.terms[d])}"
+                           for d, n in self.n_active().items())
+        return (f"AbkowitzModel(ship={self.ship.name!r}, library={self.library.name!r}, "
+                f"optimizer={self.optimizer.get('name')!r}, active terms {counts})")
+
+    # ----------------------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """The saved-model layout (JSON-ready)."""
+        return {
+            "format_version": FORMAT_VERSION,
+            "sindyship_version": __version__,
+            "ship": self.ship.name,
+            "library": self.library.to_dict(),
+            "optimizer": _jsonable(self.optimizer),
+            "rudder_signal": self.rudder_signal,
+            "nondim": {"system": "prime-I", "L": self.ship.L, "U0": self.ship.U0},
+            "coefficients": {dof: dict(self.coefficients[dof]) for dof in DOFS},
+            "info": _jsonable(self.info),
+        }
+
+    def save(self, path: str | Path) -> None:
+        """Write the model as JSON (to a temporary file, then renamed)."""
+        write_text_atomic(path, json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n")
+
+    @classmethod
+    def from_dict(cls, data: Mapping, *, source: str = "<model>", ship: Ship | None = None
+                  ) -> AbkowitzModel:
+        """Rebuild a model from :meth:`to_dict` output, checking every field."""
+        if not isinstance(data, Mapping):
+            raise SindyshipInputError(f"{source}: a saved model is a JSON object.")
+        version = data.get("format_version")
+        if not isinstance(version, int):
+            raise SindyshipInputError(f"{source}: not a sindyship model (no format_version).")
+        if version > FORMAT_VERSION:
+            raise SindyshipInputError(
+                f"{source}: saved by a newer sindyship (format {version}); upgrade sindyship "
+                "to load it."
+            )
+        for key in ("ship", "library", "coefficients", "nondim"):
+            if key not in data:
+                raise SindyshipInputError(f"{source}: the saved model lacks {key!r}.")
+        if ship is None:
+            ship = load_ship(data["ship"])
+        nondim = data["nondim"]
+        try:
+            L, U0 = float(nondim["L"]), float(nondim["U0"])
+        except (KeyError, TypeError, ValueError):
+            raise SindyshipInputError(f"{source}: 'nondim' needs numbers L and U0.") from None
+        if not (math.isclose(L, ship.L) and math.isclose(U0, ship.U0)):
+            raise SindyshipInputError(
+                f"{source}: the model was made for L = {L} m, U0 = {U0} m/s but ship "
+                f"{ship.name!r} has L = {ship.L} m, U0 = {ship.U0} m/s; pass the matching ship."
+            )
+        library = TermLibrary.from_dict(data["library"], source=source)
+        coefficients = data["coefficients"]
+        if not isinstance(coefficients, Mapping) or set(coefficients) != set(DOFS):
+            raise SindyshipInputError(f"{source}: 'coefficients' needs the keys X, Y and N.")
+        clean: dict[str, dict[str, float]] = {}
+        for dof in DOFS:
+            clean[dof] = {}
+            for term, value in coefficients[dof].items():
+                if isinstance(value, bool) or not isinstance(value, int | float) \
+                        or not math.isfinite(value):
+                    raise SindyshipInputError(
+                        f"{source}: coefficient {dof}[{term!r}] must be a finite number."
+                    )
+                clean[dof][term] = float(value)
+        return cls(ship=ship, library=library, coefficients=clean,
+                   optimizer=dict(data.get("optimizer", {"name": "given", "params": {}})),
+                   rudder_signal=str(data.get("rudder_signal", "actual")),
+                   info=dict(data.get("info", {})))
+
+    @classmethod
+    def load(cls, path: str | Path, *, ship: Ship | None = None) -> AbkowitzModel:
+        """Read a saved model (JSON)."""
+        path = Path(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise SindyshipInputError(f"{path}: no such model file.") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise SindyshipInputError(f"{path}: cannot read the model ({exc}).") from None
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise SindyshipInputError(
+                f"{path}: not valid JSON (line {exc.lineno}: {exc.msg}); the file is truncated "
+                "or was edited by hand."
+            ) from None
+        return cls.from_dict(data, source=str(path), ship=ship)
+
+
+def _jsonable(value):
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if value is None or isinstance(value, str | int | float | bool):
+        return value
+    return str(value)
+
+
+def write_text_atomic(path: str | Path, text: str) -> None:
+    """Write text to ``path`` through a temporary file in the same folder and a rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def paper_model(ship: Ship, method: str = "LS", csv_path: str | Path | None = None
+                ) -> AbkowitzModel:
+    """The paper's own identified coefficients (Tables 7-9) as a model.
+
+    Parameters
+    ----------
+    method : {"LS", "Lasso", "SVR"}
+    csv_path : path, optional
+        The coefficients CSV (``term`` keys in the library syntax; values x 1e-5); default:
+        the copy shipped with sindyship.
+    """
+    from .library import load_library
+    from .paper import paper_coefficients
+
+    table = paper_coefficients(csv_path)
+    column = f"{method}_1e-5"
+    coefficients = {
+        dof: dict(zip(rows["term"], rows[column] * 1e-5, strict=True))
+        for dof, rows in ((d, table[table["equation"] == d]) for d in DOFS)
+    }
+    return AbkowitzModel(ship=ship, library=load_library("abkowitz"), coefficients=coefficients,
+                         optimizer={"name": f"paper-{method.lower()}", "params": {}})

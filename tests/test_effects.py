@@ -1,0 +1,99 @@
+"""Each simulator effect moves the trajectory the way its physics says."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sindyship.effects import parse_effects, simulate_with_effects
+from sindyship.errors import SindyshipInputError
+from sindyship.manoeuvres import Manoeuvre
+
+STRAIGHT = Manoeuvre("straight", duration=400)
+TURN = Manoeuvre("turning-circle", rudder=20, duration=600)
+
+
+def run(ship, effects, manoeuvre=STRAIGHT):
+    return simulate_with_effects(ship, [manoeuvre], parse_effects(effects))[0]
+
+
+@pytest.fixture(scope="module")
+def calm(kcs):
+    return {"straight": run(kcs, []), "turn": run(kcs, [], TURN)}
+
+
+@pytest.mark.parametrize(("direction", "sign"), [(0, -1), (180, 1)])
+def test_head_and_following_load_slow_or_speed_the_ship(kcs, calm, direction, sign):
+    loaded = run(kcs, ["load=0.002", f"load_dir={direction}"])
+    assert sign * (loaded["x"][-1] - calm["straight"]["x"][-1]) > 5.0
+
+
+@pytest.mark.parametrize(("direction", "sign"), [(90, -1), (270, 1)])
+def test_beam_load_first_pushes_the_ship_sideways_away_from_it(kcs, direction, sign):
+    # the hull then turns (weather-vaning), so judge by the early sway velocity and drift
+    loaded = run(kcs, ["load=0.002", f"load_dir={direction}"])
+    assert sign * loaded["v"][5:30].mean() > 0.01
+    assert sign * loaded["y"][30] > 0.1
+
+
+def test_load_arm_turns_the_bow(kcs):
+    # a force from the east (pushing west = to port) acting ahead of midship yaws to port
+    bow = run(kcs, ["load=0.002", "load_dir=90", "load_arm=0.4"])
+    stern = run(kcs, ["load=0.002", "load_dir=90", "load_arm=-0.4"])
+    assert bow["psi"][50] < 0 < stern["psi"][50]
+
+
+@pytest.mark.parametrize(("toward", "axis", "sign"), [(90, "y", 1), (180, "x", -1)])
+def test_current_drifts_the_record_over_ground(kcs, calm, toward, axis, sign):
+    drifted = run(kcs, ["current=1.0", f"current_dir={toward}"])
+    t = drifted.t[-1]
+    shift = drifted[axis][-1] - calm["straight"][axis][-1]
+    assert shift == pytest.approx(sign * 1.0 * t, rel=1e-9)
+    # the hull sees the same water: heading and yaw rate are unchanged
+    np.testing.assert_allclose(drifted["psi"], calm["straight"]["psi"], atol=1e-12)
+    if toward == 90:
+        np.testing.assert_allclose(drifted["v"], calm["straight"]["v"] + 1.0, atol=1e-9)
+
+
+def test_crossflow_drag_widens_the_turn_and_reduces_drift(kcs, calm):
+    dragged = run(kcs, ["crossflow=0.5"], TURN)
+    assert np.abs(dragged["v"][300:]).mean() < np.abs(calm["turn"]["v"][300:]).mean()
+    assert dragged["psi"][-1] < calm["turn"]["psi"][-1]
+
+
+def test_propeller_side_force_yaws_the_ship(kcs):
+    # a starboard force at the stern pushes the stern to starboard: the bow turns to port
+    pushed = run(kcs, ["prop_side_force=0.0005"])
+    assert pushed["psi"][-1] < -0.01
+    assert run(kcs, ["prop_side_force=-0.0005"])["psi"][-1] > 0.01
+
+
+def test_rudder_offset_shifts_the_record_and_turns_the_ship(kcs):
+    offset = run(kcs, ["rudder_offset=2"])
+    # the indicator reads zero: the true rudder is -2 deg, turning to port
+    assert offset["psi"][-1] < -0.05
+    np.testing.assert_allclose(offset["delta"], 0.0, atol=1e-12)
+
+
+def test_noise_is_reproducible_by_seed(kcs, calm):
+    a = run(kcs, ["noise=0.01", "seed=4"], TURN)
+    b = run(kcs, ["noise=0.01", "seed=4"], TURN)
+    c = run(kcs, ["noise=0.01", "seed=5"], TURN)
+    np.testing.assert_array_equal(a["r"], b["r"])
+    assert not np.array_equal(a["r"], c["r"])
+    residual = a["r"] - calm["turn"]["r"]
+    rms = np.sqrt(np.mean(calm["turn"]["r"] ** 2))
+    assert np.std(residual) == pytest.approx(0.01 * rms, rel=0.15)
+
+
+def test_quantise_keeps_significant_figures(kcs):
+    q = run(kcs, ["quantise=3"], TURN)
+    u = q["u"][1:]
+    digits = np.array([len(f"{x:.6e}".split("e")[0].replace(".", "").rstrip("0")) for x in u])
+    assert digits.max() <= 3
+
+
+@pytest.mark.parametrize("bad", ["wind=3", "load=abc", "noise=-1", "quantise=2.5", "load"])
+def test_bad_effect_is_one_clear_error(bad):
+    with pytest.raises(SindyshipInputError, match="effect"):
+        parse_effects([bad])

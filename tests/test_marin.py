@@ -1,0 +1,296 @@
+"""Tests of the MARIN KVLCC2 loader: file handling on synthetic files, conventions on the data."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.integrate import cumulative_trapezoid
+
+from sindyship.errors import SindyshipInputError
+from sindyship.marin import (
+    MARIN_DT,
+    MARIN_FILES,
+    MARIN_LPP,
+    MARIN_SCALE,
+    default_marin_dir,
+    execute_index,
+    read_marin,
+    to_model_scale,
+)
+from sindyship.trajectory import Trajectory
+
+TITLE = "MARIN(Maritime Research Institute Netherlands)\nTurning for KVLCC2 : 35 (deg)\n\n"
+
+
+def marin_text(rows: list[list[float]], title: str = TITLE, digits: int = 3) -> str:
+    """A file in MARIN's layout: title lines, tab-separated rows, trailing tab-only rows."""
+    body = "\n".join("\t".join(f"{value:.{digits - 1}E}" for value in row) for row in rows)
+    return title + body + "\n\t\t\n\t\t\n"
+
+
+def straight_rows(count: int, heading_deg: float = 0.0) -> list[list[float]]:
+    """A ship at 8 m/s on a constant heading, rows as MARIN writes them."""
+    rows = []
+    for i in range(count):
+        t = i * MARIN_DT
+        north = 8.0 * math.cos(math.radians(heading_deg))
+        east = 8.0 * math.sin(math.radians(heading_deg))
+        rows.append([t, north * t, east * t, 0.1, heading_deg, north, east, 0.2, 0.0, 1.0, 91.5])
+    return rows
+
+
+def write(tmp_path, text: str, name: str = "MARIN_FREE_KVLCC2_zz_10_m.dat"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+# --- file handling (no data needed) ------------------------------------------------------------
+
+
+def test_short_names():
+    assert set(MARIN_FILES) == {"tc_35", "tc_-35", "zz_10", "zz_-10", "zz_20", "zz_-20"}
+    assert MARIN_FILES["zz_-20"] == "MARIN_FREE_KVLCC2_zz_-20_m.dat"
+    assert (MARIN_LPP, MARIN_SCALE) == (320.0, 45.7)
+
+
+def test_default_dir_follows_the_environment(tmp_path, monkeypatch):
+    monkeypatch.setenv("SINDYSHIP_MARIN_DIR", str(tmp_path))
+    assert default_marin_dir() == tmp_path.resolve()
+    monkeypatch.setenv("SINDYSHIP_MARIN_DIR", str(tmp_path / "absent"))
+    assert default_marin_dir() is None
+
+
+def test_synthetic_file_conventions(tmp_path):
+    record = read_marin(write(tmp_path, marin_text(straight_rows(5, heading_deg=90.0))))
+    assert record.name == "MARIN_FREE_KVLCC2_zz_10_m"
+    assert list(record.data.columns) == [
+        "t", "u", "v", "r", "x", "y", "psi", "delta", "n", "phi", "p",
+    ]  # fmt: skip
+    assert record.t.tolist() == [i * MARIN_DT for i in range(5)]
+    # heading east, moving east: all of the earth-fixed velocity is surge
+    np.testing.assert_allclose(record["u"], 8.0, atol=1e-12)
+    np.testing.assert_allclose(record["v"], 0.0, atol=1e-12)
+    np.testing.assert_allclose(record["psi"], math.pi / 2)
+    np.testing.assert_allclose(record["delta"], -math.radians(1.0))  # sign flipped
+    np.testing.assert_allclose(record["n"], 91.5 / 60.0)
+    np.testing.assert_allclose(record["phi"], math.radians(0.1))
+    np.testing.assert_allclose(record["p"], math.radians(0.2))
+    assert record.meta["full_scale"] is True
+    assert record.meta["lpp"] == 320.0 and record.meta["scale_factor"] == 45.7
+    assert record.meta["title"] == "Turning for KVLCC2 : 35 (deg)"
+
+
+def test_earth_fixed_velocity_is_rotated_into_body_axes(tmp_path):
+    rows = straight_rows(3, heading_deg=30.0)
+    for row in rows:  # ship heading 30 deg, moving north-east at 45 deg: drifting to starboard
+        row[5], row[6] = 8.0 * math.cos(math.radians(45.0)), 8.0 * math.sin(math.radians(45.0))
+    record = read_marin(write(tmp_path, marin_text(rows, digits=17)))
+    np.testing.assert_allclose(record["u"], 8.0 * math.cos(math.radians(15.0)), rtol=1e-12)
+    np.testing.assert_allclose(record["v"], 8.0 * math.sin(math.radians(15.0)), rtol=1e-12)
+
+
+def test_heading_is_unwrapped(tmp_path):
+    rows = straight_rows(4)
+    for row, heading in zip(rows, [350.0, 355.0, 0.0, 5.0], strict=True):
+        row[4] = heading
+    record = read_marin(write(tmp_path, marin_text(rows)))
+    np.testing.assert_allclose(np.rad2deg(record["psi"]), [350.0, 355.0, 360.0, 365.0])
+
+
+def test_row_with_wrong_number_of_values(tmp_path):
+    text = marin_text(straight_rows(4)).replace("\t9.15E+01\n", "\n", 2)
+    with pytest.raises(SindyshipInputError) as caught:
+        read_marin(write(tmp_path, text))
+    message = str(caught.value)
+    assert message.startswith(str(tmp_path)) and "line 4" in message and "10 values" in message
+
+
+def test_text_in_a_row(tmp_path):
+    lines = marin_text(straight_rows(4)).split("\n")
+    lines[4] = lines[4].replace("9.15E+01", "rpm")
+    with pytest.raises(SindyshipInputError) as caught:
+        read_marin(write(tmp_path, "\n".join(lines)))
+    assert "line 5" in str(caught.value) and "'rev'" in str(caught.value)
+
+
+def test_missing_title_lines(tmp_path):
+    with pytest.raises(SindyshipInputError) as caught:
+        read_marin(write(tmp_path, marin_text(straight_rows(4), title="")))
+    assert "title lines" in str(caught.value)
+
+
+def test_missing_rows_are_detected(tmp_path):
+    rows = straight_rows(400)
+    del rows[100:150]  # 6.8 s missing
+    with pytest.raises(SindyshipInputError) as caught:
+        read_marin(write(tmp_path, marin_text(rows)))
+    assert "rows are missing" in str(caught.value)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(SindyshipInputError) as caught:
+        read_marin(tmp_path / "absent.dat")
+    assert "not found" in str(caught.value)
+
+
+def test_execute_index_and_no_execute():
+    frame = pd.DataFrame(
+        {"t": [0.0, 1.0, 2.0], "u": 1.0, "v": 0.0, "r": 0.0, "x": [0.0, 1.0, 2.0], "y": 0.0,
+         "psi": 0.0, "delta_c": np.deg2rad([2.0, 2.9, 0.9])}
+    )  # fmt: skip
+    assert execute_index(Trajectory(frame, "a")) == 2
+    frame["delta_c"] = np.deg2rad(2.0)
+    with pytest.raises(SindyshipInputError) as caught:
+        execute_index(Trajectory(frame, "straight"))
+    assert "straight" in str(caught.value)
+
+
+def test_model_scale_is_froude_scaled(tmp_path):
+    record = read_marin(write(tmp_path, marin_text(straight_rows(3))))
+    model = to_model_scale(record)
+    root = math.sqrt(45.7)
+    np.testing.assert_allclose(model.t, record.t / root)
+    np.testing.assert_allclose(model["u"], 8.0 / root, rtol=1e-12)
+    np.testing.assert_allclose(model["x"], record["x"] / 45.7)
+    np.testing.assert_allclose(model["n"], 1.525 * root)
+    np.testing.assert_allclose(model["delta"], record["delta"])
+    assert model.meta["lpp"] == pytest.approx(7.002, abs=1e-3)
+    assert model.meta["full_scale"] is False
+    with pytest.raises(ValueError, match="wind_speed"):
+        to_model_scale(Trajectory(record.data.assign(wind_speed=1.0), "w"))
+
+
+# --- the real files ----------------------------------------------------------------------------
+
+MARIN_DIR = default_marin_dir()
+needs_data = pytest.mark.skipif(MARIN_DIR is None, reason="MARIN KVLCC2 data folder absent")
+SAMPLES = {"tc_35": 15288, "tc_-35": 15753, "zz_10": 3844, "zz_-10": 4177, "zz_20": 4481,
+           "zz_-20": 5057}  # fmt: skip
+EXECUTE = {"tc_35": 31, "tc_-35": 50, "zz_10": 56, "zz_-10": 31, "zz_20": 52, "zz_-20": 55}
+
+
+@pytest.fixture(scope="module")
+def records() -> dict[str, Trajectory]:
+    if MARIN_DIR is None:
+        pytest.skip("MARIN KVLCC2 data folder absent")
+    return {short: read_marin(MARIN_DIR / name) for short, name in MARIN_FILES.items()}
+
+
+def steady_turn(record: Trajectory) -> np.ndarray:
+    """Samples of the steady part of a turning circle (rudder held, speed settled)."""
+    return (record.t > 400.0) & (record.t < 1400.0)
+
+
+@needs_data
+@pytest.mark.parametrize("short", list(MARIN_FILES))
+def test_samples_and_time(records, short):
+    record = records[short]
+    assert record.n_samples == SAMPLES[short]
+    assert record.t[1] == MARIN_DT
+    assert record.t[-1] == pytest.approx((SAMPLES[short] - 1) * 0.1353, rel=1e-12)
+    assert record.dt == pytest.approx(0.1353, rel=1e-12)
+    assert execute_index(record) == EXECUTE[short]
+
+
+@needs_data
+@pytest.mark.parametrize("short", list(MARIN_FILES))
+def test_channels_in_si(records, short):
+    record = records[short]
+    assert 1.52 < record["n"].min() and record["n"].max() < 1.54  # 91.3 to 92.1 rpm
+    assert np.abs(record["phi"]).max() < math.radians(1.0)
+    assert np.abs(record["p"]).max() < math.radians(1.0)
+    assert record["u"].min() > 2.0  # body-fixed surge stays ahead, unlike the recorded north
+    assert record.meta["full_scale"] is True
+
+
+@needs_data
+@pytest.mark.parametrize("short", list(MARIN_FILES))
+def test_velocity_integrates_to_positions(records, short):
+    record = records[short]
+    psi = record["psi"]
+    north = record["u"] * np.cos(psi) - record["v"] * np.sin(psi)
+    east = record["u"] * np.sin(psi) + record["v"] * np.cos(psi)
+    x = record["x"][0] + cumulative_trapezoid(north, record.t, initial=0.0)
+    y = record["y"][0] + cumulative_trapezoid(east, record.t, initial=0.0)
+    miss = np.hypot(x - record["x"], y - record["y"]).max()
+    track = np.hypot(np.diff(record["x"]), np.diff(record["y"])).sum()
+    if short.startswith("zz"):
+        assert miss < 10.0  # metres, over 4.5 to 5.4 km
+    else:
+        assert miss < 0.02 * track  # 140 m over 9 km: see the module documentation
+
+
+@needs_data
+@pytest.mark.parametrize("short", list(MARIN_FILES))
+def test_yaw_rate_is_the_slope_of_the_heading(records, short):
+    record = records[short]
+    turning = short.startswith("tc")
+    half = 148 if turning else 37  # +-20 s or +-5 s: heading is in 1 deg steps past 100 deg
+    psi, t = record["psi"], record.t
+    slope = (psi[2 * half :] - psi[: -2 * half]) / (t[2 * half :] - t[: -2 * half])
+    r = record["r"][half:-half]
+    assert np.corrcoef(r, slope)[0, 1] > (0.99 if turning else 0.999)
+    assert np.polyfit(slope, r, 1)[0] == pytest.approx(1.0, abs=0.01)
+
+
+@needs_data
+@pytest.mark.parametrize(("short", "sign"), [("tc_35", -1.0), ("tc_-35", 1.0)])
+def test_positive_rudder_turns_to_starboard(records, short, sign):
+    record = records[short]
+    steady = steady_turn(record)
+    assert np.rad2deg(record["delta"][steady]).mean() == pytest.approx(35.0 * sign, abs=0.2)
+    r = record["r"][steady]
+    assert np.all(np.sign(r) == sign)  # starboard (positive r) for positive rudder
+    assert np.rad2deg(r.mean()) == pytest.approx(0.42 * sign, abs=0.02)
+    # the bow points inside the circle: the ship drifts outward, v opposite to r
+    assert np.all(np.sign(record["v"][steady]) == -sign)
+
+
+@needs_data
+@pytest.mark.parametrize("short", list(MARIN_FILES))
+def test_heading_first_moves_the_way_the_rudder_points(records, short):
+    record = records[short]
+    start = execute_index(record)
+    rudder = record["delta"][start] - record["delta"][0]
+    psi = record["psi"] - record["psi"][0]
+    first = np.flatnonzero(np.abs(psi) > math.radians(5.0))[0]
+    assert np.sign(psi[first]) == np.sign(rudder)
+
+
+@needs_data
+@pytest.mark.parametrize("short", list(MARIN_FILES))
+def test_ship_heels_outward_in_turns(records, short):
+    """The evidence that decides the mirror ambiguity: outward heel, negative slope on U r."""
+    record = records[short]
+    speed_times_rate = np.hypot(record["u"], record["v"]) * record["r"]
+    design = np.column_stack([speed_times_rate, np.ones_like(speed_times_rate)])
+    slope = np.linalg.lstsq(design, np.rad2deg(record["phi"]), rcond=None)[0][0]
+    assert -9.0 < slope < -3.0  # deg per m/s^2
+
+
+@needs_data
+@pytest.mark.parametrize("short", list(MARIN_FILES))
+def test_roll_rate_is_the_slope_of_the_roll_angle(records, short):
+    record = records[short]
+    slope = np.gradient(record["phi"], record.t)
+    assert np.corrcoef(record["p"], slope)[0, 1] > 0.995
+
+
+@needs_data
+def test_port_turn_is_the_tighter_one(records):
+    def tactical_diameter(record: Trajectory) -> float:
+        start = execute_index(record)
+        heading = record["psi"][start]
+        x = record["x"][start:] - record["x"][start]
+        y = record["y"][start:] - record["y"][start]
+        turned = np.abs(record["psi"][start:] - heading)
+        lateral = -x * np.sin(heading) + y * np.cos(heading)
+        return abs(float(np.interp(math.pi, turned, lateral))) / MARIN_LPP
+
+    port, starboard = tactical_diameter(records["tc_35"]), tactical_diameter(records["tc_-35"])
+    assert port == pytest.approx(3.07, abs=0.02)
+    assert starboard == pytest.approx(3.33, abs=0.02)

@@ -1,0 +1,124 @@
+"""The MMG simulator against the protocol's reference figures and the integrator's own claims."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sindyship.manoeuvres import Manoeuvre, fly, turning_figures, zigzag_figures
+from sindyship.mmg import MMGModel, force_components
+from sindyship.simulation import ConstantCommand, ZigZagCommand, simulate_batch
+
+GOLDEN = json.loads((Path(__file__).parent / "golden" / "kcs.json").read_text())
+
+
+def by_name(runs):
+    return {r.name: r for r in runs["train"] + runs["test"]}
+
+
+def test_straight_run_stays_at_equilibrium(protocol_runs, kcs):
+    run = by_name(protocol_runs)["straight"]
+    u = run["u"] / kcs.U0
+    assert np.all(np.abs(u - 1.0001) <= 0.0005)
+    assert np.max(np.abs(run["y"])) < 1e-9 and np.max(np.abs(run["psi"])) < 1e-12
+
+
+@pytest.mark.parametrize(("name", "advance", "tactical"),
+                         [("tc35_stbd", 3.56, 3.37), ("tc35_port", 3.42, 3.14)])
+def test_turning_circle_matches_independent_implementation(protocol_runs, kcs, name, advance,
+                                                           tactical):
+    figures = turning_figures(by_name(protocol_runs)[name], kcs.L)
+    assert figures["advance_L"] == pytest.approx(advance, rel=0.02)
+    assert figures["tactical_diameter_L"] == pytest.approx(tactical, rel=0.02)
+
+
+def test_port_turn_is_tighter_than_starboard(protocol_runs, kcs):
+    runs = by_name(protocol_runs)
+    stbd = turning_figures(runs["tc35_stbd"], kcs.L)
+    port = turning_figures(runs["tc35_port"], kcs.L)
+    assert port["tactical_diameter_L"] < stbd["tactical_diameter_L"] - 0.1
+    assert runs["tc35_stbd"]["psi"][-1] > 0 > runs["tc35_port"]["psi"][-1]
+
+
+def test_standard_figures_match_golden(protocol_runs, kcs):
+    runs = by_name(protocol_runs)
+    tol = GOLDEN["tolerance_rel"]
+    for name, expected in GOLDEN["turning"].items():
+        got = turning_figures(runs[name], kcs.L)
+        for key, value in expected.items():
+            assert got[key] == pytest.approx(value, rel=tol, abs=1e-9), (name, key)
+    for name, expected in GOLDEN["zigzag"].items():
+        got = zigzag_figures(runs[name])
+        for key, value in expected.items():
+            assert got[key] == pytest.approx(value, rel=tol), (name, key)
+
+
+def test_zigzag_reverses_rudder_at_check_angle(protocol_runs):
+    run = by_name(protocol_runs)["zz20_20"]
+    cmd = np.sign(run["delta_c"])
+    flips = np.flatnonzero(np.diff(cmd) != 0) + 1
+    assert len(flips) >= 8
+    psi = np.degrees(run["psi"])
+    for k in flips:
+        # the heading crossed +-20 deg between the two samples around each reversal
+        assert abs(psi[k - 1]) <= 20.0 + 1e-9 <= abs(psi[k]) + 1e-9 or abs(psi[k]) > 20.0
+
+
+def test_rudder_rate_limit_binds_with_fast_servo(kcs):
+    fast = kcs.with_servo(T_R=0.1)
+    (run,) = fly(MMGModel(fast), [Manoeuvre("turning-circle", rudder=35, duration=60, dt=0.25)])
+    rate = np.degrees(np.diff(run["delta"]) / 0.25)
+    assert rate.max() == pytest.approx(5.0, rel=0.01)
+    assert np.mean(np.abs(rate[:20] - 5.0) < 0.05) > 0.9  # the first 5 s are at the limit
+    assert np.degrees(run["delta"][-1]) == pytest.approx(35.0, abs=1e-3)
+    (slow,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=35, duration=60, dt=0.25)])
+    assert np.degrees(np.diff(slow["delta"]) / 0.25).max() < 5.0
+
+
+def test_halving_the_step_moves_positions_less_than_1e4_L(kcs):
+    mmg = MMGModel(kcs)
+    manoeuvres = [Manoeuvre("zigzag", rudder=35, check=10, duration=1600),
+                  Manoeuvre("spiral", rudder=35, duration=1600)]
+    coarse = fly(mmg, manoeuvres)
+    fine = fly(mmg, manoeuvres, step=0.5 * 0.1 * kcs.time_scale)
+    for a, b in zip(coarse, fine, strict=True):
+        assert np.max(np.hypot(a["x"] - b["x"], a["y"] - b["y"])) / kcs.L < 1e-4
+
+
+def test_unstable_model_stops_with_divergence_time(kcs):
+    class Unstable:
+        ship = kcs
+
+        def accelerations(self, u, v, r, delta, psi, branch=None):
+            return 0.0 * u, 0.0 * u, 0.02 * r + 1e-4
+
+    (result,) = simulate_batch(Unstable(), [ConstantCommand(0.0)], np.arange(3200.0),
+                               np.array([kcs.U0, 0, 0, 0, 0, 0, 0]))
+    assert result.diverged_at is not None and 10 < result.diverged_at < 3200
+    k = int(result.diverged_at)
+    assert np.isnan(result.states[:, k:]).all() and np.isfinite(result.states[:, :k]).all()
+
+
+def test_force_function_is_the_simulators(kcs):
+    mmg = MMGModel(kcs)
+    u, v, r, d = 11.0, -0.6, 0.004, math.radians(20)
+    parts = force_components(kcs, u / kcs.U0, v / kcs.U0, r * kcs.L / kcs.U0, d)
+    assert set(parts) == {"hull", "propeller", "rudder", "coriolis"}
+    a = mmg.accelerations(u, v, r, d, 0.0)
+    X = sum(p[0] for p in parts.values())
+    M = np.array([[kcs.mass.m + kcs.mass.m_x]])
+    assert a[0] == pytest.approx(X / M[0, 0] * kcs.U0**2 / kcs.L, rel=1e-12)
+
+
+def test_zigzag_first_sign_port_mirrors(kcs):
+    mmg = MMGModel(kcs.with_rudder(gamma_R_port=kcs.rudder.gamma_R_stbd))
+    t = np.arange(600.0)
+    s0 = np.array([kcs.U0, 0, 0, 0, 0, 0, 0])
+    a, b = simulate_batch(mmg, [ZigZagCommand(math.radians(20), math.radians(20), 1),
+                                ZigZagCommand(math.radians(20), math.radians(20), -1)], t, s0)
+    np.testing.assert_allclose(a.states[5], -b.states[5], atol=1e-9)
+    np.testing.assert_allclose(a.states[4], -b.states[4], atol=1e-6)
