@@ -117,11 +117,28 @@ class AbkowitzModel:
                 f"rudder_signal must be 'actual' or 'commanded', not {self.rudder_signal!r}."
             )
         self.inverse_mass = np.linalg.inv(abkowitz_mass_matrix(self.ship))
-        self._active = {
-            dof: [(term, self.coefficients[dof][term.text]) for term in self.library.terms[dof]
-                  if self.coefficients[dof][term.text] != 0.0]
-            for dof in DOFS
-        }
+        self._compile()
+
+    def _compile(self) -> None:
+        """Group the non-zero terms of all equations so each distinct factor and term is
+        evaluated once per call (the term-by-term path, without repeated work)."""
+        unique: dict[str, object] = {}
+        for dof in DOFS:
+            for term in self.library.terms[dof]:
+                if self.coefficients[dof][term.text] != 0.0:
+                    unique.setdefault(term.canonical(scale=False) + "|" + term.text, term)
+        self._terms = list(unique.values())
+        index = {t.text: k for k, t in enumerate(self._terms)}
+        self._weights = {}
+        for dof in DOFS:
+            w = np.zeros(len(self._terms))
+            for term in self.library.terms[dof]:
+                c = self.coefficients[dof][term.text]
+                if c != 0.0:
+                    w[index[term.text]] += c
+            self._weights[dof] = w
+        self._active = {dof: [(t, self.coefficients[dof][t.text]) for t in self.library.terms[dof]
+                              if self.coefficients[dof][t.text] != 0.0] for dof in DOFS}
 
     # ----------------------------------------------------------------------------------------
     def coefficient_vector(self, dof: str) -> np.ndarray:
@@ -133,15 +150,24 @@ class AbkowitzModel:
         return {dof: len(self._active[dof]) for dof in DOFS}
 
     def forces_from_values(self, values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Forces of eq. 15 (Prime I) from non-dimensional variables, term by term."""
-        zero = 0.0 * values["du"]
-        out = {}
-        for dof in DOFS:
-            total = zero
-            for term, coef in self._active[dof]:
-                total = total + coef * term.evaluate(values)
-            out[dof] = total
-        return out
+        """Forces of eq. 15 (Prime I) from non-dimensional variables, term by term.
+
+        Each term's column comes from its factors (a factor shared by several terms is
+        computed once); the forces are the coefficient-weighted sums of the columns.
+        """
+        base = np.asarray(values["du"], dtype=float)
+        if not self._terms:
+            return {dof: 0.0 * base for dof in DOFS}
+        cache: dict[tuple, np.ndarray] = {}
+        columns = np.empty((len(self._terms), *base.shape))
+        for k, term in enumerate(self._terms):
+            column = 1.0
+            for factor in term.factors:
+                if factor not in cache:
+                    cache[factor] = term_factor(factor, values)
+                column = column * cache[factor]
+            columns[k] = column
+        return {dof: np.tensordot(self._weights[dof], columns, axes=1) for dof in DOFS}
 
     def variables(self, traj: Trajectory) -> dict[str, np.ndarray]:
         """The library's non-dimensional variables of a record (with this model's rudder)."""
@@ -275,6 +301,25 @@ class AbkowitzModel:
                 "or was edited by hand."
             ) from None
         return cls.from_dict(data, source=str(path), ship=ship)
+
+
+_FUNCTIONS = {"abs": np.abs, "sign": np.sign, "sin": np.sin, "cos": np.cos}
+
+
+def term_factor(factor, values: Mapping[str, np.ndarray]):
+    """One factor ``(function, base, power)`` of a term, evaluated on the variables."""
+    function, base, power = factor
+    if isinstance(base, str):
+        if base not in values:
+            raise SindyshipInputError(
+                f"the model needs the variable {base!r}, which the data do not provide."
+            )
+        column = np.asarray(values[base], dtype=float)
+    else:
+        column = float(base)
+    if function is not None:
+        column = _FUNCTIONS[function](column)
+    return column**power if power != 1 else column
 
 
 def _jsonable(value):

@@ -48,7 +48,11 @@ def trajectory_overlay(reference: Trajectory, flown: Mapping[str, Trajectory], *
                         color=line.get_color())
     ax.set_xlabel("y / L (east)")
     ax.set_ylabel("x / L (north)")
-    ax.set_aspect("equal", adjustable="datalim")
+    span_x = np.nanmax(reference["x"]) - np.nanmin(reference["x"])
+    span_y = np.nanmax(reference["y"]) - np.nanmin(reference["y"])
+    if max(span_x, span_y) < 5 * min(span_x, span_y) + 1e-9:
+        ax.set_aspect("equal", adjustable="datalim")  # a turn: true shape
+    # an elongated track (a zig-zag) keeps independent axis scales so the weave is visible
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     if title:

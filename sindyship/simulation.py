@@ -80,8 +80,13 @@ class StepCommand(RudderCommand):
     angles: Sequence[float]
 
     def __post_init__(self):
-        self.times = np.asarray(self.times, dtype=float)
-        self.angles = np.asarray(self.angles, dtype=float)
+        times = np.asarray(self.times, dtype=float)
+        angles = np.asarray(self.angles, dtype=float)
+        # keep only the samples where the command changes: they are the step's breakpoints
+        keep = np.ones(len(angles), dtype=bool)
+        keep[1:] = angles[1:] != angles[:-1]
+        self.times = times[keep]
+        self.angles = angles[keep]
 
     def value(self, t, state):
         k = int(np.searchsorted(self.times, t + 1e-9, side="right")) - 1

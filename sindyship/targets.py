@@ -126,7 +126,8 @@ def smoothed_states(traj: Trajectory, method: str = "five-point", window: float 
 
 
 def regression_targets(traj: Trajectory, ship: Ship, *, method: str = "five-point",
-                       window: float = 21.0, order: int = 3) -> dict[str, np.ndarray]:
+                       window: float = 21.0, order: int = 3,
+                       accelerations: tuple | None = None) -> dict[str, np.ndarray]:
     """Hydrodynamic forces F' = M a' - C' of paper eq. 16 for one record (Prime I).
 
     Parameters
@@ -137,6 +138,9 @@ def regression_targets(traj: Trajectory, ship: Ship, *, method: str = "five-poin
         Gives L, U0 and the Prime I inertia (paper Table 6).
     method, window, order
         Derivative estimate (:func:`derivative`).
+    accelerations : tuple of ndarray, optional
+        Known (du/dt, dv/dt, dr/dt) in SI instead of finite differences (for tests of the
+        regression with a generating model's exact accelerations).
 
     Returns
     -------
@@ -150,9 +154,13 @@ def regression_targets(traj: Trajectory, ship: Ship, *, method: str = "five-poin
     v = states["v"] / U0
     r = states["r"] * L / U0
     t_scale = L / U0
-    du = derivative(traj["u"] / U0, dt / t_scale, method, window / t_scale, order)
-    dv = derivative(traj["v"] / U0, dt / t_scale, method, window / t_scale, order)
-    dr = derivative(traj["r"] * L / U0, dt / t_scale, method, window / t_scale, order)
+    if accelerations is not None:
+        a_u, a_v, a_r = (np.asarray(a, dtype=float) for a in accelerations)
+        du, dv, dr = a_u * t_scale / U0, a_v * t_scale / U0, a_r * t_scale * L / U0
+    else:
+        du = derivative(traj["u"] / U0, dt / t_scale, method, window / t_scale, order)
+        dv = derivative(traj["v"] / U0, dt / t_scale, method, window / t_scale, order)
+        dr = derivative(traj["r"] * L / U0, dt / t_scale, method, window / t_scale, order)
     M = abkowitz_mass_matrix(ship)
     X_C, Y_C, N_C = coriolis(ship, u, v, r)
     return {
