@@ -1,0 +1,150 @@
+"""The command line contract: verbs, exit status, one-line errors, --json on stdout only."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from sindyship.cli import main
+from sindyship.measurements import read_csv
+
+
+def run_cli(*args, cwd=None):
+    proc = subprocess.run([sys.executable, "-m", "sindyship.cli", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, timeout=600)
+    return proc.returncode, proc.stdout, proc.stderr
+
+
+def test_help_lists_the_verbs():
+    code, out, _ = run_cli("--help")
+    assert code == 0
+    for verb in ("simulate", "fit", "evaluate", "reproduce"):
+        assert verb in out
+
+
+@pytest.fixture(scope="module")
+def records(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("records")
+    specs = {
+        "tc35": ["--manoeuvre", "turning-circle", "--rudder", "35"],
+        "tc-35": ["--manoeuvre", "turning-circle", "--rudder", "-35"],
+        "zz20": ["--manoeuvre", "zigzag", "--rudder", "20", "--check", "20"],
+        "spiral": ["--manoeuvre", "spiral", "--rudder", "35"],
+    }
+    paths = {}
+    for name, spec in specs.items():
+        path = folder / f"{name}.csv"
+        assert main(["simulate", "--ship", "kcs", *spec, "--duration", "1200",
+                     "--out", str(path)]) == 0
+        paths[name] = path
+    return paths
+
+
+def test_simulate_writes_the_measurement_csv(records):
+    record = read_csv(records["zz20"])
+    assert record.n_samples == 1200
+    assert list(record.data.columns[:9]) == ["t", "u", "v", "r", "x", "y", "psi", "delta",
+                                             "delta_c"]
+    assert np.degrees(np.abs(record["delta_c"])).max() == pytest.approx(20.0)
+
+
+def test_simulate_with_effects_changes_the_record(tmp_path):
+    plain, drifted = tmp_path / "a.csv", tmp_path / "b.csv"
+    base = ["simulate", "--manoeuvre", "straight", "--duration", "100"]
+    assert main([*base, "--out", str(plain)]) == 0
+    assert main([*base, "--effect", "current=1", "--effect", "current_dir=90",
+                 "--out", str(drifted)]) == 0
+    assert read_csv(drifted)["y"][-1] - read_csv(plain)["y"][-1] == pytest.approx(99.0)
+
+
+def test_fit_then_evaluate_json(records, tmp_path):
+    model = tmp_path / "model.json"
+    train = [records[k] for k in ("tc35", "tc-35", "zz20", "spiral")]
+    code, out, err = run_cli("fit", *train, "--ship", "kcs", "--optimizer", "ls",
+                             "--out", model, "--json")
+    assert code == 0, err
+    assert json.loads(out)["active_terms"]["Y"] == 22
+    saved = json.loads(model.read_text())
+    assert saved["optimizer"]["name"] == "ls" and saved["rudder_signal"] == "actual"
+    code, out, err = run_cli("evaluate", model, records["zz20"], records["tc35"], "--json")
+    assert code == 0, err
+    errors = json.loads(out)["errors"]
+    assert set(errors) == {"zz20", "tc35"}
+    assert errors["tc35"]["mean_distance_L"] < 0.05  # a training record flies back closely
+    assert errors["zz20"]["diverged_at_s"] is None
+
+
+GOOD_HEADER = "t,u,v,r,x,y,psi,delta"
+GOOD_ROWS = [f"{k},12.3,0,0,{12.3 * k},0,0,0" for k in range(10)]
+
+BAD_CSVS = {
+    "missing column": ("t,u,v,r,x,y,delta\n" + "\n".join(r.rsplit(",", 2)[0] + ",0"
+                                                        for r in GOOD_ROWS), "psi"),
+    "nan": (GOOD_HEADER + "\n" + "\n".join(GOOD_ROWS[:4] + ["4,nan,0,0,49.2,0,0,0"]
+                                           + GOOD_ROWS[5:]), "u"),
+    "inf": (GOOD_HEADER + "\n" + "\n".join(GOOD_ROWS[:4] + ["4,12.3,inf,0,49.2,0,0,0"]
+                                           + GOOD_ROWS[5:]), "v"),
+    "text": (GOOD_HEADER + "\n" + "\n".join(GOOD_ROWS[:4] + ["4,12.3,0,abc,49.2,0,0,0"]
+                                            + GOOD_ROWS[5:]), "r"),
+    "time not increasing": (GOOD_HEADER + "\n" + "\n".join(GOOD_ROWS[:5] + ["3,12.3,0,0,0,0,0,0"]
+                                                           + GOOD_ROWS[6:]), "row"),
+    "irregular sampling": (GOOD_HEADER + "\n" + "\n".join(GOOD_ROWS[:5] + ["4.5,12.3,0,0,0,0,0,0"]
+                                                          + GOOD_ROWS[5:]), "resample"),
+    "degrees in a radian column": (GOOD_HEADER + "\n" + "\n".join(
+        r.rsplit(",", 1)[0] + ",35" for r in GOOD_ROWS), "delta"),
+    "empty": ("", "empty"),
+    "one row": (GOOD_HEADER + "\n" + GOOD_ROWS[0], "row"),
+    "unknown unit": (GOOD_HEADER.replace("psi", "psi [furlong]") + "\n" + "\n".join(GOOD_ROWS),
+                     "psi"),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(BAD_CSVS))
+def test_bad_csv_exits_2_with_one_line_naming_file_and_place(tmp_path, kind):
+    text, place = BAD_CSVS[kind]
+    path = tmp_path / "bad_input.csv"
+    path.write_text(text)
+    out_model = tmp_path / "model.json"
+    code, out, err = run_cli("fit", path, "--ship", "kcs", "--out", out_model, "--json")
+    assert code == 2
+    assert out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err
+    assert "bad_input.csv" in lines[0]
+    assert place.lower() in lines[0].lower()
+    assert not out_model.exists()
+    assert not list(tmp_path.glob(".model.json*"))
+
+
+def test_unknown_ship_and_model_errors_exit_2(tmp_path, records):
+    code, _, err = run_cli("fit", records["tc35"], "--ship", "titanic", "--out", tmp_path / "m")
+    assert code == 2 and "titanic" in err
+    bad = tmp_path / "truncated.json"
+    bad.write_text('{"format_version": 1, "ship": "kcs", "coeff')
+    code, _, err = run_cli("evaluate", bad, records["tc35"])
+    assert code == 2 and "truncated.json" in err and len(err.strip().splitlines()) == 1
+    newer = tmp_path / "newer.json"
+    newer.write_text(json.dumps({"format_version": 99, "ship": "kcs"}))
+    code, _, err = run_cli("evaluate", newer, records["tc35"])
+    assert code == 2 and "newer" in err
+
+
+def test_reproduce_json_contract(tmp_path):
+    code, out, err = run_cli("reproduce", "--out", tmp_path / "rep", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    methods = [r["method"] for r in doc["results"]]
+    assert methods[:4] == ["ls", "stlsq", "lasso", "svr"]
+    for result in doc["results"]:
+        assert set(result["errors"]) >= {"tc15_port", "tc15_stbd", "zz10_10"}
+        for err_row in result["errors"].values():
+            assert set(err_row) >= {"mean_distance_L", "max_distance_L", "diverged_at_s"}
+    agreement = doc["paper_ls_agreement"]
+    assert agreement["median_rel_dev"] < 0.15 and agreement["sign_agreement"] >= 0.95
+    assert doc["seconds"] < 120
+    assert (tmp_path / "rep" / "results.json").exists()
+    assert (tmp_path / "rep" / "trajectory-zz10_10.png").exists()
