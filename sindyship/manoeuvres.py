@@ -294,13 +294,16 @@ def turning_figures(traj: Trajectory, L: float, *, execute: int | None = None) -
         return float(values[k - 1] + w * (values[k] - values[k - 1]))
 
     U = np.hypot(traj["u"][k0:], traj["v"][k0:])
-    steady = dpsi >= dpsi[-1] - 2 * math.pi if dpsi[-1] > 3 * math.pi else np.zeros_like(dpsi, bool)
+    # the steady turn: the last full circle flown with the rudder still at its turning angle
+    rudder = traj.rudder[k0:]
+    held = np.abs(rudder - np.median(rudder[: max(len(rudder) // 2, 1)])) < math.radians(1.0)
+    end = int(np.flatnonzero(held)[-1]) if held.any() else len(dpsi) - 1
+    steady = np.zeros_like(dpsi, dtype=bool)
+    if dpsi[end] > 3 * math.pi:
+        steady[:end + 1] = dpsi[:end + 1] >= dpsi[end] - 2 * math.pi
     if steady.any():
         xs, ys = x[steady], y[steady]
-        diameter = float(np.hypot(xs.max() - xs.min(), ys.max() - ys.min()) / math.sqrt(2))
-        d_x = xs.max() - xs.min()
-        d_y = ys.max() - ys.min()
-        diameter = float(0.5 * (d_x + d_y))
+        diameter = float(0.5 * ((xs.max() - xs.min()) + (ys.max() - ys.min())))
         speed_loss = float(1.0 - U[steady].mean() / U[0])
     else:
         diameter = math.nan
