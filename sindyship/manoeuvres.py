@@ -148,8 +148,13 @@ class Manoeuvre:
         return StepCommand(times, np.radians(angles))
 
 
-def protocol_manoeuvres() -> dict[str, list[Manoeuvre]]:
+def protocol_manoeuvres(duration: float = 3200.0) -> dict[str, list[Manoeuvre]]:
     """The reproduction protocol's training and held-out manoeuvres (paper section 3.1).
+
+    Parameters
+    ----------
+    duration : float
+        Record length [s]; the protocol's is 3200 s (shorter runs make quick examples).
 
     Returns
     -------
@@ -157,19 +162,19 @@ def protocol_manoeuvres() -> dict[str, list[Manoeuvre]]:
         ``{"train": [8 manoeuvres], "test": [tc15_port, tc15_stbd, zz10_10]}``.
     """
     train = [
-        Manoeuvre("straight"),
-        Manoeuvre("turning-circle", rudder=35),
-        Manoeuvre("turning-circle", rudder=-35),
-        Manoeuvre("zigzag", rudder=35, check=10),
-        Manoeuvre("zigzag", rudder=20, check=20),
-        Manoeuvre("zigzag", rudder=15, check=15),
-        Manoeuvre("spiral", rudder=35, first_sign=1),
-        Manoeuvre("spiral", rudder=35, first_sign=-1),
+        Manoeuvre("straight", duration=duration),
+        Manoeuvre("turning-circle", rudder=35, duration=duration),
+        Manoeuvre("turning-circle", rudder=-35, duration=duration),
+        Manoeuvre("zigzag", rudder=35, check=10, duration=duration),
+        Manoeuvre("zigzag", rudder=20, check=20, duration=duration),
+        Manoeuvre("zigzag", rudder=15, check=15, duration=duration),
+        Manoeuvre("spiral", rudder=35, first_sign=1, duration=duration),
+        Manoeuvre("spiral", rudder=35, first_sign=-1, duration=duration),
     ]
     test = [
-        Manoeuvre("turning-circle", rudder=-15),
-        Manoeuvre("turning-circle", rudder=15),
-        Manoeuvre("zigzag", rudder=10, check=10),
+        Manoeuvre("turning-circle", rudder=-15, duration=duration),
+        Manoeuvre("turning-circle", rudder=15, duration=duration),
+        Manoeuvre("zigzag", rudder=10, check=10, duration=duration),
     ]
     return {"train": train, "test": test}
 

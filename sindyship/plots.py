@@ -185,7 +185,7 @@ def sparsity_path(estimator, terms, *, target: int = 0, title: str = "", axes=No
     ax_cv.set_xscale("log")
     ax_cv.set_yscale("log")
     ax_cv.set_xlabel(xlabel)
-    ax_cv.set_ylabel("CV mean squared error")
+    ax_cv.set_ylabel("CV mean squared error\n(Prime I force$^2$)")
     ax_cv.grid(alpha=0.3)
     ax_cv.legend(fontsize=8)
     return fig
@@ -207,11 +207,11 @@ def pareto(estimator, *, target: int = 0, ax=None, label: str = ""):
     for n, e in zip(n_active, mse, strict=True):
         best[int(n)] = min(best.get(int(n), np.inf), float(e))
     ns = sorted(best)
-    ax.plot(ns, [best[n] for n in ns], marker="o", label=label or None)
-    ax.axvline(chosen, color="black", ls="--", lw=1.0)
+    line = ax.plot(ns, [best[n] for n in ns], marker="o", label=label or None)[0]
+    ax.axvline(chosen, color=line.get_color(), ls="--", lw=1.0)  # the chosen model
     ax.set_yscale("log")
     ax.set_xlabel("number of active terms")
-    ax.set_ylabel("CV mean squared error")
+    ax.set_ylabel("CV mean squared error (Prime I force$^2$)")
     ax.grid(alpha=0.3)
     if label:
         ax.legend(fontsize=8)
