@@ -86,6 +86,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_fit(sub)
     _add_evaluate(sub)
     _add_reproduce(sub)
+    from .export import add_export_parser
+
+    add_export_parser(sub)
     return parser
 
 
@@ -178,8 +181,14 @@ def cmd_reproduce(args) -> int:
     return 0
 
 
+def cmd_export(args) -> int:
+    from .export import cmd_export as run_export
+
+    return run_export(args)
+
+
 COMMANDS = {"simulate": cmd_simulate, "fit": cmd_fit, "evaluate": cmd_evaluate,
-            "reproduce": cmd_reproduce}
+            "reproduce": cmd_reproduce, "export": cmd_export}
 
 
 def main(argv: list[str] | None = None) -> int:

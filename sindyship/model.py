@@ -210,6 +210,16 @@ class AbkowitzModel:
                              "value": value, "value_1e-5": value * 1e5})
         return pd.DataFrame(rows)
 
+    def __str__(self) -> str:
+        from .export import equations_text
+
+        return equations_text(self)
+
+    def _repr_latex_(self) -> str:
+        from .export import equations_latex
+
+        return equations_latex(self)
+
     def __repr__(self) -> str:
         counts = ", ".join(f"{d}: {n}/{len(self.library.terms[d])}"
                            for d, n in self.n_active().items())

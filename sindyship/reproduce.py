@@ -72,7 +72,16 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
     paper_flown = fly_like_batch(paper_ls.dynamics(), test)
     paper_errors = {rec.name: distance_errors(f, rec, ship.L)
                     for f, rec in zip(paper_flown, test, strict=True)}
+    table = coefficient_table(models, ship)
+    linear_terms = {("X", "du"), ("Y", "v"), ("Y", "r"), ("Y", "delta"), ("N", "v"),
+                    ("N", "r"), ("N", "delta")}
+    linear = [
+        {"name": row["paper_name"].replace("'", ""), "MMG_Taylor": row["MMG_Taylor"],
+         "paper_LS": row["paper_LS"], **{m: row[m.upper()] for m in models}}
+        for _, row in table.iterrows() if (row["equation"], row["term"]) in linear_terms
+    ]
     output = {
+        "linear_derivatives": linear,
         "results": results,
         "paper_ls_agreement": agreement,
         "paper_ls_flown": paper_errors,
@@ -81,9 +90,14 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
     if out_dir is not None:
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
+        from .export import generate_python, latex_document_part
+
         for method, model in models.items():
             model.save(out / f"model-{method}.json")
-        coefficient_table(models).to_csv(out / "coefficients.csv", index=False)
+            write_text_atomic(out / f"equations-{method}.tex", latex_document_part(model))
+            write_text_atomic(out / f"simulator-{method}.py", generate_python(
+                model, source_note="sindyship reproduce: the paper's KCS training set"))
+        coefficient_table(models, ship).to_csv(out / "coefficients.csv", index=False)
         if figures:
             from .plots import trajectory_overlay
 
@@ -100,12 +114,20 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
     return output
 
 
-def coefficient_table(models: dict) -> pd.DataFrame:
-    """Identified coefficients (x 1e-5) beside the paper's Tables 7-9."""
+def coefficient_table(models: dict, ship=None) -> pd.DataFrame:
+    """Identified coefficients (x 1e-5) beside the paper's Tables 7-9 and, with ``ship``, the
+    Taylor reference the MMG implies (expanded with the mean gamma_R)."""
     paper = paper_coefficients()
     table = paper[["equation", "term", "paper_name", "LS_1e-5", "Lasso_1e-5", "SVR_1e-5"]]
     table = table.rename(columns={"LS_1e-5": "paper_LS", "Lasso_1e-5": "paper_LASSO",
                                   "SVR_1e-5": "paper_SVR"})
+    if ship is not None:
+        from .taylor import taylor_reference
+
+        reference = taylor_reference(ship)
+        table.insert(3, "MMG_Taylor", [reference[d].get(t, float("nan")) * 1e5
+                                       for d, t in zip(table["equation"], table["term"],
+                                                       strict=True)])
     for method, model in models.items():
         values = [model.coefficients[d].get(t, float("nan")) * 1e5
                   for d, t in zip(table["equation"], table["term"], strict=True)]
@@ -140,5 +162,16 @@ def format_report(output: dict) -> str:
             f"{agreement['median_rel_dev']:.3f}, "
             f"same sign {100 * agreement['sign_agreement']:.1f} %"
             f" ({agreement['n_coefficients']} non-zero coefficients)")
+    linear = output.get("linear_derivatives")
+    if linear:
+        lines.append("")
+        lines.append("Linear derivatives x 1e-5: the MMG's Taylor reference beside the fits")
+        methods = [k for k in linear[0] if k not in ("name", "MMG_Taylor", "paper_LS")]
+        lines.append(f"{'':8s}{'MMG':>10s}{'paper LS':>10s}" + "".join(
+            f"{m.upper():>10s}" for m in methods))
+        for row in linear:
+            lines.append(f"{row['name']:8s}{row['MMG_Taylor']:10.1f}{row['paper_LS']:10.1f}"
+                         + "".join(f"{row[m]:10.1f}" for m in methods))
+        lines.append("(all coefficients: coefficients.csv in the output folder)")
     lines.append(f"Finished in {output['seconds']:.1f} s.")
     return "\n".join(lines)

@@ -1,0 +1,482 @@
+"""Exported models: sympy equations, text, LaTeX and the generated standalone simulator.
+
+The generated module is checked against sindyship's own term-by-term path
+(:class:`sindyship.model.AbkowitzDynamics` flown by :mod:`sindyship.simulation`): both use
+the same RK4 scheme, so their trajectories agree to rounding (asserted: 1e-9 of each
+channel's magnitude; measured about 5e-13).
+"""
+
+from __future__ import annotations
+
+import argparse
+import doctest
+import importlib.util
+import json
+import math
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy
+
+from sindyship.errors import SindyshipInputError
+from sindyship.export import (
+    ACCELERATIONS,
+    add_export_parser,
+    cmd_export,
+    coefficient_symbol,
+    coefficient_table_latex,
+    coriolis_expressions,
+    equations_latex,
+    equations_text,
+    force_expressions,
+    generate_python,
+    model_equations,
+)
+from sindyship.library import TermLibrary, load_library
+from sindyship.manoeuvres import fly, protocol_manoeuvres
+from sindyship.model import AbkowitzModel, paper_model
+from sindyship.simulation import (
+    FeedbackCommand,
+    StepCommand,
+    ZigZagCommand,
+    _Integrator,
+    simulate_batch,
+)
+from sindyship.targets import DOFS, abkowitz_mass_matrix, coriolis
+
+ROOT = Path(__file__).resolve().parents[1]
+RTOL = 1e-9  # the generated integrator against sindyship's, relative to each channel's size
+
+
+@pytest.fixture(scope="module")
+def model(kcs):
+    return paper_model(kcs, "LS")
+
+
+def relative_difference(a: np.ndarray, b: np.ndarray) -> float:
+    """max |a - b| / (max |b| + tiny) over each state channel, the worst channel."""
+    a, b = np.atleast_2d(a), np.atleast_2d(b)
+    scale = np.max(np.abs(b), axis=1) + 1e-300
+    return float(np.max(np.max(np.abs(a - b), axis=1) / scale))
+
+
+def load_module(source: str, path: Path):
+    path.write_text(source)
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+# ---------------------------------------------------------------------------------------------
+# Round trip: the generated module, in a clean interpreter, against sindyship's path
+# ---------------------------------------------------------------------------------------------
+RUNNER = '''
+import importlib.util, json, sys
+from pathlib import Path
+
+generated, numpy_dir, out = Path(sys.argv[1]), sys.argv[2], Path(sys.argv[3])
+sys.path.append(numpy_dir)  # numpy only: without site, no .pth file (no editable install)
+import numpy as np
+
+spec = importlib.util.spec_from_file_location("kcs_sim", generated)
+sim = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(sim)
+t = np.arange(3200.0)
+state0 = np.array([sim.U0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+flights = {
+    "tc15_port": sim.simulate(t, np.full(t.shape, np.radians(-15.0)), state0),
+    "tc15_stbd": sim.simulate(t, np.full(t.shape, np.radians(15.0)), state0),
+    "zz10_10": sim.zigzag(t, 10.0, 10.0, state0),
+}
+for name, flight in flights.items():
+    np.save(out / f"{name}.npy", flight.states)
+    np.save(out / f"{name}_cmd.npy", flight.delta_c)
+loaded = sorted({m.split(".")[0] for m in sys.modules})
+try:
+    import sindyship.model  # noqa: F401
+    importable = True
+except ImportError:
+    importable = False
+(out / "facts.json").write_text(json.dumps({
+    "sindyship_importable": importable, "loaded": loaded,
+    "diverged": [f.diverged_at for f in flights.values()],
+}))
+'''
+
+
+@pytest.fixture(scope="module")
+def round_trip(model, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("round_trip")
+    generated = folder / "kcs_sim.py"
+    generated.write_text(generate_python(model, source_note="paper LS coefficients"))
+    runner = folder / "runner.py"
+    runner.write_text(RUNNER)
+    numpy_dir = str(Path(np.__file__).resolve().parents[1])
+    env = {"PATH": "/usr/bin:/bin"}  # no PYTHONPATH, no user site
+    done = subprocess.run([sys.executable, "-I", "-S", str(runner), str(generated), numpy_dir,
+                           str(folder)], capture_output=True, text=True, env=env, cwd=folder,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    facts = json.loads((folder / "facts.json").read_text())
+    flown = {name: (np.load(folder / f"{name}.npy"), np.load(folder / f"{name}_cmd.npy"))
+             for name in ("tc15_port", "tc15_stbd", "zz10_10")}
+    reference = {r.name: r for r in fly(model.dynamics(), protocol_manoeuvres()["test"])}
+    return facts, flown, reference
+
+
+def test_generated_module_runs_without_sindyship(round_trip):
+    facts, _, _ = round_trip
+    assert facts["sindyship_importable"] is False
+    assert "sindyship" not in facts["loaded"]
+    assert facts["diverged"] == [None, None, None]
+
+
+@pytest.mark.parametrize("name", ["tc15_port", "tc15_stbd", "zz10_10"])
+def test_generated_module_flies_held_out_manoeuvres_like_sindyship(round_trip, name):
+    _, flown, reference = round_trip
+    states, command = flown[name]
+    ref = reference[name]
+    assert states.shape == (7, 3200)
+    assert relative_difference(states, ref.state()) <= RTOL
+    assert np.array_equal(command, ref["delta_c"])
+    if name == "zz10_10":  # the zig-zag was flown closed loop: the rudder reversed
+        assert np.sum(np.diff(np.sign(command)) != 0) >= 8
+
+
+def test_step_and_feedback_commands_match_sindyship(model, tmp_path):
+    sim = load_module(generate_python(model), tmp_path / "sim_steps.py")
+    t = np.arange(0.0, 600.0, 0.5)
+    state0 = np.array([model.ship.U0, 0, 0, 0, 0, 0, 0])
+    angles = np.where(t < 150.0, 0.2, np.where(t < 400.0, -0.1, 0.35))  # changes at samples
+    change = [0.0, 150.0, 400.0]
+    (ref_steps,) = simulate_batch(model.dynamics(), [StepCommand(change, [0.2, -0.1, 0.35])], t,
+                                  state0)
+    flight = sim.simulate(t, angles, state0)
+    assert relative_difference(flight.states, ref_steps.states) <= RTOL
+
+    def heading_hold(time, state):  # feedback: steer towards 20 deg of heading
+        return float(np.clip(2.0 * (math.radians(20.0) - state[5]), -0.6, 0.6))
+
+    (ref_fb,) = simulate_batch(model.dynamics(), [FeedbackCommand(heading_hold)], t, state0)
+    flight = sim.simulate(t, heading_hold, state0)
+    assert relative_difference(flight.states, ref_fb.states) <= RTOL
+    assert np.ptp(flight.delta_c) > 0.5  # the command did follow the heading
+
+
+def test_commanded_rudder_and_heading_terms_match_sindyship(kcs, tmp_path):
+    """A model on the commanded rudder, with heading (environment) terms, ports exactly."""
+    base = load_library("abkowitz")
+    terms = {dof: [t.text for t in base.terms[dof]] for dof in DOFS}
+    terms["X"].append("cos(psi)")
+    terms["Y"] += ["sin(psi)", "abs(v) v"]
+    terms["N"] += ["sin(psi)", "cos(psi) r"]
+    library = TermLibrary("abkowitz+env", "prime-I", "test library", terms)
+    paper = paper_model(kcs, "LS")
+    coefficients = {dof: dict(paper.coefficients[dof]) for dof in DOFS}
+    coefficients["X"]["cos(psi)"] = -2e-5
+    coefficients["Y"].update({"sin(psi)": 3e-5, "abs(v) v": -0.01})
+    coefficients["N"].update({"sin(psi)": -1e-5, "cos(psi) r": 2e-5})
+    env = AbkowitzModel(kcs, library, coefficients, rudder_signal="commanded")
+    source = generate_python(env)
+    assert "np.sin(psi)" in source and "abs(v)" in source
+    sim = load_module(source, tmp_path / "sim_env.py")
+    assert sim.RUDDER_INPUT == "commanded"
+    t = np.arange(0.0, 900.0)
+    state0 = np.array([kcs.U0, 0, 0, 0, 0, 0.3, 0])
+    refs = simulate_batch(env.dynamics(), [StepCommand([0.0], [math.radians(15.0)]),
+                                           ZigZagCommand(math.radians(10.0),
+                                                         math.radians(10.0), -1)], t, state0)
+    assert relative_difference(sim.simulate(t, math.radians(15.0), state0).states,
+                               refs[0].states) <= RTOL
+    assert relative_difference(sim.zigzag(t, 10.0, 10.0, state0, first_sign=-1).states,
+                               refs[1].states) <= RTOL
+
+
+def test_sparse_and_diverging_models_match_sindyship(kcs, tmp_path):
+    """Zero coefficients are left out; a diverging model stops at the same sample."""
+    lasso = paper_model(kcs, "Lasso")
+    sim = load_module(generate_python(lasso), tmp_path / "sim_lasso.py")
+    assert "X_rr *" not in (tmp_path / "sim_lasso.py").read_text()  # the paper's X'_rr = 0
+    t = np.arange(600.0)
+    state0 = np.array([kcs.U0, 0, 0, 0, 0, 0, 0])
+    (ref,) = simulate_batch(lasso.dynamics(), [ZigZagCommand(math.radians(20.0),
+                                                             math.radians(20.0))], t, state0)
+    assert relative_difference(sim.zigzag(t, 20.0, 20.0, state0).states, ref.states) <= RTOL
+
+    paper = paper_model(kcs, "LS")
+    coefficients = {dof: dict(paper.coefficients[dof]) for dof in DOFS}
+    coefficients["N"]["r"] = 0.004  # yaw-unstable: the turn runs away
+    unstable = AbkowitzModel(kcs, paper.library, coefficients)
+    sim = load_module(generate_python(unstable), tmp_path / "sim_unstable.py")
+    t = np.arange(300.0)
+    (ref,) = simulate_batch(unstable.dynamics(), [StepCommand([0.0], [0.17])], t, state0)
+    flight = sim.simulate(t, 0.17, state0)
+    assert ref.diverged_at is not None and flight.diverged_at == ref.diverged_at
+    valid = ref.valid
+    assert np.all(np.isnan(flight.states[:, ~valid])) and np.all(np.isnan(flight.delta_c[~valid]))
+    assert relative_difference(flight.states[:, valid], ref.states[:, valid]) <= RTOL
+
+
+def test_rhs_is_vectorised_and_equals_sindyship(model, tmp_path, seed):
+    sim = load_module(generate_python(model), tmp_path / "sim_rhs.py")
+    rng = np.random.default_rng(seed)
+    n = 11
+    U0, L = model.ship.U0, model.ship.L
+    states = np.vstack([U0 * rng.uniform(0.6, 1.1, n), U0 * rng.uniform(-0.2, 0.2, n),
+                        U0 / L * rng.uniform(-0.5, 0.5, n), rng.normal(0, 500, (2, n)),
+                        rng.uniform(-4, 4, n), rng.uniform(-0.6, 0.6, n)])
+    delta_c = rng.uniform(-0.7, 0.7, n)
+    batch = sim.rhs(0.0, states, delta_c)
+    columns = np.column_stack([sim.rhs(0.0, states[:, j], delta_c[j]) for j in range(n)])
+    reference = _Integrator(model.dynamics(), [StepCommand([0.0], [0.0])] * n).rhs(
+        0.0, states, delta_c, np.arange(n), None)
+    assert batch.shape == (7, n)
+    assert relative_difference(batch, reference) <= 1e-13
+    assert relative_difference(columns, reference) <= 1e-13
+    assert sim.rhs(0.0, states[:, 0], delta_c[0]).shape == (7,)
+
+
+def test_generated_constants_and_coefficients(model, tmp_path):
+    sim = load_module(generate_python(model), tmp_path / "sim_consts.py")
+    expected = {term.identifier(dof): model.coefficients[dof][term.text]
+                for dof in DOFS for term in model.library.terms[dof]}
+    assert sim.COEFFICIENTS == expected  # exact: every double reads back unchanged
+    assert sim.Y_vvr == model.coefficients["Y"]["v^2 r"]
+    assert sim.TERMS["N_vrd"] == ("N", "v r delta")
+    assert sim.DEFAULT_STEP == pytest.approx(0.1 * model.ship.L / model.ship.U0, rel=1e-15)
+    assert sim.T_SERVO == pytest.approx(model.ship.L / model.ship.U0, rel=1e-15)
+    assert sim.RATE_MAX == pytest.approx(math.radians(5.0), rel=1e-15)
+    assert sim.MASS_MATRIX == tuple(map(tuple, abkowitz_mass_matrix(model.ship).tolist()))
+    results = doctest.testmod(sim, verbose=False)
+    assert results.attempted >= 4 and results.failed == 0
+
+
+def test_generated_module_passes_ruff(model, kcs, tmp_path):
+    ruff = shutil.which("ruff")
+    if ruff is None:
+        pytest.skip("ruff is not installed")
+    long_term = "wind_speed^2 cos(wind_dir) sin(psi) abs(v) v r delta du"
+    terms = {dof: ["du", "v", "r", "delta", long_term] for dof in DOFS}
+    exotic = AbkowitzModel(kcs, TermLibrary("a-rather-long-library-name", "prime-I", "", terms),
+                           {dof: {t: -1.2345678901234567e-5 for t in terms[dof]} for dof in DOFS})
+    sources = {
+        "kcs_sim.py": generate_python(model, source_note='A note, "quoted", with a \\ in it.'),
+        "exotic_sim.py": generate_python(exotic, channels={"wind_speed": 0.5, "wind_dir": 1.0}),
+    }
+    for name, source in sources.items():
+        (tmp_path / name).write_text(source)
+    done = subprocess.run([ruff, "check", "--no-cache", "--config", str(ROOT / "pyproject.toml"),
+                           *sorted(sources)], capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_generate_python_needs_channel_values(kcs):
+    terms = {dof: ["du", "v", "r", "delta"] for dof in DOFS}
+    terms["X"].append("n")
+    library = TermLibrary("with-n", "prime-I", "", terms)
+    coefficients = {dof: {t: 1e-4 for t in terms[dof]} for dof in DOFS}
+    with_n = AbkowitzModel(kcs, library, coefficients)
+    with pytest.raises(SindyshipInputError, match="channel 'n'"):
+        generate_python(with_n)
+    source = generate_python(with_n, channels={"n": 35.86})
+    assert "CHANNEL_N = 35.86" in source and "X_n * CHANNEL_N" in source
+
+
+# ---------------------------------------------------------------------------------------------
+# sympy equations, text and LaTeX
+# ---------------------------------------------------------------------------------------------
+def _symbols():
+    return {name: sympy.Symbol(name, real=True) for name in ("du", "v", "r", "delta")}
+
+
+def test_model_equations_equal_the_model_numerically(model, seed):
+    """Eq. 14 as sympy: left mass-matrix row, right forces (term by term) plus Coriolis."""
+    eqs = model_equations(model, numeric=True)
+    symbolic = model_equations(model)
+    M = abkowitz_mass_matrix(model.ship)
+    rng = np.random.default_rng(seed)
+    values = {"du": rng.uniform(-0.3, 0.1, 8), "v": rng.uniform(-0.2, 0.2, 8),
+              "r": rng.uniform(-0.5, 0.5, 8), "delta": rng.uniform(-0.6, 0.6, 8)}
+    forces = model.forces_from_values(values)
+    extra = coriolis(model.ship, 1.0 + values["du"], values["v"], values["r"])
+    s = _symbols()
+    names = list(s)
+    for i, dof in enumerate(DOFS):
+        for j, acc in enumerate(ACCELERATIONS):
+            assert float(eqs[dof].lhs.coeff(acc)) == M[i, j]
+        rhs = sympy.lambdify([s[n] for n in names], eqs[dof].rhs, "numpy")
+        got = rhs(*(values[n] for n in names))
+        want = forces[dof] + extra[i]
+        assert np.allclose(got, want, rtol=1e-13, atol=1e-16)
+        active = {coefficient_symbol(dof, t) for t in model.library.terms[dof]
+                  if model.coefficients[dof][t.text] != 0.0}
+        assert symbolic[dof].rhs.free_symbols - set(s.values()) == active
+    assert force_expressions(model, numeric=True)["X"].subs({x: 0 for x in s.values()}) == 0
+    assert set(coriolis_expressions(model.ship)["X"].free_symbols) == {s["r"], s["v"]}
+
+
+def _parse_align(tex: str) -> list[sympy.Eq]:
+    """Equations of an ``align`` environment, read back with sympy's LaTeX parser.
+
+    sympy reads ``\\Delta u'`` as the product Delta * u' and ``\\dot{u}`` as dot * u, so
+    Delta and dot are set to 1 and the primed/unprimed names mapped to the model's symbols.
+    Its parser also stops, silently, at a prime after a braced argument, so the paper's
+    ``\\dot{u}'`` is read as ``\\dot{u}``.
+    """
+    from sympy.parsing.latex import parse_latex
+
+    body = tex.split(r"\begin{align}")[1].split(r"\end{align}")[0]
+    equations, current = [], ""
+    for line in body.split(r"\\"):
+        line = line.replace(r"\nonumber", "").replace(r"\quad", "").replace("&", "")
+        line = re.sub(r"(\\dot\{[a-z]\})'", r"\1", line).strip()
+        if not line:
+            continue
+        if "=" in line and current:
+            equations.append(current)
+            current = ""
+        current += " " + line
+    equations.append(current)
+    s = _symbols()
+    rename = {sympy.Symbol("Delta"): 1, sympy.Symbol("dot"): 1,
+              sympy.Symbol("u'"): s["du"], sympy.Symbol("v'"): s["v"],
+              sympy.Symbol("r'"): s["r"], sympy.Symbol("delta"): s["delta"],
+              sympy.Symbol("u"): ACCELERATIONS[0], sympy.Symbol("v"): ACCELERATIONS[1],
+              sympy.Symbol("r"): ACCELERATIONS[2]}
+    parsed = [parse_latex(eq.strip()) for eq in equations]
+    assert all(isinstance(eq, sympy.Eq) for eq in parsed)
+    return [eq.xreplace(rename) for eq in parsed]
+
+
+def test_latex_equations_read_back_to_the_model(model, seed):
+    """Checked numerically at random points (structural equality is fragile with Floats).
+
+    With 17 significant digits every coefficient reads back as the same double.  (sympy's
+    LaTeX parser takes about 4 s for the 66 terms, so only this precision is read back.)
+    """
+    pytest.importorskip("antlr4")
+    rtol = 1e-13
+    parsed = _parse_align(equations_latex(model, 17))
+    exact = model_equations(model, numeric=True)
+    assert len(parsed) == 3
+    rng = np.random.default_rng(seed)
+    s = _symbols()
+    names = [s["du"], s["v"], s["r"], s["delta"], *ACCELERATIONS]
+    point = [rng.uniform(-0.3, 0.1, 20), rng.uniform(-0.2, 0.2, 20), rng.uniform(-0.5, 0.5, 20),
+             rng.uniform(-0.6, 0.6, 20), *rng.uniform(-0.1, 0.1, (3, 20))]
+    for eq, dof in zip(parsed, DOFS, strict=True):
+        assert eq.free_symbols <= set(names)
+        for side in ("lhs", "rhs"):
+            want = getattr(exact[dof], side)
+            got = sympy.lambdify(names, getattr(eq, side))(*point)
+            terms = sympy.Add.make_args(sympy.expand(want))
+            size = sum(np.abs(sympy.lambdify(names, t)(*point)) for t in terms)
+            assert np.all(np.abs(got - sympy.lambdify(names, want)(*point)) <= rtol * size)
+
+
+def test_latex_numbers_have_the_requested_precision(model):
+    tex = equations_latex(model, 4)
+    assert r"0.008853 \dot{u}' &= -0.002265 \Delta u' - 0.0005081 \Delta u'^{2}" in tex
+    assert r"- 3.071 \times 10^{-5} r'^{2} \Delta u'" in tex  # X'_rru, as in Table 7
+    assert r"&= 4.32 \times 10^{-6} - 0.0002212 \Delta u'" in tex  # Y'_0
+    assert r"- 0.008853 (1 + \Delta u') r'" in tex  # Coriolis, u' = 1 + du
+    assert tex.count(r"\nonumber") == sum(math.ceil(n / 4) - 1 for n in (17, 23, 24))
+
+
+def test_symbolic_latex_names_every_active_coefficient(model):
+    tex = equations_latex(model, numeric=False)
+    for dof in DOFS:
+        for term in model.library.terms[dof]:
+            active = model.coefficients[dof][term.text] != 0.0
+            assert (term.latex(dof) + " ") in tex or (term.latex(dof) + " \\") in tex \
+                or not active
+    assert tex.count(r"\\") >= 2 and tex.startswith(r"\begin{align}")
+
+
+def test_coefficient_table_lists_every_coefficient(model):
+    reference = {dof: {t: v * 2 for t, v in model.coefficients[dof].items()} for dof in DOFS}
+    reference["N"]["v r delta"] = math.nan
+    table = coefficient_table_latex(model, 4, reference=reference, reference_label="Twice")
+    lines = table.splitlines()
+    assert lines[0] == r"\begin{tabular}{lrr}" and lines[-1] == r"\end{tabular}"
+    assert r"\toprule" in lines and r"\bottomrule" in lines and lines.count(r"\midrule") == 3
+    rows = [line for line in lines if line.startswith("$")]
+    assert len(rows) == 16 + 22 + 22
+    for dof in DOFS:
+        for term in model.library.terms[dof]:
+            (row,) = [line for line in rows if line.startswith(f"${term.latex(dof)}$ ")]
+            cells = [c.strip(" $\\") for c in row.split("&")]
+            value = model.coefficients[dof][term.text] * 1e5
+            assert float(cells[1]) == pytest.approx(value, rel=5e-4, abs=1e-9)
+            if dof == "N" and term.text == "v r delta":
+                assert cells[2] == "--"
+            else:
+                assert float(cells[2]) == pytest.approx(2 * value, rel=5e-4, abs=1e-9)
+    assert "$-199408$" in table  # Y'_vvv: integer digits kept, as in Table 8
+
+
+def test_equations_text_lists_every_active_term(model):
+    text = equations_text(model, precision=4)
+    lines = text.splitlines()
+    assert lines[0].startswith("Abkowitz model") and all(len(x) <= 100 for x in lines)
+    blocks = " ".join(lines[1:]).replace("      ", " ")
+    assert blocks.count("u_dot'") == 1 and blocks.count("r_dot'") == 2
+    assert "- 1.994 v^3" in blocks and "- 0.008853 (1 + du) r" in blocks
+    with pytest.raises(SindyshipInputError, match="precision"):
+        equations_text(model, precision=0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Command line
+# ---------------------------------------------------------------------------------------------
+def _args(*argv: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(prog="sindyship")
+    add_export_parser(parser.add_subparsers(dest="verb"))
+    return parser.parse_args(["export", *argv])
+
+
+def test_cmd_export_writes_latex_and_python(model, tmp_path, capsys):
+    saved = tmp_path / "model.json"
+    model.save(saved)
+    tex, py = tmp_path / "out" / "eqs.tex", tmp_path / "out" / "sim.py"
+    assert cmd_export(_args(str(saved), "--latex", str(tex), "--python", str(py),
+                            "--precision", "6", "--json")) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["active_terms"] == {"X": 15, "Y": 22, "N": 22}
+    assert r"\begin{align}" in tex.read_text() and r"\toprule" in tex.read_text()
+    assert "-0.00226510" not in tex.read_text() and "-0.0022651" in tex.read_text()
+    sim = load_module(py.read_text(), py)
+    assert sim.COEFFICIENTS["N_uv"] == model.coefficients["N"]["du v"]
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["eqs.tex", "sim.py"]
+    assert cmd_export(_args(str(saved))) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert [line for line in printed if line.startswith("X: ")][0].startswith(
+        "X: 0.008853 u_dot' = -0.002265 du - 0.0005081 du^2 + 0.002459 v^2")
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["missing.json"], "no such model file"),
+    (["{model}", "--precision", "0"], "precision"),
+    (["{model}", "--latex", "same.txt", "--python", "same.txt"], "two different files"),
+    (["{model}", "--python", "{folder}"], "is a folder"),
+    (["{model}", "--channel", "n"], "NAME=VALUE"),
+    (["{model_n}", "--python", "sim.py"], "--channel n=VALUE"),
+])
+def test_cmd_export_rejects_bad_input(model, tmp_path, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    model.save(tmp_path / "m.json")
+    terms = {dof: ["du", "v", "r", "delta"] for dof in DOFS}
+    terms["X"].append("n")
+    with_n = AbkowitzModel(model.ship, TermLibrary("with-n", "prime-I", "", terms),
+                           {dof: {t: 1e-4 for t in terms[dof]} for dof in DOFS})
+    with_n.save(tmp_path / "n.json")
+    (tmp_path / "folder").mkdir()
+    argv = [a.format(model="m.json", model_n="n.json", folder="folder") for a in argv]
+    with pytest.raises(SindyshipInputError, match=message):
+        cmd_export(_args(*argv))
