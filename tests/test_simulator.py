@@ -122,3 +122,21 @@ def test_zigzag_first_sign_port_mirrors(kcs):
                                 ZigZagCommand(math.radians(20), math.radians(20), -1)], t, s0)
     np.testing.assert_allclose(a.states[5], -b.states[5], atol=1e-9)
     np.testing.assert_allclose(a.states[4], -b.states[4], atol=1e-6)
+
+
+def test_pull_out_returns_rudder_to_zero_and_yaw_decays(kcs):
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("pull-out", rudder=20, pull_out_time=600,
+                                           duration=1600)])
+    assert np.degrees(run["delta_c"][700]) == pytest.approx(0.0)
+    assert abs(run["r"][-1]) < 0.2 * abs(run["r"][599])
+
+
+def test_random_rudder_is_reproducible_by_seed(kcs):
+    mmg = MMGModel(kcs)
+    a, b, c = fly(mmg, [Manoeuvre("random", rudder=20, seed=3, duration=900),
+                        Manoeuvre("random", rudder=20, seed=3, duration=900),
+                        Manoeuvre("random", rudder=20, seed=4, duration=900)])
+    np.testing.assert_array_equal(a["x"], b["x"])
+    assert not np.array_equal(a["delta_c"], c["delta_c"])
+    assert np.degrees(np.abs(a["delta_c"])).max() <= 20.0
+    assert len(np.unique(a["delta_c"])) >= 5
