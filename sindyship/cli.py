@@ -86,8 +86,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_fit(sub)
     _add_evaluate(sub)
     _add_reproduce(sub)
+    from .diagnose import add_diagnose_parser
     from .export import add_export_parser
 
+    add_diagnose_parser(sub)
     add_export_parser(sub)
     return parser
 
@@ -181,6 +183,12 @@ def cmd_reproduce(args) -> int:
     return 0
 
 
+def cmd_diagnose(args) -> int:
+    from .diagnose import cmd_diagnose as run_diagnose
+
+    return run_diagnose(args)
+
+
 def cmd_export(args) -> int:
     from .export import cmd_export as run_export
 
@@ -188,7 +196,7 @@ def cmd_export(args) -> int:
 
 
 COMMANDS = {"simulate": cmd_simulate, "fit": cmd_fit, "evaluate": cmd_evaluate,
-            "reproduce": cmd_reproduce, "export": cmd_export}
+            "reproduce": cmd_reproduce, "diagnose": cmd_diagnose, "export": cmd_export}
 
 
 def main(argv: list[str] | None = None) -> int:

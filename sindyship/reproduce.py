@@ -33,7 +33,7 @@ def _progress(message: str) -> None:
 
 
 def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
-        figures: bool = True, progress=_progress) -> dict:
+        figures: bool = True, diagnose_rounds: int = 3, progress=_progress) -> dict:
     """Run the protocol; return the JSON-ready results (and write files when ``out_dir``).
 
     Returns
@@ -67,6 +67,42 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
                          "selected": model.info.get("selected", {})})
         progress(f"  {method:6s} fitted and flown in {time.perf_counter() - t0:5.1f} s: "
                  + ", ".join(f"{k} {v['mean_distance_L']:.3f} L" for k, v in errors.items()))
+    diagnosis = None
+    if diagnose_rounds:
+        from .diagnose import diagnose_iteratively
+
+        progress("diagnosing missing effects, adding the best one, diagnosing again")
+        t0 = time.perf_counter()
+        iterative = diagnose_iteratively(train, ship, test=test, max_rounds=diagnose_rounds)
+        diagnosis = {"rounds": [], "stopped": iterative.stopped,
+                     "report": iterative.report()}
+        for k, rnd in enumerate(iterative.rounds):
+            d = rnd.diagnosis
+            diagnosis["rounds"].append({
+                "library": d.library.name,
+                "ranking": [{"effect": sc.effect.name, "explained": sc.explained}
+                            for sc in d.ranking],
+                "added": rnd.added,
+            })
+            if k == 0:
+                continue  # the plain library: the "ls" row above
+            effects = list(d.library.effects)
+            errors = d.errors("held-out")
+            results.append({"method": "ls", "library": d.library.name, "effects": effects,
+                            "errors": errors, "active_terms": d.model.n_active(),
+                            "selected": {}})
+            key = "ls+" + "+".join(effects)
+            models[key] = d.model
+            flights[key] = fly_like_batch(d.model.dynamics(), test)
+        if out_dir is not None and figures:
+            import matplotlib.pyplot as plt
+
+            Path(out_dir).mkdir(parents=True, exist_ok=True)
+            fig = iterative.figure()
+            fig.savefig(Path(out_dir) / "diagnosis-rounds.png", dpi=110)
+            plt.close(fig)
+        progress(f"  diagnosis in {time.perf_counter() - t0:5.1f} s: " + " -> ".join(
+            r["library"] for r in diagnosis["rounds"]))
     agreement = ls_agreement(models["ls"].coefficients) if "ls" in models else None
     paper_ls = paper_model(ship, "LS")
     paper_flown = fly_like_batch(paper_ls.dynamics(), test)
@@ -83,6 +119,7 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
     output = {
         "linear_derivatives": linear,
         "results": results,
+        "diagnosis": diagnosis,
         "paper_ls_agreement": agreement,
         "paper_ls_flown": paper_errors,
         "paper_table_10": TABLE_10,
@@ -102,7 +139,7 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
             from .plots import trajectory_overlay
 
             for k, rec in enumerate(test):
-                fig = trajectory_overlay(rec, {m.upper(): flights[m][k] for m in models},
+                fig = trajectory_overlay(rec, {m.upper(): flights[m][k] for m in flights},
                                          L=ship.L, title=f"Held-out {rec.name}")
                 fig.savefig(out / f"trajectory-{rec.name}.png", dpi=110)
                 import matplotlib.pyplot as plt
@@ -137,8 +174,9 @@ def coefficient_table(models: dict, ship=None) -> pd.DataFrame:
 
 def format_report(output: dict) -> str:
     """Plain-text report: Table 10 beside the paper, and the LS agreement check."""
-    lines = ["Held-out mean distance [ship lengths] (paper Table 10 in brackets)", ""]
-    header = f"{'method':8s}" + "".join(f"{n:>22s}" for n in TEST_NAMES)
+    lines = ["Held-out mean distance [ship lengths] (paper Table 10 in brackets; +effect: the",
+             "least-squares model with the terms of effects the diagnosis found missing)", ""]
+    header = f"{'method':30s}" + "".join(f"{n:>22s}" for n in TEST_NAMES)
     lines.append(header)
     for res in output["results"]:
         cells = []
@@ -147,9 +185,15 @@ def format_report(output: dict) -> str:
             value = f"{err['mean_distance_L']:.4f}"
             if err["diverged_at_s"] is not None:
                 value += f" (div {err['diverged_at_s']:.0f}s)"
-            paper = TABLE_10.get(res["method"], {}).get(name)
+            paper = None if res["effects"] else TABLE_10.get(res["method"], {}).get(name)
             cells.append(f"{value} [{paper:.4f}]" if paper is not None else value)
-        lines.append(f"{res['method']:8s}" + "".join(f"{c:>22s}" for c in cells))
+        label = res["method"] + "".join(f"+{e}" for e in res["effects"])
+        lines.append(f"{label:30s}" + "".join(f"{c:>22s}" for c in cells))
+    if output.get("diagnosis"):
+        lines.append("")
+        lines.append("Missing-effect diagnosis (share of the force error each effect explains on "
+                     "manoeuvres left out):")
+        lines.extend("  " + line for line in output["diagnosis"]["report"].splitlines()[:4])
     paper_flown = output.get("paper_ls_flown")
     if paper_flown:
         lines.append("")
@@ -167,11 +211,13 @@ def format_report(output: dict) -> str:
         lines.append("")
         lines.append("Linear derivatives x 1e-5: the MMG's Taylor reference beside the fits")
         methods = [k for k in linear[0] if k not in ("name", "MMG_Taylor", "paper_LS")]
+        widths = [max(10, len(m) + 2) for m in methods]
         lines.append(f"{'':8s}{'MMG':>10s}{'paper LS':>10s}" + "".join(
-            f"{m.upper():>10s}" for m in methods))
+            f"{m.upper():>{w}s}" for m, w in zip(methods, widths, strict=True)))
         for row in linear:
             lines.append(f"{row['name']:8s}{row['MMG_Taylor']:10.1f}{row['paper_LS']:10.1f}"
-                         + "".join(f"{row[m]:10.1f}" for m in methods))
+                         + "".join(f"{row[m]:{w}.1f}"
+                                   for m, w in zip(methods, widths, strict=True)))
         lines.append("(all coefficients: coefficients.csv in the output folder)")
     lines.append(f"Finished in {output['seconds']:.1f} s.")
     return "\n".join(lines)
