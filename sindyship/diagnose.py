@@ -218,71 +218,6 @@ def _one_blas_thread(function):
 
 
 # =============================================================================== flights
-class _CompiledForces:
-    """Forces of eq. 15 from a model's coefficients, evaluated fast for the integrator.
-
-    :meth:`sindyship.model.AbkowitzModel.forces_from_values` evaluates every term through
-    :meth:`Term.evaluate`, which costs about 20 us a term and call; a flight makes ~10^4
-    calls.  Here each term is a product of cached powers of its factors (from the term's
-    machine-readable ``factors``; a function of a variable is evaluated by the one-factor
-    :class:`Term`, so its meaning stays that of :mod:`sindyship.terms`), 20-30 times faster
-    and equal to rounding.  It stands in for the model inside
-    :class:`sindyship.model.AbkowitzDynamics`, so the equations of motion are the model's own.
-    """
-
-    def __init__(self, model: AbkowitzModel) -> None:
-        self.ship = model.ship
-        self.inverse_mass = model.inverse_mass
-        self.rudder_signal = model.rudder_signal
-        self.plan: dict[str, list[tuple[float, tuple]]] = {}
-        self.functions: dict[tuple[str, str], Term] = {}
-        for dof in DOFS:
-            items = []
-            for term in model.library.terms[dof]:
-                coef = model.coefficients[dof][term.text]
-                if coef == 0.0:
-                    continue
-                factors = []
-                for function, base, power in term.factors:
-                    if isinstance(base, str):
-                        factors.append((function, base, power))
-                        if function is not None:
-                            self.functions[function, base] = Term(f"{function}({base})")
-                    else:
-                        coef *= base**power
-                items.append((coef, tuple(factors)))
-            self.plan[dof] = items
-
-    def forces_from_values(self, values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Forces (Prime I) per degree of freedom, as the model's method of that name."""
-        cache: dict[tuple, np.ndarray] = {}
-
-        def atom(function, base, power):
-            key = (function, base, power)
-            if key not in cache:
-                if power == 1:
-                    cache[key] = (
-                        np.asarray(values[base], dtype=float)
-                        if function is None
-                        else self.functions[function, base].evaluate({base: values[base]})
-                    )
-                else:
-                    cache[key] = atom(function, base, power - 1) * atom(function, base, 1)
-            return cache[key]
-
-        zero = 0.0 * np.asarray(values["du"], dtype=float)
-        out = {}
-        for dof, items in self.plan.items():
-            total = zero
-            for coef, factors in items:
-                column = coef
-                for factor in factors:
-                    column = column * atom(*factor)
-                total = total + column
-            out[dof] = total
-        return out
-
-
 def _channel_means(model: AbkowitzModel, record: Trajectory) -> dict[str, float]:
     """The record's mean value of each channel the model needs beyond psi (non-dimensional)."""
     channels = sorted(model.library.channels - {"psi"})
@@ -293,7 +228,7 @@ def _channel_means(model: AbkowitzModel, record: Trajectory) -> dict[str, float]
 
 
 def fly_model(model: AbkowitzModel, records: Sequence[Trajectory]) -> list[Trajectory]:
-    """Fly an identified model the way each record was flown (fast force evaluation).
+    """Fly an identified model the way each record was flown.
 
     The same flights as ``fly_like_batch(model.dynamics(), records)``
     (:mod:`sindyship.evaluation`): zig-zags closed loop, other records replaying their rudder,
@@ -312,11 +247,10 @@ def fly_model(model: AbkowitzModel, records: Sequence[Trajectory]) -> list[Traje
         In the order of ``records``; ``meta["diverged_at"]`` is the divergence time or None.
     """
     if not model.library.channels - {"psi"}:
-        return fly_like_batch(AbkowitzDynamics(_CompiledForces(model)), records)
-    compiled = _CompiledForces(model)
+        return fly_like_batch(model.dynamics(), records)
     out = []
     for record in records:
-        dynamics = AbkowitzDynamics(compiled, _channel_means(model, record))
+        dynamics = AbkowitzDynamics(model, _channel_means(model, record))
         out.extend(fly_like(dynamics, [record]))
     return out
 
