@@ -194,7 +194,10 @@ class MMGModel:
     current: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self):
-        object.__setattr__(self, "_inverse_mass", np.linalg.inv(mass_matrix(self.ship)))
+        ship = self.ship
+        scale = np.array([[1.0], [1.0], [1.0 / ship.L]]) * ship.U0**2 / ship.L
+        object.__setattr__(self, "_scaled_inverse_mass",
+                           scale * np.linalg.inv(mass_matrix(ship)))
 
     def switching(self, state: np.ndarray) -> np.ndarray:
         """beta_R at SI states (7, k): the sign selects gamma_R (see :func:`force_components`)."""
@@ -224,10 +227,6 @@ class MMGModel:
             X = X + pX
             Y = Y + pY
             N = N + pN
-        Minv = self._inverse_mass
-        a_u = Minv[0, 0] * X
-        a_v = Minv[1, 1] * Y + Minv[1, 2] * N
-        a_r = Minv[2, 1] * Y + Minv[2, 2] * N
-        ship = self.ship
-        scale = ship.U0**2 / ship.L
-        return a_u * scale, a_v * scale, a_r * scale / ship.L
+        # M^-1 (paper eq. 1) and the Prime II -> SI scaling folded into one matrix
+        S = self._scaled_inverse_mass
+        return S[0, 0] * X, S[1, 1] * Y + S[1, 2] * N, S[2, 1] * Y + S[2, 2] * N

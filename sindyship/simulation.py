@@ -248,6 +248,7 @@ class _Integrator:
         self.rudder_input = getattr(dynamics, "rudder_input", "actual")
         self.commands = list(commands)
         self.prescribed = np.array([c.prescribed for c in self.commands])
+        self.any_prescribed = bool(self.prescribed.any())
 
     def branch(self, y):
         """Sign branch of the dynamics' switching function (None if it has none)."""
@@ -263,7 +264,7 @@ class _Integrator:
         c, s = np.cos(psi), np.sin(psi)
         target = np.minimum(np.maximum(delta_c, -self.delta_max), self.delta_max)
         ddelta = np.minimum(np.maximum((target - delta) / self.T, -self.rate_max), self.rate_max)
-        if self.prescribed[members].any():
+        if self.any_prescribed and self.prescribed[members].any():
             for j, m in enumerate(members):
                 if self.prescribed[m]:
                     ddelta[j] = self.commands[m].rate(t)
@@ -455,39 +456,59 @@ def _advance(integ: _Integrator, commands, time, y, h, members, t_out, samples, 
             out_cmd[k, members[smooth]] = delta_c[smooth]
     for idx in split:
         j = members[idx]
-        y[:, j] = _advance_one(integ, commands[j], j, time, h, y_start[:, idx], t_out, samples,
-                               out, out_cmd)
-        fsal.valid[j] = False
+        first = (y_end[:, idx : idx + 1], f_start[:, idx : idx + 1])
+        y[:, j], f_end_j, delta_c_j, branch_j = _advance_one(
+            integ, commands[j], j, time, h, y_start[:, idx], t_out, samples, out, out_cmd,
+            first=first)
+        if f_end_j is None:
+            fsal.valid[j] = False
+        else:
+            fsal.store(np.array([j]), f_end_j, delta_c_j, branch_j)
     return y
 
 
-def _advance_one(integ, cmd, j, time, h, y0, t_out, samples, out, out_cmd):
-    """Advance one member over [time, time + h], stopping at every discontinuity."""
+def _advance_one(integ, cmd, j, time, h, y0, t_out, samples, out, out_cmd, first=None):
+    """Advance one member over [time, time + h], stopping at every discontinuity.
+
+    ``first`` holds the batch's full step from the same start (end state and start
+    derivative), reused for the first piece.  Returns the final state, its derivative, and the
+    command and branch that derivative belongs to (for the next step's first stage).
+    """
     col = np.array([j])
     t_end = time + h
     tol = 1e-9 * max(1.0, h)
     y = y0.reshape(N_STATE, 1)
+    forced_branch = None
+    f1 = delta_c = branch = None
     for _ in range(64):  # a bounded number of switches per step
         remaining = t_end - time
         if remaining <= tol:
             break
         delta_c = np.array([cmd.value(time, y[:, 0])])
-        branch = integ.branch(y)
+        branch = integ.branch(y) if forced_branch is None else forced_branch
+        forced_branch = None
         t_change = cmd.next_change(time)
         h_try = min(remaining, t_change - time) if t_change < t_end - tol else remaining
-        y_try, f0 = integ.step(time, y, h_try, delta_c, col, branch)
+        if first is not None and h_try == remaining:
+            y_try, f0 = first
+        else:
+            y_try, f0 = integ.step(time, y, h_try, delta_c, col, branch,
+                                   f0=None if first is None else first[1])
+        first = None
         f1 = integ.rhs(time + h_try, y_try, delta_c, col, branch)
         theta, kind = 1.0, "change" if h_try < remaining else None
         g_end = cmd.event(y_try[:, 0])
         if g_end is not None and g_end >= 0.0:
-            theta = _bisect(lambda s: cmd.event(s) >= 0.0, y, f0, y_try, f1, h_try)
+            theta = _crossing(cmd.event, y, f0, y_try, f1, h_try)
             kind = "event"
         if branch is not None:
-            def flipped(s, b=bool(branch[0])):
-                return bool(integ.branch(s.reshape(N_STATE, 1))[0]) != b
+            sign = -1.0 if branch[0] else 1.0  # g < 0 on the present branch
 
-            if flipped(y_try[:, 0]):
-                theta_b = _bisect(flipped, y, f0, y_try, f1, h_try)
+            def g_branch(state, sign=sign):
+                return sign * float(integ.switching(state.reshape(N_STATE, 1))[0])
+
+            if bool(integ.branch(y_try)[0]) != bool(branch[0]):
+                theta_b = _crossing(g_branch, y, f0, y_try, f1, h_try)
                 if theta_b < theta:
                     theta, kind = theta_b, "branch"
         h_taken = theta * h_try
@@ -505,20 +526,45 @@ def _advance_one(integ, cmd, j, time, h, y0, t_out, samples, out, out_cmd):
         y = y_new
         if kind == "event":
             cmd.on_event()
+            f1 = None  # the command changed: the derivative at the end is stale
+        elif kind == "branch":
+            forced_branch = ~branch  # the state sits on the switching surface
+            f1 = None
+        elif kind == "change":
+            f1 = None
         if kind is None:
             break
-    return y[:, 0]
+    return y[:, 0], f1, delta_c, branch
 
 
-def _bisect(crossed, y0, f0, y1, f1, h) -> float:
-    """Smallest fraction of a step at which ``crossed(state)`` becomes true (Hermite states)."""
-    if crossed(y0[:, 0]):
+def _crossing(g, y0, f0, y1, f1, h) -> float:
+    """Fraction of a step where ``g`` (negative at its start) reaches zero.
+
+    The state inside the step is the cubic Hermite interpolant of the step's end points and
+    derivatives (fourth-order accurate, like the step); the root is bracketed and found by the
+    Illinois variant of regula falsi, to 1e-12 of the step.
+    """
+    a, b = 0.0, 1.0
+    ga = g(y0[:, 0])
+    if ga >= 0.0:
         return 0.0
-    lo, hi = 0.0, 1.0
-    while hi - lo > 1e-12:
-        mid = 0.5 * (lo + hi)
-        if crossed(_hermite(y0[:, 0], f0[:, 0], y1[:, 0], f1[:, 0], h, mid)):
-            hi = mid
+    gb = g(y1[:, 0])
+    side = 0
+    for _ in range(100):
+        c = (a * gb - b * ga) / (gb - ga) if gb != ga else 0.5 * (a + b)
+        if not a < c < b:
+            c = 0.5 * (a + b)
+        gc = g(_hermite(y0[:, 0], f0[:, 0], y1[:, 0], f1[:, 0], h, c))
+        if gc >= 0.0:
+            b, gb = c, gc
+            if side == 1:
+                ga *= 0.5
+            side = 1
         else:
-            lo = mid
-    return hi
+            a, ga = c, gc
+            if side == -1:
+                gb *= 0.5
+            side = -1
+        if b - a < 1e-12 or gc == 0.0:
+            break
+    return b
