@@ -51,6 +51,12 @@ def _add_fit(sub) -> None:
                    help="Savitzky-Golay window [s] (with --derivative savgol)")
     p.add_argument("--resample", type=float, default=None,
                    help="resample irregular records onto this interval [s]")
+    p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",
+                   help="smooth noisy records before differencing: a Savitzky-Golay or a "
+                   "Kalman (RTS) smoother over W seconds, or 'auto' to choose the setting by "
+                   "leave-one-manoeuvre-out flights on the training records")
+    p.add_argument("--n-jobs", type=int, default=None,
+                   help="parallel workers for --smoothing auto (joblib; -1: every core)")
     p.add_argument("--seed", type=int, default=0, help="seed of randomised optimizers")
     p.add_argument("--out", required=True, help="output model JSON")
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
@@ -140,9 +146,24 @@ def cmd_fit(args) -> int:
     records = _read_records(args.data, args.resample)
     effects = [e.strip() for e in args.effects.split(",") if e.strip()]
     params = {"random_state": args.seed} if args.optimizer == "svr" else {}
+    smoothing = None
+    if args.smoothing != "none":
+        from .smoothing import SmoothingSetting, choose_smoothing, smooth_records
+
+        if args.smoothing == "auto":
+            smoothing, table = choose_smoothing(records, ship, optimizer=args.optimizer,
+                                                library=args.library, effects=effects,
+                                                params=params, n_jobs=args.n_jobs)
+            _progress(table.to_string())
+        else:
+            smoothing = SmoothingSetting.parse(args.smoothing)
+        _progress(f"smoothing: {smoothing.as_dict()}")
+        records = smooth_records(records, smoothing)
     model = fit(records, ship, library=args.library, effects=effects, optimizer=args.optimizer,
                 params=params, rudder_signal=args.rudder_signal, derivative=args.derivative,
                 window=args.window)
+    if smoothing is not None:
+        model.info["smoothing"] = smoothing.as_dict()
     model.save(args.out)
     _progress(f"wrote {args.out}: {model!r}")
     if args.json:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import SindyshipInputError
-from .library import TermLibrary, feature_matrix, load_effect, load_library
+from .library import TermLibrary, load_effect, load_library
 from .model import AbkowitzModel
 from .ships import Ship
 from .targets import DOFS, regression_targets
@@ -70,25 +70,64 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
     """
     if not records:
         raise SindyshipInputError("no records to fit; pass at least one measurement CSV.")
+    check_channels(library, records)
     shell = AbkowitzModel(ship=ship, library=library, coefficients={},
                           rudder_signal=rudder_signal)
-    parts: dict[str, list] = {dof: [] for dof in DOFS}
-    targets: dict[str, list] = {dof: [] for dof in DOFS}
-    groups = []
+    n_total = sum(record.n_samples for record in records)
+    # one column-major array per degree of freedom, filled column by column: no stacking
+    # copies, and the layout LAPACK works in
+    features = {dof: np.empty((n_total, len(library.terms[dof])), order="F") for dof in DOFS}
+    target = {dof: np.empty(n_total) for dof in DOFS}
+    group_array = np.empty(n_total, dtype=int)
+    start = 0
     for index, record in enumerate(records):
+        stop = start + record.n_samples
         values = shell.variables(record)
         forces = regression_targets(record, ship, method=derivative, window=window)
         for dof in DOFS:
-            parts[dof].append(feature_matrix(library.terms[dof], values))
-            targets[dof].append(forces[dof])
-        groups.append(np.full(record.n_samples, index))
-    group_array = np.concatenate(groups)
+            for j, term in enumerate(library.terms[dof]):
+                features[dof][start:stop, j] = term.evaluate(values)
+            target[dof][start:stop] = forces[dof]
+        group_array[start:stop] = index
+        start = stop
     return {
-        dof: Design(features=np.vstack(parts[dof]), target=np.concatenate(targets[dof]),
-                    groups=group_array,
+        dof: Design(features=features[dof], target=target[dof], groups=group_array,
                     terms=tuple(t.text for t in library.terms[dof]))
         for dof in DOFS
     }
+
+
+def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
+    """Every data channel a term uses must be in every record.
+
+    Raises
+    ------
+    SindyshipInputError
+        Naming the file the term comes from (the library's or an effect's), the degree of
+        freedom, the term, the channel and the record.
+    """
+    from .terms import describe_variable
+
+    origin = {}
+    for name in library.effects:
+        effect = load_effect(name)
+        for dof in DOFS:
+            for term in effect.terms[dof]:
+                origin.setdefault((dof, term.text), effect.source or f'effect "{name}"')
+    for record in records:
+        for dof in DOFS:
+            for term in library.terms[dof]:
+                for variable in sorted(term.variables):
+                    column = describe_variable(variable).column
+                    if column == "rudder" or record.has(column):
+                        continue
+                    where = origin.get((dof, term.text),
+                                       library.source or f'library "{library.name}"')
+                    raise SindyshipInputError(
+                        f'{where}: the {dof} term "{term.text}" uses the channel "{column}", '
+                        f'which record "{record.name}" does not have; add the column to the '
+                        "data or remove the term."
+                    )
 
 
 def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary = "abkowitz",

@@ -252,7 +252,7 @@ class AbkowitzModel:
         if not isinstance(data, Mapping):
             raise SindyshipInputError(f"{source}: a saved model is a JSON object.")
         version = data.get("format_version")
-        if not isinstance(version, int):
+        if not isinstance(version, int) or isinstance(version, bool):
             raise SindyshipInputError(f"{source}: not a sindyship model (no format_version).")
         if version > FORMAT_VERSION:
             raise SindyshipInputError(
@@ -262,8 +262,25 @@ class AbkowitzModel:
         for key in ("ship", "library", "coefficients", "nondim"):
             if key not in data:
                 raise SindyshipInputError(f"{source}: the saved model lacks {key!r}.")
+        for key in ("optimizer", "info"):
+            if not isinstance(data.get(key, {}), Mapping):
+                raise SindyshipInputError(f"{source}: {key!r} must be a JSON object.")
+        optimizer = dict(data.get("optimizer", {"name": "given", "params": {}}))
+        if not isinstance(optimizer.get("name", "given"), str) or not isinstance(
+                optimizer.get("params", {}), Mapping):
+            raise SindyshipInputError(
+                f"{source}: 'optimizer' needs a text 'name' and an object 'params'."
+            )
         if ship is None:
-            ship = load_ship(data["ship"])
+            if not isinstance(data["ship"], str):
+                raise SindyshipInputError(f"{source}: 'ship' must be a ship name or file.")
+            try:
+                ship = load_ship(data["ship"])
+            except SindyshipInputError as error:
+                raise SindyshipInputError(
+                    f"{source}: the model's ship {data['ship']!r} cannot be loaded ({error}); "
+                    "pass the ship with --ship."
+                ) from None
         nondim = data["nondim"]
         try:
             L, U0 = float(nondim["L"]), float(nondim["U0"])
@@ -280,6 +297,10 @@ class AbkowitzModel:
             raise SindyshipInputError(f"{source}: 'coefficients' needs the keys X, Y and N.")
         clean: dict[str, dict[str, float]] = {}
         for dof in DOFS:
+            if not isinstance(coefficients[dof], Mapping):
+                raise SindyshipInputError(
+                    f"{source}: coefficients {dof!r} must be an object of term: value pairs."
+                )
             clean[dof] = {}
             for term, value in coefficients[dof].items():
                 if isinstance(value, bool) or not isinstance(value, int | float) \
@@ -288,10 +309,16 @@ class AbkowitzModel:
                         f"{source}: coefficient {dof}[{term!r}] must be a finite number."
                     )
                 clean[dof][term] = float(value)
-        return cls(ship=ship, library=library, coefficients=clean,
-                   optimizer=dict(data.get("optimizer", {"name": "given", "params": {}})),
-                   rudder_signal=str(data.get("rudder_signal", "actual")),
-                   info=dict(data.get("info", {})))
+        rudder_signal = data.get("rudder_signal", "actual")
+        if rudder_signal not in ("actual", "commanded"):
+            raise SindyshipInputError(
+                f"{source}: rudder_signal must be 'actual' or 'commanded', not {rudder_signal!r}."
+            )
+        try:
+            return cls(ship=ship, library=library, coefficients=clean, optimizer=optimizer,
+                       rudder_signal=rudder_signal, info=dict(data.get("info", {})))
+        except SindyshipInputError as error:
+            raise SindyshipInputError(f"{source}: {error}") from None
 
     @classmethod
     def load(cls, path: str | Path, *, ship: Ship | None = None) -> AbkowitzModel:

@@ -1,6 +1,11 @@
-"""Figures: each function takes data or fitted objects and an optional matplotlib ``ax``.
+"""Figures: each function takes data or fitted objects and an optional matplotlib ``ax``
+and returns the figure.
 
-The command line and the notebooks use these same functions.
+The command line and the notebooks use these same functions: trajectory overlays in the style
+of the paper's Figures 2-5, time series, coefficient bars beside a reference, sparsity paths and
+their Pareto view, before/after bars, and (from :mod:`sindyship.diagnose_plots`) the
+comparison of a model with a measurement, force residuals over time and binned over the state,
+the ranking of missing effects and the error after each diagnosed effect.
 """
 
 from __future__ import annotations
@@ -10,6 +15,16 @@ from collections.abc import Mapping
 import matplotlib.pyplot as plt
 import numpy as np
 
+from .diagnose_plots import (  # noqa: F401  (the diagnosis figures, one namespace for all)
+    plot_before_after,
+    plot_comparison,
+    plot_ranking,
+    plot_residual_bins,
+    plot_residual_time_series,
+    plot_rounds,
+    plot_time_series,
+    plot_track,
+)
 from .trajectory import Trajectory
 
 

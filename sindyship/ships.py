@@ -301,6 +301,23 @@ def _ship_dir() -> Path:
     return Path(str(resources.files("sindyship") / "ships"))
 
 
+def _finite(value: Any, what: str, source: str) -> float:
+    """A finite number from a ship file, or an error naming the file and the key."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise SindyshipInputError(f"{source}: {what} must be a finite number, not {value!r}.")
+    return float(value)
+
+
+#: Quantities that must be positive, by section.
+_POSITIVE = {
+    "particulars": ("L", "B", "d", "displacement", "rho", "U0"),
+    "mass": ("m", "I_zz"),
+    "propeller": ("D_P",),
+    "rudder": ("A_R",),
+    "servo": ("rate_max", "delta_max"),
+}
+
+
 def _group(cls: type, table: Any, section: str, source: str) -> Any:
     if not isinstance(table, dict):
         raise SindyshipInputError(
@@ -333,6 +350,11 @@ def _group(cls: type, table: Any, section: str, source: str) -> Any:
             raise SindyshipInputError(
                 f"{source}: [{section}] {key} must be a finite number, not {value!r}."
             )
+    for key in _POSITIVE.get(section, ()):
+        if key in table and not table[key] > 0:
+            raise SindyshipInputError(
+                f"{source}: [{section}] {key} must be positive, not {table[key]!r}."
+            )
     values = dict(table)
     if "K_T" in values:
         values["K_T"] = tuple(float(x) for x in values["K_T"])
@@ -357,8 +379,13 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
     particulars = _group(Particulars, data.get("particulars"), "particulars", source)
     if particulars.L <= 0 or particulars.d <= 0 or particulars.U0 <= 0 or particulars.rho <= 0:
         raise SindyshipInputError(f"{source}: L, d, U0 and rho in [particulars] must be positive.")
+    for section in ("mass", "hull", "rudder", "abkowitz"):
+        if section in data and not isinstance(data[section], dict):
+            raise SindyshipInputError(f"{source}: [{section}] must be a table of numbers.")
     mass_table = dict(data.get("mass") or {})
     k_zz = mass_table.pop("k_zz", None)
+    if k_zz is not None:
+        k_zz = _finite(k_zz, "[mass] k_zz", source)
     p = particulars
     scale_m = 0.5 * p.rho * p.L**2 * p.d
     if "m" not in mass_table:
@@ -376,6 +403,11 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
             f"{source}: [propeller] wake_model must be 'constant' or 'drift'."
         )
     rudder_table = dict(data.get("rudder") or {})
+    for key in ("lambda", "H_R"):
+        if key in rudder_table:
+            rudder_table[key] = _finite(rudder_table[key], f"[rudder] {key}", source)
+            if rudder_table[key] <= 0:
+                raise SindyshipInputError(f"{source}: [rudder] {key} must be positive.")
     if "lambda" in rudder_table:
         lam = rudder_table.pop("lambda")
         rudder_table.setdefault("f_alpha", 6.13 * lam / (2.25 + lam))
@@ -397,11 +429,13 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
             f"{source}: unknown [hull] coefficient {unknown[0]!r} for hull_form "
             f"{data['hull_form']!r}."
         )
+    hull = {k: _finite(v, f"[hull] {k}", source) for k, v in hull.items()}
     abkowitz = dict(data.get("abkowitz") or {})
     valid_abk = {"X_udot", "Y_vdot", "Y_rdot", "N_vdot", "N_rdot"}
     unknown = sorted(set(abkowitz) - valid_abk)
     if unknown:
         raise SindyshipInputError(f"{source}: unknown [abkowitz] key {unknown[0]!r}.")
+    abkowitz = {k: _finite(v, f"[abkowitz] {k}", source) for k, v in abkowitz.items()}
     return Ship(
         name=data["name"],
         title=str(data.get("title", data["name"])),

@@ -148,3 +148,14 @@ def test_reproduce_json_contract(tmp_path):
     assert doc["seconds"] < 120
     assert (tmp_path / "rep" / "results.json").exists()
     assert (tmp_path / "rep" / "trajectory-zz10_10.png").exists()
+
+
+def test_fit_with_smoothing_records_the_setting(records, tmp_path):
+    model = tmp_path / "smoothed.json"
+    train = [records[k] for k in ("tc35", "tc-35", "zz20", "spiral")]
+    assert main(["fit", *map(str, train), "--ship", "kcs", "--smoothing", "savgol:21",
+                 "--out", str(model)]) == 0
+    info = json.loads(model.read_text())["info"]
+    assert info["smoothing"] == {"method": "savgol", "window_s": 21.0, "order": 3}
+    assert main(["fit", str(train[0]), "--ship", "kcs", "--smoothing", "bogus:x",
+                 "--out", str(tmp_path / "x.json")]) == 2
