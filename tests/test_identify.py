@@ -151,3 +151,15 @@ def test_saved_model_round_trip(tmp_path, protocol_runs, kcs):
     assert again.coefficients == model.coefficients
     assert again.optimizer["name"] == "lasso"
     assert json.loads(path.read_text())["format_version"] == 1
+
+
+def test_a_saved_format_1_model_still_loads_and_flies(kcs):
+    """Saved models are a contract: files written by earlier versions keep loading."""
+    path = Path(__file__).parent / "fixtures" / "model-format1-lasso.json"
+    model = AbkowitzModel.load(path)
+    assert model.optimizer["name"] == "lasso"
+    assert model.library.name == "abkowitz"
+    assert model.coefficients["Y"]["v"] == pytest.approx(
+        json.loads(path.read_text())["coefficients"]["Y"]["v"])
+    (run,) = fly(model.dynamics(), protocol_manoeuvres(600.0)["test"][:1])
+    assert run.meta["diverged_at"] is None
