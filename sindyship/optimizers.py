@@ -262,6 +262,118 @@ def _qr(Xs: NDArray, Ys: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     return R, Z, rest
 
 
+#: Rows per block of the blocked QR (a block of ~24 columns fits in the CPU cache).
+_BLOCK_ROWS = 16384
+
+
+class _Compressed:
+    """A regression problem compressed to one small QR factor per block of rows.
+
+    Each block's rows of ``A = [c | X_free | Y]`` (``c`` the intercept column, when there is
+    one) are reduced to their triangular factor; the factor of any union of blocks is the QR
+    of their stacked factors.  From it come, exactly and without another pass over the data,
+    the column means and scales of those rows, the standardised least-squares problem
+    ``(R, Z, rest)`` of :func:`_qr`, and the squared error of any coefficients on them.  So a
+    cross-validation fold costs a QR of a few dozen rows, and fitting is linear in the number
+    of samples (no copies of ``X`` per fold).
+    """
+
+    def __init__(self, X: NDArray, Y: NDArray, free: NDArray, intercept: int | None,
+                 blocks: list[NDArray]) -> None:
+        self.free = free
+        self.intercept = intercept
+        self.n_free = int(free.sum())
+        self.n_targets = Y.shape[1]
+        self.const_value = float(X[0, intercept]) if intercept is not None else 1.0
+        self.blocks = []
+        for rows in blocks:
+            parts = [X[rows][:, [intercept]]] if intercept is not None else []
+            A = np.hstack([*parts, X[rows][:, free], Y[rows]])
+            R = np.linalg.qr(A, mode="r")
+            magnitude = np.abs(A).max(axis=0, initial=0.0) if len(rows) else np.zeros(A.shape[1])
+            self.blocks.append((R, magnitude, len(rows)))
+
+    def _factor(self, which) -> tuple[NDArray, NDArray, int]:
+        parts = [self.blocks[b] for b in which]
+        R = np.linalg.qr(np.vstack([p[0] for p in parts]), mode="r")
+        magnitude = np.max([p[1] for p in parts], axis=0)
+        return R, magnitude, sum(p[2] for p in parts)
+
+    def problem(self, which) -> tuple[_Standardiser, NDArray, NDArray, NDArray]:
+        """The standardiser and ``(R, Z, rest)`` of the rows of the blocks ``which``."""
+        R, magnitude, n = self._factor(which)
+        p, k = self.n_free, 1 if self.intercept is not None else 0
+        if k:
+            x_mean = self.const_value * R[0, 1:1 + p] / R[0, 0]
+            y_mean = self.const_value * R[0, 1 + p:] / R[0, 0]
+            Rc = R[1:, 1:]
+        else:
+            x_mean, y_mean, Rc = np.zeros(p), np.zeros(self.n_targets), R
+        scale = np.sqrt(np.sum(Rc**2, axis=0) / n)
+        x_scale, y_scale = scale[:p].copy(), scale[p:].copy()
+        dead = ~(x_scale > _CONSTANT_RTOL * magnitude[k:k + p])
+        x_scale[dead] = 1.0
+        y_scale[~(y_scale > 0)] = 1.0
+        st = _Standardiser.__new__(_Standardiser)
+        st.free, st.intercept, st.const_value = self.free, self.intercept, self.const_value
+        st.x_mean, st.y_mean, st.x_scale, st.y_scale, st.dead = (
+            x_mean, y_mean, x_scale, y_scale, dead)
+        Rs = Rc / np.concatenate([x_scale, y_scale])
+        Rs[:, :p][:, dead] = 0.0  # zero columns keep the factor triangular
+        return st, Rs[:p, :p], Rs[:p, p:], np.sum(Rs[p:, p:] ** 2, axis=0)
+
+    def squared_error(self, which, coef: NDArray, t: int) -> NDArray:
+        """Mean squared error of target ``t`` on the blocks ``which`` for physical
+        coefficients ``coef`` of shape (n_features, n_models)."""
+        R, _, n = self._factor(which)
+        parts = [coef[[self.intercept]]] if self.intercept is not None else []
+        minus_y = np.zeros((self.n_targets, coef.shape[1]))
+        minus_y[t] = -1.0
+        V = np.vstack([*parts, coef[self.free], minus_y])
+        return np.sum((R @ V) ** 2, axis=0) / n
+
+
+def _row_blocks(n: int, splits: list[tuple[NDArray, NDArray]] | None
+                ) -> tuple[list[NDArray], list[list[int]] | None]:
+    """Blocks of rows, and for each split the blocks of its test rows, or None when the test
+    sets do not partition the rows (then folds are fitted directly)."""
+    if splits is not None:
+        tests = [np.sort(test) for _, test in splits]
+        covered = np.zeros(n, dtype=int)
+        for test in tests:
+            covered[test] += 1
+        if np.all(covered == 1):
+            blocks, fold_blocks = [], []
+            for test in tests:
+                pieces = np.array_split(test, max(1, int(np.ceil(len(test) / _BLOCK_ROWS))))
+                fold_blocks.append(list(range(len(blocks), len(blocks) + len(pieces))))
+                blocks.extend(pieces)
+            return blocks, fold_blocks
+    pieces = np.array_split(np.arange(n), max(1, int(np.ceil(n / _BLOCK_ROWS))))
+    return pieces, None
+
+
+def _folds(compressed: _Compressed, splits, fold_blocks, X: NDArray, Y: NDArray):
+    """For every split: its index, the training standardiser, the standardised problem
+    ``(R, Z)`` and a function ``error(coef, t)`` giving the held-out mean squared error of
+    target ``t`` for physical coefficients (n_features, n_models)."""
+    for f, (train, test) in enumerate(splits):
+        if fold_blocks is not None:
+            held_out = fold_blocks[f]
+            kept = [b for b in range(len(compressed.blocks)) if b not in set(held_out)]
+            fold, Rf, Zf, _ = compressed.problem(kept)
+
+            def error(coef, t, held_out=held_out):
+                return compressed.squared_error(held_out, coef, t)
+        else:  # overlapping test sets: fit the fold's rows directly
+            fold = _Standardiser(X[train], Y[train], compressed.free, compressed.intercept)
+            Rf, Zf, _ = _qr(fold.transform_X(X[train]), fold.transform_Y(Y[train]))
+
+            def error(coef, t, test=test):
+                return np.mean((X[test] @ coef - Y[test, t][:, None]) ** 2, axis=0)
+        yield f, fold, Rf, Zf, error
+
+
 def _lstsq(A: NDArray, b: NDArray) -> NDArray:
     return scipy.linalg.lstsq(A, b, lapack_driver="gelsd", check_finite=False)[0]
 
@@ -399,8 +511,19 @@ class LeastSquares(_LinearModel):
         if self.column_scaling:
             norms = np.linalg.norm(X, axis=0)
             scale[norms > 0] = norms[norms > 0]
+        n, p = X.shape
+        if n > 2 * (p + Y.shape[1]):
+            # compress [X | Y] block by block to its triangular factor: the same solution
+            # (and singular values) as on the full matrix, in time linear in n
+            R = np.zeros((0, p + Y.shape[1]))
+            for rows in np.array_split(np.arange(n), max(1, int(np.ceil(n / _BLOCK_ROWS)))):
+                block = np.hstack([X[rows] / scale, Y[rows]])
+                R = np.linalg.qr(np.vstack([R, block]), mode="r")
+            A, B = R[:p, :p], R[:p, p:]
+        else:
+            A, B = X / scale, Y
         W, _, rank, sv = scipy.linalg.lstsq(
-            X / scale, Y, cond=self.cond, lapack_driver="gelsd", check_finite=False
+            A, B, cond=self.cond, lapack_driver="gelsd", check_finite=False
         )
         self.coef_ = (W / scale[:, None]).T
         self.rank_ = int(rank)
@@ -538,8 +661,13 @@ class STLSQ(_LinearModel):
         X, Y, groups = self._validate_fit_input(X, y, groups)
         n_features, n_targets = X.shape[1], Y.shape[1]
         free, intercept = _column_roles(X)
-        full = _Standardiser(X, Y, free, intercept)
-        R, Z, _ = _qr(full.transform_X(X), full.transform_Y(Y))
+        splits = None
+        if self.threshold == "cv":
+            self.cv_, split_groups = _resolve_cv(self.cv, groups)
+            splits = _splits(self.cv_, X, Y, split_groups)
+        blocks, fold_blocks = _row_blocks(X.shape[0], splits)
+        compressed = _Compressed(X, Y, free, intercept, blocks)
+        full, R, Z, _ = compressed.problem(range(len(blocks)))
 
         if self.threshold != "cv":
             thresholds = np.full((n_targets, 1), float(self.threshold))
@@ -564,18 +692,14 @@ class STLSQ(_LinearModel):
         if self.threshold != "cv":
             chosen = np.zeros(n_targets, dtype=int)
         else:
-            self.cv_, split_groups = _resolve_cv(self.cv, groups)
-            splits = _splits(self.cv_, X, Y, split_groups)
             mse = np.zeros((n_targets, thresholds.shape[1], len(splits)))
-            for f, (train, test) in enumerate(splits):
-                fold = _Standardiser(X[train], Y[train], free, intercept)
-                Rf, Zf, _ = _qr(fold.transform_X(X[train]), fold.transform_Y(Y[train]))
+            for f, fold, Rf, Zf, error in _folds(compressed, splits, fold_blocks, X, Y):
                 for t in range(n_targets):
                     W = np.column_stack(
                         [_stlsq(Rf, Zf[:, t], thr, self.max_iter)[0] for thr in thresholds[t]]
                     )
-                    pred = X[test] @ fold.physical(W, np.zeros(W.shape[1]), t, n_features)
-                    mse[t, :, f] = np.mean((pred - Y[test, t][:, None]) ** 2, axis=0)
+                    mse[t, :, f] = error(fold.physical(W, np.zeros(W.shape[1]), t, n_features),
+                                         t)
             mean_mse = mse.mean(axis=2)
             y_ms = np.mean(Y**2, axis=0)
             chosen = np.array(
@@ -851,21 +975,20 @@ class LassoCV(_LinearModel):
         free, intercept = _column_roles(X)
         max_events = 50 * n_features + 100
 
-        full = _Standardiser(X, Y, free, intercept)
-        R, Z, rest = _qr(full.transform_X(X), full.transform_Y(Y))
+        self.cv_, split_groups = _resolve_cv(self.cv, groups)
+        splits = _splits(self.cv_, X, Y, split_groups)
+        blocks, fold_blocks = _row_blocks(n_samples, splits)
+        compressed = _Compressed(X, Y, free, intercept, blocks)
+        full, R, Z, rest = compressed.problem(range(len(blocks)))
         grids = [self._grid(R, Z[:, t], rest[t], n_samples) for t in range(n_targets)]
         alphas = np.vstack(grids)
 
-        self.cv_, split_groups = _resolve_cv(self.cv, groups)
-        splits = _splits(self.cv_, X, Y, split_groups)
         mse = np.zeros((n_targets, alphas.shape[1], len(splits)))
-        for f, (train, test) in enumerate(splits):
-            fold = _Standardiser(X[train], Y[train], free, intercept)
-            Rf, Zf, _ = _qr(fold.transform_X(X[train]), fold.transform_Y(Y[train]))
+        for f, fold, Rf, Zf, error in _folds(compressed, splits, fold_blocks, X, Y):
+            n_train = n_samples - len(splits[f][1])
             for t in range(n_targets):
-                W = _lasso_path_exact(Rf, Zf[:, t], train.size * alphas[t], max_events)
-                pred = X[test] @ fold.physical(W, np.zeros(W.shape[1]), t, n_features)
-                mse[t, :, f] = np.mean((pred - Y[test, t][:, None]) ** 2, axis=0)
+                W = _lasso_path_exact(Rf, Zf[:, t], n_train * alphas[t], max_events)
+                mse[t, :, f] = error(fold.physical(W, np.zeros(W.shape[1]), t, n_features), t)
 
         coef_path = np.zeros((n_targets, n_features, alphas.shape[1]))
         chosen = np.zeros(n_targets, dtype=int)
