@@ -59,7 +59,6 @@ True
 from __future__ import annotations
 
 import argparse
-import functools
 import json
 import math
 import os
@@ -75,7 +74,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import scipy.linalg
-from threadpoolctl import threadpool_limits
 
 from .errors import SindyshipInputError
 from .evaluation import error_summary, fly_like, fly_like_batch
@@ -89,6 +87,7 @@ from .library import (
     nondimensional_variables,
 )
 from .model import AbkowitzDynamics, AbkowitzModel, write_text_atomic
+from .optimizers import _one_blas_thread
 from .ships import Ship
 from .terms import Term, describe_variable
 from .trajectory import Trajectory
@@ -198,23 +197,6 @@ def _bin_labels(bins: StateBins, variable: str) -> list[str]:
 
 def _bin_index(values: np.ndarray, bins: StateBins) -> np.ndarray:
     return np.digitize(values, bins.edges)
-
-
-def _one_blas_thread(function):
-    """Run ``function`` with BLAS limited to one thread.
-
-    The least-squares problems here are tall and thin (tens of columns); a multi-threaded
-    BLAS gains nothing on them and, competing with other processes for the cores, makes a QR
-    factorisation ~20 times slower (measured: 24 QRs of 1000 x 50 took 0.72 s with two
-    OpenBLAS threads on a busy two-core machine, 0.04 s with one).
-    """
-
-    @functools.wraps(function)
-    def wrapper(*args, **kwargs):
-        with threadpool_limits(limits=1, user_api="blas"):
-            return function(*args, **kwargs)
-
-    return wrapper
 
 
 # =============================================================================== flights

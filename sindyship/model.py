@@ -137,8 +137,6 @@ class AbkowitzModel:
                 if c != 0.0:
                     w[index[term.text]] += c
             self._weights[dof] = w
-        self._active = {dof: [(t, self.coefficients[dof][t.text]) for t in self.library.terms[dof]
-                              if self.coefficients[dof][t.text] != 0.0] for dof in DOFS}
 
     # ----------------------------------------------------------------------------------------
     def coefficient_vector(self, dof: str) -> np.ndarray:
@@ -147,7 +145,8 @@ class AbkowitzModel:
 
     def n_active(self) -> dict[str, int]:
         """Number of non-zero coefficients per degree of freedom."""
-        return {dof: len(self._active[dof]) for dof in DOFS}
+        return {dof: sum(value != 0.0 for value in self.coefficients[dof].values())
+                for dof in DOFS}
 
     def forces_from_values(self, values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
         """Forces of eq. 15 (Prime I) from non-dimensional variables, term by term.

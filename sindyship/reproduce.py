@@ -134,7 +134,7 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
             write_text_atomic(out / f"equations-{method}.tex", latex_document_part(model))
             write_text_atomic(out / f"simulator-{method}.py", generate_python(
                 model, source_note="sindyship reproduce: the paper's KCS training set"))
-        coefficient_table(models, ship).to_csv(out / "coefficients.csv", index=False)
+        table.to_csv(out / "coefficients.csv", index=False)
         if figures:
             from .plots import trajectory_overlay
 
