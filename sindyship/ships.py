@@ -361,8 +361,7 @@ def _group(cls: type, table: Any, section: str, source: str) -> Any:
     return cls(**values)
 
 
-def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
-    """Build a :class:`Ship` from the parsed TOML layout, validating every field."""
+def _check_top_level(data: dict, source: str) -> None:
     for key in ("name", "hull_form", "speed_reference", "coriolis"):
         if not isinstance(data.get(key), str):
             raise SindyshipInputError(f"{source}: top-level key {key!r} (a string) is missing.")
@@ -376,17 +375,17 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
             raise SindyshipInputError(
                 f"{source}: {key} = {data[key]!r} is not one of {', '.join(valid)}."
             )
-    particulars = _group(Particulars, data.get("particulars"), "particulars", source)
-    if particulars.L <= 0 or particulars.d <= 0 or particulars.U0 <= 0 or particulars.rho <= 0:
-        raise SindyshipInputError(f"{source}: L, d, U0 and rho in [particulars] must be positive.")
     for section in ("mass", "hull", "rudder", "abkowitz"):
         if section in data and not isinstance(data[section], dict):
             raise SindyshipInputError(f"{source}: [{section}] must be a table of numbers.")
+
+
+def _mass_properties(data: dict, p: Particulars, source: str) -> MassProperties:
+    """[mass] with m from the displacement and I_zz from k_zz when not given (Prime II)."""
     mass_table = dict(data.get("mass") or {})
     k_zz = mass_table.pop("k_zz", None)
     if k_zz is not None:
         k_zz = _finite(k_zz, "[mass] k_zz", source)
-    p = particulars
     scale_m = 0.5 * p.rho * p.L**2 * p.d
     if "m" not in mass_table:
         mass_table["m"] = p.rho * p.displacement / scale_m
@@ -396,12 +395,11 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
         m_dim = mass_table["m"] * scale_m
         inertia = m_dim * (k_zz * p.L) ** 2 + m_dim * p.x_G**2
         mass_table["I_zz"] = inertia / (0.5 * p.rho * p.L**4 * p.d)
-    mass = _group(MassProperties, mass_table, "mass", source)
-    propeller = _group(Propeller, data.get("propeller"), "propeller", source)
-    if propeller.wake_model not in ("constant", "drift"):
-        raise SindyshipInputError(
-            f"{source}: [propeller] wake_model must be 'constant' or 'drift'."
-        )
+    return _group(MassProperties, mass_table, "mass", source)
+
+
+def _rudder_group(data: dict, propeller: Propeller, source: str) -> Rudder:
+    """[rudder] with f_alpha from the aspect ratio lambda and eta from H_R when given."""
     rudder_table = dict(data.get("rudder") or {})
     for key in ("lambda", "H_R"):
         if key in rudder_table:
@@ -414,8 +412,10 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
     if "H_R" in rudder_table:
         rudder_table.setdefault("eta", propeller.D_P / rudder_table["H_R"])
         rudder_table.pop("H_R")
-    rudder = _group(Rudder, rudder_table, "rudder", source)
-    servo = _group(Servo, data.get("servo"), "servo", source)
+    return _group(Rudder, rudder_table, "rudder", source)
+
+
+def _hull_coefficients(data: dict, source: str) -> dict[str, float]:
     hull = data.get("hull")
     if not isinstance(hull, dict):
         raise SindyshipInputError(f"{source}: section [hull] is missing.")
@@ -429,13 +429,30 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
             f"{source}: unknown [hull] coefficient {unknown[0]!r} for hull_form "
             f"{data['hull_form']!r}."
         )
-    hull = {k: _finite(v, f"[hull] {k}", source) for k, v in hull.items()}
+    return {k: float(_finite(v, f"[hull] {k}", source)) for k, v in hull.items()}
+
+
+def _abkowitz_added_masses(data: dict, source: str) -> dict[str, float]:
     abkowitz = dict(data.get("abkowitz") or {})
     valid_abk = {"X_udot", "Y_vdot", "Y_rdot", "N_vdot", "N_rdot"}
     unknown = sorted(set(abkowitz) - valid_abk)
     if unknown:
         raise SindyshipInputError(f"{source}: unknown [abkowitz] key {unknown[0]!r}.")
-    abkowitz = {k: _finite(v, f"[abkowitz] {k}", source) for k, v in abkowitz.items()}
+    return {k: float(_finite(v, f"[abkowitz] {k}", source)) for k, v in abkowitz.items()}
+
+
+def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
+    """Build a :class:`Ship` from the parsed TOML layout, validating every field."""
+    _check_top_level(data, source)
+    particulars = _group(Particulars, data.get("particulars"), "particulars", source)
+    if particulars.L <= 0 or particulars.d <= 0 or particulars.U0 <= 0 or particulars.rho <= 0:
+        raise SindyshipInputError(f"{source}: L, d, U0 and rho in [particulars] must be positive.")
+    mass = _mass_properties(data, particulars, source)
+    propeller = _group(Propeller, data.get("propeller"), "propeller", source)
+    if propeller.wake_model not in ("constant", "drift"):
+        raise SindyshipInputError(
+            f"{source}: [propeller] wake_model must be 'constant' or 'drift'."
+        )
     return Ship(
         name=data["name"],
         title=str(data.get("title", data["name"])),
@@ -444,11 +461,11 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
         coriolis=data["coriolis"],
         particulars=particulars,
         mass=mass,
-        hull={k: float(v) for k, v in hull.items()},
+        hull=_hull_coefficients(data, source),
         propeller=propeller,
-        rudder=rudder,
-        servo=servo,
-        abkowitz={k: float(v) for k, v in abkowitz.items()},
+        rudder=_rudder_group(data, propeller, source),
+        servo=_group(Servo, data.get("servo"), "servo", source),
+        abkowitz=_abkowitz_added_masses(data, source),
     )
 
 

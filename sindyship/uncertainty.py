@@ -480,51 +480,13 @@ def spread_vif_agreement(result: EnsembleResult, conditioning: Mapping[str, Mapp
 def drift_figure(result: EnsembleResult, dof: str, ax=None, *, order: str = "cluster"):
     """Heat map of the correlations between one equation's ensemble coefficients.
 
-    Strongly correlated (red) or anti-correlated (blue) pairs drift together: the data
-    determine a combination of them better than each one.  Coefficients that never vary
-    (always zero) are grey.
-
-    Parameters
-    ----------
-    result : EnsembleResult
-    dof : {"X", "Y", "N"}
-        The equation.
-    ax : matplotlib.axes.Axes, optional
-        Where to draw; a new figure otherwise.
-    order : {"cluster", "library"}
-        Term order: hierarchical clustering on ``1 - |correlation|`` (groups that drift
-        together are adjacent), or the library's order.
+    The axes of :func:`sindyship.plotting.plot_coefficient_drift` (which returns the figure).
 
     Returns
     -------
     matplotlib.axes.Axes
     """
-    import matplotlib.pyplot as plt
+    from .plotting.coefficients import plot_coefficient_drift
 
-    if order not in ("cluster", "library"):
-        raise SindyshipInputError(f"order must be 'cluster' or 'library', not {order!r}.")
-    corr = result.correlation(dof)
-    terms = list(result.terms[dof])
-    index = np.arange(len(terms))
-    if order == "cluster" and len(terms) > 2:
-        from scipy.cluster.hierarchy import leaves_list, linkage
-        from scipy.spatial.distance import squareform
-
-        distance = 1.0 - np.abs(np.nan_to_num(corr, nan=0.0))
-        np.fill_diagonal(distance, 0.0)
-        distance = np.clip(0.5 * (distance + distance.T), 0.0, None)
-        index = leaves_list(linkage(squareform(distance, checks=False), "average"))
-    shown = corr[np.ix_(index, index)]
-    if ax is None:
-        size = max(4.0, 0.32 * len(terms) + 1.5)
-        _, ax = plt.subplots(figsize=(size + 1.0, size))
-    cmap = plt.get_cmap("RdBu_r").with_extremes(bad="0.85")
-    image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, vmin=-1.0, vmax=1.0,
-                      interpolation="nearest")
-    labels = [terms[i] for i in index]
-    ax.set_xticks(range(len(labels)), labels, rotation=90, fontsize=7)
-    ax.set_yticks(range(len(labels)), labels, fontsize=7)
-    ax.set_title(f"{dof}: correlation of coefficients over {result.n_models} "
-                 f"{result.scheme} models ({result.optimizer})", fontsize=9)
-    ax.figure.colorbar(image, ax=ax, fraction=0.046, pad=0.04, label="correlation")
-    return ax
+    fig = plot_coefficient_drift(result, dof, ax=ax, order=order)
+    return ax if ax is not None else fig.axes[0]

@@ -18,11 +18,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from sindyship.cli import diagnose as diagnose_verb
 from sindyship.diagnose import (
     MEANINGFUL_SHARE,
     STATE_BINS,
-    add_diagnose_parser,
-    cmd_diagnose,
     diagnose,
     diagnose_iteratively,
     fly_model,
@@ -309,7 +308,7 @@ def test_json_report_and_figures(kcs, tmp_path):
     folder.mkdir()
     paths = [write_csv(run, folder / f"{run.name}.csv") for run in runs]
     parser = argparse.ArgumentParser()
-    add_diagnose_parser(parser.add_subparsers(dest="verb"))
+    diagnose_verb.add_parser(parser.add_subparsers(dest="verb"))
     out = tmp_path / "out"
     args = parser.parse_args(
         [
@@ -328,7 +327,7 @@ def test_json_report_and_figures(kcs, tmp_path):
     )
     stdout = io.StringIO()
     with redirect_stdout(stdout):
-        assert cmd_diagnose(args) == 0
+        assert diagnose_verb.run(args) == 0
     document = json.loads(stdout.getvalue())
     assert {"ranking", "not_testable", "errors", "threshold", "complete"} <= set(document)
     for entry in document["ranking"]:

@@ -1,0 +1,122 @@
+"""``sindyship diagnose``: where a fitted model fails, and which catalogued effect is missing."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+from ..errors import SindyshipInputError
+from ._common import (
+    add_identification,
+    add_json,
+    add_n_jobs,
+    add_resample,
+    add_ship,
+    emit,
+    progress,
+    split_names,
+)
+from ._records import read_records
+
+
+def add_parser(sub) -> None:
+    from ..diagnose import MEANINGFUL_SHARE
+
+    p = sub.add_parser(
+        "diagnose",
+        help="show where a fitted model fails and which effect is missing",
+        description="Fit the library on the training records, fly it like each record, show "
+        "the force residuals and rank the catalogued physical effects "
+        "(libraries/effects/*.toml) by the share of the cross-validated force error they "
+        "explain; confirm the best by refitting and re-flying.",
+    )
+    p.add_argument("data", nargs="+", help="training measurement CSV files (two or more)")
+    add_ship(p)
+    add_identification(p)
+    p.add_argument("--candidates", default="", metavar="NAME,...",
+                   help="comma-separated effects to score (default: the whole catalogue)")
+    p.add_argument("--test", nargs="+", default=[], metavar="HELD_OUT.csv",
+                   help="held-out records: flown before and after, never fitted on "
+                   "(default: none)")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="folder for figures, report.txt and diagnose.json (default: none)")
+    add_json(p)
+    p.add_argument("--rounds", type=int, default=1,
+                   help="add the best confirmed effect and diagnose again, up to this many "
+                   "times (default 1: diagnose once)")
+    p.add_argument("--threshold", type=float, default=MEANINGFUL_SHARE,
+                   help="share of the force error that is meaningful "
+                   f"(default {MEANINGFUL_SHARE})")
+    p.add_argument("--confirm", type=int, default=2,
+                   help="best candidates to confirm by refitting and re-flying (default 2)")
+    add_resample(p)
+    add_n_jobs(p)
+
+
+def _write_folder(out: Path, result, iterative, text: str, document: dict, progress_bar: bool
+                  ) -> None:
+    from .._io import save_figure, write_text_atomic
+    from ..plotting import plot_before_after, plot_rounds, save_diagnosis_figures
+
+    save_diagnosis_figures(result, out, progress=progress_bar)
+    if iterative is not None:
+        save_figure(plot_rounds(iterative), out / "rounds.png")
+        for k, rnd in enumerate(iterative.rounds, 1):
+            if rnd.change is not None:
+                save_figure(plot_before_after(rnd.change), out / f"round-{k}-before-after.png")
+                write_text_atomic(out / f"round-{k}-before-after.csv",
+                                  rnd.change.table.to_csv(index=False))
+    write_text_atomic(out / "report.txt", text + "\n")
+    write_text_atomic(out / "diagnose.json", json.dumps(document, indent=2) + "\n")
+
+
+def run(args) -> int:
+    """Run ``sindyship diagnose``; text report on stdout, or one JSON document with --json."""
+    from ..diagnose import diagnose, diagnose_iteratively
+    from ..identify import resolve_library
+    from ..ships import load_ship
+
+    start = time.perf_counter()
+    ship = load_ship(args.ship)
+    records = read_records(args.data, args.resample)
+    test = read_records(args.test, args.resample)
+    library = resolve_library(args.library, split_names(args.effects))
+    if args.rounds < 1:
+        raise SindyshipInputError(f"--rounds must be 1 or more, not {args.rounds}.")
+    options = {
+        "effects": split_names(args.candidates) or None,
+        "threshold": args.threshold,
+        "confirm": args.confirm,
+        "optimizer": args.optimizer,
+        "rudder_signal": args.rudder_signal,
+        "derivative": args.derivative,
+        "window": args.window,
+        "n_jobs": args.n_jobs,
+    }
+    bar = sys.stderr.isatty()
+    progress(f"sindyship diagnose: {len(records)} training and {len(test)} held-out records, "
+             f"library {library.name}")
+    iterative = None
+    if args.rounds > 1:
+        iterative = diagnose_iteratively(records, ship, library=library, test=test,
+                                         max_rounds=args.rounds, progress=bar, **options)
+        result = iterative.rounds[0].diagnosis
+    else:
+        result = diagnose(records, ship, library=library, test=test, progress=bar, **options)
+    document = result.to_json()
+    text = result.report()
+    if iterative is not None:
+        document.update(iterative.to_json())
+        text += "\n\n" + iterative.report()
+    document["seconds"] = time.perf_counter() - start
+    if args.out:
+        out = Path(args.out)
+        _write_folder(out, result, iterative, text, document, bar)
+        progress(f"sindyship diagnose: figures, report.txt and diagnose.json are in {out}/")
+    if args.json:
+        emit(document)
+    else:
+        print(text)
+    return 0

@@ -1,0 +1,34 @@
+"""``sindyship evaluate``: fly a saved model like each record and report the distances."""
+
+from __future__ import annotations
+
+from ._common import add_json, add_resample, add_ship, emit
+from ._records import read_records
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("evaluate", help="fly a model like each record, report distances",
+                       description="Fly a saved model the way each record was flown (zig-zags "
+                       "closed loop) and report the Table-10 distance per file.")
+    p.add_argument("model", help="saved model JSON")
+    p.add_argument("data", nargs="+", help="measurement CSV files")
+    add_ship(p, default=None)
+    add_resample(p)
+    add_json(p)
+
+
+def run(args) -> int:
+    from ..evaluation import evaluate
+    from ..model import AbkowitzModel
+    from ..reports import evaluation_report
+    from ..ships import load_ship
+
+    ship = load_ship(args.ship) if args.ship else None
+    model = AbkowitzModel.load(args.model, ship=ship)
+    records = read_records(args.data, args.resample)
+    errors = evaluate(model, records)
+    if args.json:
+        emit({"errors": errors})
+    else:
+        print(evaluation_report(errors))
+    return 0

@@ -1,0 +1,76 @@
+"""``sindyship fit``: identify an Abkowitz model from records and save it as JSON."""
+
+from __future__ import annotations
+
+from ._common import (
+    add_identification,
+    add_json,
+    add_n_jobs,
+    add_resample,
+    add_ship,
+    emit,
+    progress,
+    split_names,
+)
+from ._records import read_records
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("fit", help="identify an Abkowitz model from records",
+                       description="Identify an Abkowitz model (paper eq. 14-17) from "
+                       "measurement CSVs and save it as JSON.")
+    p.add_argument("data", nargs="+", help="measurement CSV files")
+    add_ship(p)
+    add_identification(p)
+    add_resample(p)
+    p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",
+                   help="smooth noisy records before differencing: a Savitzky-Golay or a "
+                   "Kalman (RTS) smoother over W seconds, or 'auto' to choose the setting by "
+                   "leave-one-manoeuvre-out flights on the training records (default: none)")
+    add_n_jobs(p, default=None)
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of randomised optimizers (default 0)")
+    p.add_argument("--out", required=True, metavar="FILE", help="output model JSON")
+    add_json(p)
+
+
+def _smoothing(args, records, ship, effects, params):
+    """The smoothing setting the options ask for (None for ``none``)."""
+    if args.smoothing == "none":
+        return None
+    from ..smoothing import SmoothingSetting, choose_smoothing
+
+    if args.smoothing != "auto":
+        return SmoothingSetting.parse(args.smoothing)
+    setting, table = choose_smoothing(records, ship, optimizer=args.optimizer,
+                                      library=args.library, effects=effects, params=params,
+                                      n_jobs=args.n_jobs)
+    progress(table.to_string())
+    return setting
+
+
+def run(args) -> int:
+    from ..identify import fit
+    from ..ships import load_ship
+
+    ship = load_ship(args.ship)
+    records = read_records(args.data, args.resample)
+    effects = split_names(args.effects)
+    params = {"random_state": args.seed} if args.optimizer == "svr" else {}
+    smoothing = _smoothing(args, records, ship, effects, params)
+    if smoothing is not None:
+        from ..smoothing import smooth_records
+
+        progress(f"smoothing: {smoothing.as_dict()}")
+        records = smooth_records(records, smoothing)
+    model = fit(records, ship, library=args.library, effects=effects, optimizer=args.optimizer,
+                params=params, rudder_signal=args.rudder_signal, derivative=args.derivative,
+                window=args.window)
+    if smoothing is not None:
+        model.info["smoothing"] = smoothing.as_dict()
+    model.save(args.out)
+    progress(f"wrote {args.out}: {model!r}")
+    if args.json:
+        emit({"model": str(args.out), "active_terms": model.n_active(),
+              "library": model.library.name, "optimizer": model.optimizer["name"]})
+    return 0

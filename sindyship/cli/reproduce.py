@@ -1,0 +1,28 @@
+"""``sindyship reproduce``: the paper's experiment on the KCS, end to end."""
+
+from __future__ import annotations
+
+from ._common import add_json, emit, progress
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("reproduce", help="run the paper's experiment on the KCS",
+                       description="Train on the paper's manoeuvres, fit every optimizer, fly "
+                       "the held-out manoeuvres and compare with the paper's Table 10.")
+    p.add_argument("--out", default="reproduce-output", metavar="DIR",
+                   help="output folder for figures, tables, models and results.json "
+                   "(default: reproduce-output)")
+    add_json(p)
+
+
+def run(args) -> int:
+    from ..reports import reproduce_report
+    from ..reproduce import run as run_experiment
+
+    output = run_experiment(args.out, progress=progress)
+    if args.json:
+        emit(output)
+    else:
+        print(reproduce_report(output))
+        print(f"Figures, coefficient tables, models and results.json are in {args.out}/")
+    return 0

@@ -1,0 +1,63 @@
+"""``sindyship simulate``: fly a manoeuvre with the MMG simulator and write the measurement CSV."""
+
+from __future__ import annotations
+
+from ..errors import SindyshipInputError
+from ._common import add_ship, progress
+
+MANOEUVRES = ["turning-circle", "zigzag", "spiral", "pull-out", "straight", "random"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("simulate", help="fly a manoeuvre with the MMG simulator, write a CSV",
+                       description="Fly a standard manoeuvre with the MMG model of a ship and "
+                       "write the measurement CSV (bare SI headers).")
+    add_ship(p)
+    p.add_argument("--manoeuvre", required=True, choices=MANOEUVRES,
+                   help="the manoeuvre to fly")
+    p.add_argument("--rudder", type=float, default=35.0, metavar="DEG",
+                   help="rudder angle [deg]: of the turn, the zig-zag, the largest spiral step, "
+                   "the pull-out, or the random rudder's amplitude (default 35)")
+    p.add_argument("--check", type=float, default=None, metavar="DEG",
+                   help="zig-zag heading check angle [deg] (default: the rudder angle)")
+    p.add_argument("--first", choices=["starboard", "port"], default="starboard",
+                   help="side of the first rudder (zig-zag) or of the spiral (default starboard)")
+    p.add_argument("--duration", type=float, default=3200.0, metavar="SECONDS",
+                   help="record length [s] (default 3200)")
+    p.add_argument("--dt", type=float, default=1.0, metavar="SECONDS",
+                   help="sample interval [s] (default 1)")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the random rudder and of noise effects (default 0)")
+    p.add_argument("--effect", action="append", default=[], metavar="NAME=VALUE",
+                   help="hidden physical effect, repeatable: load [Prime II force], load_dir "
+                   "[deg, the direction the load comes FROM, clockwise from north], load_arm "
+                   "[x/L of its point of action], current [m/s], current_dir [deg, the "
+                   "direction the current flows TOWARD], crossflow [drag coefficient], "
+                   "prop_side_force [Y' at the propeller], rudder_offset [deg: recorded = true "
+                   "+ offset], noise [fraction of each channel's RMS], quantise [significant "
+                   "figures]")
+    p.add_argument("--out", required=True, metavar="FILE", help="output measurement CSV")
+
+
+def run(args) -> int:
+    from ..effects import parse_effects, simulate_with_effects
+    from ..manoeuvres import Manoeuvre
+    from ..measurements import write_csv
+    from ..ships import load_ship
+
+    ship = load_ship(args.ship)
+    effects = parse_effects(args.effect + ([f"seed={args.seed}"] if args.seed else []))
+    sign = 1 if args.first == "starboard" else -1
+    check = args.check if args.check is not None else (args.rudder if args.manoeuvre == "zigzag"
+                                                       else 0.0)
+    manoeuvre = Manoeuvre(args.manoeuvre, rudder=args.rudder, check=check, first_sign=sign,
+                          duration=args.duration, dt=args.dt, seed=args.seed)
+    (record,) = simulate_with_effects(ship, [manoeuvre], effects)
+    if record.meta.get("diverged_at") is not None:
+        raise SindyshipInputError(
+            f"the simulation left the plausible range at t = {record.meta['diverged_at']:.0f} s; "
+            "reduce the effects' magnitudes."
+        )
+    write_csv(record, args.out)
+    progress(f"wrote {args.out}: {record.n_samples} samples of {manoeuvre.label}")
+    return 0

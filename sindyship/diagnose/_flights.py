@@ -1,0 +1,108 @@
+"""Flights of identified models like the records, in parallel processes when asked."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..evaluation import fly_like, fly_like_batch
+from ..library import (
+    DOFS,
+    TermLibrary,
+    nondimensional_variables,
+)
+from ..model import AbkowitzDynamics, AbkowitzModel
+from ..trajectory import Trajectory
+
+
+# =============================================================================== flights
+def _channel_means(model: AbkowitzModel, record: Trajectory) -> dict[str, float]:
+    """The record's mean value of each channel the model needs beyond psi (non-dimensional)."""
+    channels = sorted(model.library.channels - {"psi"})
+    if not channels:
+        return {}
+    values = nondimensional_variables(record, model.ship.L, model.ship.U0, needed=channels)
+    return {name: float(np.mean(values[name])) for name in channels}
+
+
+def fly_model(model: AbkowitzModel, records: Sequence[Trajectory]) -> list[Trajectory]:
+    """Fly an identified model the way each record was flown.
+
+    The same flights as ``fly_like_batch(model.dynamics(), records)``
+    (:mod:`sindyship.evaluation`): zig-zags closed loop, other records replaying their rudder,
+    from each record's first row.  Channels the library uses beyond the heading (``n``,
+    ``phi``, ...) are held at their mean over the record, since the flight does not compute
+    them.
+
+    Parameters
+    ----------
+    model : AbkowitzModel
+    records : sequence of Trajectory
+
+    Returns
+    -------
+    list of Trajectory
+        In the order of ``records``; ``meta["diverged_at"]`` is the divergence time or None.
+    """
+    if not model.library.channels - {"psi"}:
+        return fly_like_batch(model.dynamics(), records)
+    out = []
+    for record in records:
+        dynamics = AbkowitzDynamics(model, _channel_means(model, record))
+        out.extend(fly_like(dynamics, [record]))
+    return out
+
+
+def _model_payload(model: AbkowitzModel) -> dict:
+    """What a worker process needs to rebuild a model (a TermLibrary does not pickle)."""
+    return {
+        "ship": model.ship,
+        "library": model.library.to_dict(),
+        "coefficients": {dof: dict(model.coefficients[dof]) for dof in DOFS},
+        "rudder_signal": model.rudder_signal,
+    }
+
+
+def _fly_payload(payload: dict, records: Sequence[Trajectory]) -> list[Trajectory]:
+    model = AbkowitzModel(
+        ship=payload["ship"],
+        library=TermLibrary.from_dict(payload["library"]),
+        coefficients=payload["coefficients"],
+        rudder_signal=payload["rudder_signal"],
+    )
+    return fly_model(model, records)
+
+
+def _fly_many(
+    jobs: Sequence[tuple[AbkowitzModel, Sequence[Trajectory]]],
+    *,
+    n_jobs: int,
+    progress: bool,
+    what: str,
+) -> list[list[Trajectory]]:
+    """Fly several (model, records) jobs, in parallel processes when ``n_jobs`` != 1."""
+    from tqdm.auto import tqdm
+
+    jobs = [(model, list(records)) for model, records in jobs if records]
+    if not jobs:
+        return []
+    bar = tqdm(total=len(jobs), desc=what, file=sys.stderr, disable=not progress, leave=False)
+    if n_jobs == 1 or len(jobs) == 1:
+        out = []
+        for model, records in jobs:
+            out.append(fly_model(model, records))
+            bar.update()
+    else:
+        from joblib import Parallel, delayed
+
+        results = Parallel(n_jobs=n_jobs, return_as="generator")(
+            delayed(_fly_payload)(_model_payload(model), records) for model, records in jobs
+        )
+        out = []
+        for flown in results:
+            out.append(flown)
+            bar.update()
+    bar.close()
+    return out

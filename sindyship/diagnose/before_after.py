@@ -1,0 +1,278 @@
+"""Before and after: refit with effects added and compare the error on every manoeuvre."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+from .._io import clean_json
+from ..evaluation import error_summary
+from ..identify import Design, design, fit, resolve_library
+from ..library import (
+    Effect,
+    TermLibrary,
+    load_effect,
+)
+from ..model import AbkowitzModel
+from ..optimizers import _one_blas_thread
+from ..ships import Ship
+from ..trajectory import Trajectory
+from ._constants import CONFIRMING_RATIO, SETS
+from ._flights import _fly_many
+
+
+# =============================================================================== before/after
+def _geometric_mean_ratio(pairs: Iterable[tuple[dict, dict]]) -> float:
+    """Geometric mean of after/before mean distances over flights that both finished."""
+    logs = [
+        math.log(max(a["mean_distance_L"], 1e-9) / max(b["mean_distance_L"], 1e-9))
+        for b, a in pairs
+        if b["diverged_at_s"] is None
+        and a["diverged_at_s"] is None
+        and math.isfinite(b["mean_distance_L"])
+        and math.isfinite(a["mean_distance_L"])
+    ]
+    return math.exp(sum(logs) / len(logs)) if logs else math.nan
+
+
+@dataclass
+class BeforeAfter:
+    """The error on every manoeuvre before and after adding effects to a library.
+
+    Attributes
+    ----------
+    before, after : str
+        Library names.
+    added : tuple of str
+        The effects added.
+    rows : list of dict
+        Per manoeuvre: ``manoeuvre``, ``set`` (training or held-out) and the error summaries
+        ``before`` and ``after`` (:func:`sindyship.evaluation.error_summary`).
+    model_before, model_after : AbkowitzModel
+    """
+
+    before: str
+    after: str
+    added: tuple[str, ...]
+    rows: list[dict]
+    model_before: AbkowitzModel | None = field(default=None, repr=False)
+    model_after: AbkowitzModel | None = field(default=None, repr=False)
+
+    @property
+    def table(self) -> pd.DataFrame:
+        """One row per manoeuvre: mean and max distance and divergence, before and after."""
+        records = []
+        for row in self.rows:
+            entry = {"manoeuvre": row["manoeuvre"], "set": row["set"]}
+            for when in ("before", "after"):
+                err = row[when]
+                entry[f"{when}_mean_L"] = err["mean_distance_L"]
+                entry[f"{when}_max_L"] = err["max_distance_L"]
+                entry[f"{when}_diverged_at_s"] = err["diverged_at_s"]
+            entry["ratio"] = (
+                entry["after_mean_L"] / entry["before_mean_L"]
+                if entry["before_mean_L"] > 0
+                else math.nan
+            )
+            records.append(entry)
+        return pd.DataFrame(records)
+
+    def ratio(self, kind: str = "training") -> float:
+        """Geometric mean of after/before mean distance over the set's finished flights."""
+        return _geometric_mean_ratio(
+            (row["before"], row["after"]) for row in self.rows if row["set"] == kind
+        )
+
+    def divergences(self, kind: str = "training") -> tuple[int, int]:
+        """Number of flights of the set (training or held-out) that diverged, before and after."""
+        rows = [row for row in self.rows if row["set"] == kind]
+        return (
+            sum(row["before"]["diverged_at_s"] is not None for row in rows),
+            sum(row["after"]["diverged_at_s"] is not None for row in rows),
+        )
+
+    @property
+    def confirmed(self) -> bool | None:
+        """Whether re-flying the training manoeuvres confirms the effect.
+
+        True when the geometric-mean distance falls below :data:`CONFIRMING_RATIO` times
+        its value before and no more training flights diverge than before (or fewer
+        diverge); None without training flights.  Held-out flights never enter it (they
+        would select the model on the test set).
+        """
+        if not any(row["set"] == "training" for row in self.rows):
+            return None
+        before, after = self.divergences("training")
+        ratio = self.ratio("training")
+        if after > before:
+            return False
+        if after < before:
+            return True
+        return bool(ratio <= CONFIRMING_RATIO)
+
+
+    def report(self) -> str:
+        """A plain-text table of the errors before and after
+        (:func:`sindyship.reports.before_after_report`)."""
+        from ..reports import before_after_report
+
+        return before_after_report(self)
+
+    def to_json(self) -> dict:
+        return clean_json(
+            {
+                "before": self.before,
+                "after": self.after,
+                "added": list(self.added),
+                "confirmed": self.confirmed,
+                "ratio": {kind: self.ratio(kind) for kind in SETS},
+                "errors": {
+                    row["manoeuvre"]: {
+                        "set": row["set"],
+                        "before": row["before"],
+                        "after": row["after"],
+                    }
+                    for row in self.rows
+                },
+            }
+        )
+
+    def figure(self, ax=None):
+        """Bar chart of the mean distance per manoeuvre, before and after."""
+        from ..plotting.diagnosis import plot_before_after
+
+        return plot_before_after(self, ax=ax)
+
+
+def _fit(
+    records: Sequence[Trajectory],
+    ship: Ship,
+    library: TermLibrary,
+    problems: Mapping[str, Design],
+    *,
+    optimizer: str,
+    rudder_signal: str,
+    derivative: str,
+    window: float,
+) -> AbkowitzModel:
+    """:func:`sindyship.identify.fit` on a design already built for ``records``."""
+    return fit(
+        records,
+        ship,
+        library=library,
+        optimizer=optimizer,
+        rudder_signal=rudder_signal,
+        derivative=derivative,
+        window=window,
+        problems=dict(problems),
+    )
+
+
+def _change_rows(
+    sets: Sequence[tuple[str, Sequence[Trajectory]]],
+    before: Sequence[Sequence[Trajectory]],
+    after: Sequence[Sequence[Trajectory]],
+    L: float,
+) -> list[dict]:
+    """Rows of a :class:`BeforeAfter`: per record of each set, the two error summaries."""
+    rows = []
+    for (kind, records), flown_before, flown_after in zip(sets, before, after, strict=True):
+        for rec, b, a in zip(records, flown_before, flown_after, strict=True):
+            rows.append(
+                {
+                    "manoeuvre": rec.name,
+                    "set": kind,
+                    "before": error_summary(b, rec, L),
+                    "after": error_summary(a, rec, L),
+                }
+            )
+    return rows
+
+
+@_one_blas_thread
+def before_after(
+    train: Sequence[Trajectory],
+    ship: Ship,
+    *,
+    library: str | TermLibrary = "abkowitz",
+    effects: Sequence[str | Effect],
+    test: Sequence[Trajectory] = (),
+    optimizer: str = "ls",
+    rudder_signal: str = "actual",
+    derivative: str = "five-point",
+    window: float = 21.0,
+    fly_training: bool = True,
+    n_jobs: int = 1,
+    progress: bool = False,
+) -> BeforeAfter:
+    """Refit with effects added and compare the error on every manoeuvre, before and after.
+
+    Parameters
+    ----------
+    train : sequence of Trajectory
+        Training records: both models are fitted on them.
+    ship : Ship
+    library : str or TermLibrary
+        The library before.
+    effects : sequence of str or Effect
+        The catalogued effects (names or files) to add.
+    test : sequence of Trajectory
+        Held-out records, flown but never fitted on.
+    optimizer, rudder_signal, derivative, window
+        As :func:`sindyship.identify.fit`.
+    fly_training : bool
+        Also fly the training records.
+    n_jobs : int
+        Processes for the flights (joblib).
+    progress : bool
+        Show a progress bar on stderr.
+
+    Returns
+    -------
+    BeforeAfter
+        ``.table``, ``.report()``, ``.figure()``, ``.to_json()``.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> from sindyship.effects import parse_effects, simulate_with_effects
+    >>> from sindyship.manoeuvres import Manoeuvre
+    >>> ship = load_ship("kcs")
+    >>> plan = [Manoeuvre("turning-circle", rudder=35, duration=800),
+    ...         Manoeuvre("turning-circle", rudder=-35, duration=800),
+    ...         Manoeuvre("zigzag", rudder=20, check=20, duration=800),
+    ...         Manoeuvre("zigzag", rudder=10, check=10, duration=800),
+    ...         Manoeuvre("turning-circle", rudder=-20, duration=800)]
+    >>> runs = simulate_with_effects(ship, plan, parse_effects(["current=0.5", "current_dir=90"]))
+    >>> change = before_after(runs[:4], ship, effects=["environment"], test=runs[4:])
+    >>> change.table[["manoeuvre", "set"]].values.tolist()[-1]
+    ['tc20_port', 'held-out']
+    >>> bool(change.ratio("held-out") < 0.5)
+    True
+    """
+    base = resolve_library(library)
+    added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
+    extended = base.extended(*added)
+    settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
+    models = []
+    for lib in (base, extended):
+        problems = design(train, ship, lib, **settings)
+        models.append(_fit(train, ship, lib, problems, optimizer=optimizer, **settings))
+    sets = ([("training", list(train))] if fly_training else []) + [("held-out", list(test))]
+    sets = [(kind, records) for kind, records in sets if records]
+    jobs = [(model, records) for model in models for _, records in sets]
+    flown = _fly_many(jobs, n_jobs=n_jobs, progress=progress, what="before/after flights")
+    rows = _change_rows(sets, flown[: len(sets)], flown[len(sets) :], ship.L)
+    return BeforeAfter(
+        base.name,
+        extended.name,
+        tuple(e.name for e in added),
+        rows,
+        model_before=models[0],
+        model_after=models[1],
+    )
+
+

@@ -1,0 +1,389 @@
+"""The diagnosis: compare, residuals and the ranked missing effects."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._io import clean_json
+from ..errors import SindyshipInputError
+from ..identify import Design, design, resolve_library
+from ..library import (
+    DOFS,
+    Effect,
+    TermLibrary,
+    available_effects,
+    load_effect,
+)
+from ..model import AbkowitzModel
+from ..optimizers import _one_blas_thread
+from ..ships import Ship
+from ..terms import Term
+from ..trajectory import Trajectory
+from ._constants import DOF_NAMES, MEANINGFUL_SHARE
+from ._flights import _fly_many
+from .before_after import BeforeAfter, _change_rows, _fit
+from .compare import ManoeuvreComparison, compare
+from .residuals import Residuals, _residuals
+from .scoring import EffectScore, NotTestable, _GroupedProblem, _score, _untestable
+
+
+@dataclass
+class Diagnosis:
+    """The answer of :func:`diagnose`: comparison, residuals and the ranked missing effects.
+
+    Attributes
+    ----------
+    ship : Ship
+    library : TermLibrary
+        The library diagnosed.
+    model : AbkowitzModel
+        The library fitted on the training records.
+    threshold : float
+        The share an effect must explain to be meaningful.
+    ranking : list of EffectScore
+        Testable effects, best first.
+    not_testable : list of NotTestable
+    in_library : list of str
+        Catalogued effects whose terms the library already has.
+    comparisons : list of ManoeuvreComparison
+        The model flown like every training (if flown) and held-out record.
+    residuals : Residuals
+        On the training records.
+    force_error : dict
+        Per degree of freedom: the leave-one-manoeuvre-out error of the library relative to
+        the measured force (RMS over RMS).
+    settings : dict
+    seconds : float
+    """
+
+    ship: Ship
+    library: TermLibrary
+    model: AbkowitzModel
+    threshold: float
+    ranking: list[EffectScore]
+    not_testable: list[NotTestable]
+    in_library: list[str]
+    comparisons: list[ManoeuvreComparison]
+    residuals: Residuals
+    force_error: dict[str, float]
+    settings: dict
+    seconds: float = 0.0
+
+    @property
+    def complete(self) -> bool:
+        """No testable effect explains a meaningful share of the force error."""
+        return not any(score.meaningful for score in self.ranking)
+
+    @property
+    def warnings(self) -> list[str]:
+        """Cautions about the data behind the verdict (empty when there are none)."""
+        out = []
+        noisy = [dof for dof in DOFS if self.force_error[dof] > 0.5]
+        if noisy:
+            names = " and ".join(DOF_NAMES[dof] for dof in noisy)
+            if self.settings.get("derivative") == "savgol":
+                advice = (
+                    f"the accelerations are already smoothed over "
+                    f"{self.settings.get('window')} s; a verdict of 'complete' then means "
+                    "that no catalogued effect describes the rest"
+                )
+            else:
+                advice = (
+                    "with noisy or quantised data, smooth the accelerations (derivative "
+                    "savgol) before trusting a verdict of 'complete'"
+                )
+            out.append(
+                f"the library predicts less than half of the measured {names} on "
+                "held-out manoeuvres (noise in the accelerations, manoeuvres too unlike "
+                "each other for one to be predicted from the rest, or physics no catalogued "
+                f"effect describes); {advice}"
+            )
+        diverged = [c.name for c in self.comparisons if c.errors["diverged_at_s"] is not None]
+        if diverged:
+            out.append(
+                f"the flights of {', '.join(diverged)} diverged: their mean distances "
+                "cover only the time before the divergence"
+            )
+        return out
+
+    @property
+    def top(self) -> EffectScore | None:
+        """The best meaningful effect, or None when the library is complete."""
+        return next((s for s in self.ranking if s.meaningful), None)
+
+    def score(self, name: str) -> EffectScore:
+        """The score of one effect by name."""
+        for score in self.ranking:
+            if score.effect.name == name:
+                return score
+        raise KeyError(f"effect {name!r} was not scored (not testable or already in the library)")
+
+    def rank(self, name: str) -> int | None:
+        """1-based rank of an effect, None if it was not scored."""
+        names = [s.effect.name for s in self.ranking]
+        return names.index(name) + 1 if name in names else None
+
+    def errors(self, kind: str | None = None) -> dict[str, dict]:
+        """Error summaries of the flights by record name (optionally of one set)."""
+        return {c.name: c.errors for c in self.comparisons if kind in (None, c.set)}
+
+    # ------------------------------------------------------------------------------- text
+
+    def report(self) -> str:
+        """The diagnosis as text a person reads (:func:`sindyship.reports.diagnosis_report`)."""
+        from ..reports import diagnosis_report
+
+        return diagnosis_report(self)
+
+    def save_figures(self, out_dir, *, progress: bool = False) -> list:
+        """Write the figures and before/after tables to a folder
+        (:func:`sindyship.plotting.save_diagnosis_figures`)."""
+        from ..plotting.diagnosis import save_diagnosis_figures
+
+        return save_diagnosis_figures(self, out_dir, progress=progress)
+
+    def to_json(self) -> dict:
+        """The JSON document of ``sindyship diagnose --json`` (DESIGN.md)."""
+        return clean_json(
+            {
+                "ship": self.ship.name,
+                "library": self.library.name,
+                "effects_in_library": list(self.library.effects),
+                "threshold": self.threshold,
+                "complete": self.complete,
+                "ranking": [score.to_json() for score in self.ranking],
+                "not_testable": [item.to_json() for item in self.not_testable],
+                "in_library": list(self.in_library),
+                "warnings": self.warnings,
+                "errors": {c.name: {"set": c.set, **c.errors} for c in self.comparisons},
+                "force_residual": {
+                    dof: {**self.residuals.summary()[dof], "cross_validated": self.force_error[dof]}
+                    for dof in DOFS
+                },
+                "settings": self.settings,
+                "seconds": self.seconds,
+            }
+        )
+
+    # ------------------------------------------------------------------------------- figures
+
+def _catalogue(effects: Sequence[str | Effect] | None) -> list[Effect]:
+    names = available_effects() if effects is None else effects
+    out = [e if isinstance(e, Effect) else load_effect(e) for e in names]
+    seen = set()
+    for effect in out:
+        if effect.name in seen:
+            raise SindyshipInputError(f'the effect "{effect.name}" is given twice.')
+        seen.add(effect.name)
+    return out
+
+
+@_one_blas_thread
+def diagnose(
+    records: Sequence[Trajectory],
+    ship: Ship,
+    *,
+    library: str | TermLibrary = "abkowitz",
+    effects: Sequence[str | Effect] | None = None,
+    test: Sequence[Trajectory] = (),
+    threshold: float = MEANINGFUL_SHARE,
+    confirm: int = 2,
+    fly_training: bool = True,
+    optimizer: str = "ls",
+    rudder_signal: str = "actual",
+    derivative: str = "five-point",
+    window: float = 21.0,
+    n_jobs: int = 1,
+    progress: bool = False,
+) -> Diagnosis:
+    """Fit a library, show where it fails and rank the catalogued effects that are missing.
+
+    Parameters
+    ----------
+    records : sequence of Trajectory
+        Training records (at least two: effects are scored leave-one-manoeuvre-out).
+    ship : Ship
+    library : str or TermLibrary
+        The library to diagnose (a name, a file, or an extended library).
+    effects : sequence of str or Effect, optional
+        Candidate effects; default the whole catalogue (:func:`available_effects`).
+    test : sequence of Trajectory
+        Held-out records: flown before and after, never fitted on, never used to choose.
+    threshold : float
+        Share of the cross-validated force error an effect must explain to be meaningful.
+    confirm : int
+        Number of best meaningful candidates to confirm by refitting and re-flying.
+    fly_training : bool
+        Fly the training records (compare, confirmation).  Without it only the held-out
+        records are flown, and a candidate's ``confirmation.confirmed`` is None.
+    optimizer : str
+        The optimizer of the fitted model and of the confirmation refits (scoring always
+        uses least squares).
+    rudder_signal, derivative, window
+        As :func:`sindyship.identify.fit`.
+    n_jobs : int
+        Parallel jobs: threads for scoring the effects, processes for the flights (joblib).
+    progress : bool
+        Progress bars on stderr.
+
+    Returns
+    -------
+    Diagnosis
+        ``.ranking``, ``.not_testable``, ``.report()``, ``.to_json()``, ``.save_figures()``.
+
+    Raises
+    ------
+    SindyshipInputError
+        Fewer than two training records, an unknown effect, or a record the library cannot
+        be evaluated on.
+    """
+    from joblib import Parallel, delayed
+
+    start = time.perf_counter()
+    records, test = list(records), list(test)
+    if len(records) < 2:
+        raise SindyshipInputError(
+            "diagnose needs at least two training records: effects are scored by "
+            "leave-one-manoeuvre-out cross-validation."
+        )
+    if not 0.0 < threshold < 1.0:
+        raise SindyshipInputError(f"the threshold must lie between 0 and 1, not {threshold}.")
+    names = [r.name for r in records + test]
+    if len(set(names)) != len(names):
+        raise SindyshipInputError("two records share a name; give each file a distinct name.")
+    base = resolve_library(library)
+    settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
+    candidates, not_testable, in_library = [], [], []
+    for effect in _catalogue(effects):
+        if effect.name in base.effects:
+            in_library.append(effect.name)
+            continue
+        reason = _untestable(effect, records)
+        if reason is not None:
+            not_testable.append(reason)
+            continue
+        present = {dof: {t.canonical(scale=False) for t in base.terms[dof]} for dof in DOFS}
+        new = {
+            dof: [t.text for t in effect.terms[dof] if t.canonical(scale=False) not in present[dof]]
+            for dof in DOFS
+        }
+        if not any(new.values()):
+            in_library.append(effect.name)
+            continue
+        candidates.append((effect, new))
+    union = base.extended(*[effect for effect, _ in candidates])
+    problems = design(records, ship, union, **settings)
+    n_base = {dof: len(base.terms[dof]) for dof in DOFS}
+    base_problems = {
+        dof: Design(
+            problems[dof].features[:, : n_base[dof]],
+            problems[dof].target,
+            problems[dof].groups,
+            problems[dof].terms[: n_base[dof]],
+        )
+        for dof in DOFS
+    }
+    model = _fit(records, ship, base, base_problems, optimizer=optimizer, **settings)
+    residuals = _residuals(
+        base_problems,
+        {dof: model.coefficient_vector(dof) for dof in DOFS},
+        records,
+        ship,
+        rudder_signal,
+    )
+    grouped = {
+        dof: _GroupedProblem(problems[dof].features, problems[dof].target, problems[dof].groups)
+        for dof in DOFS
+    }
+    base_columns = {dof: np.arange(n_base[dof]) for dof in DOFS}
+    base_errors = {dof: grouped[dof].lomo_errors(base_columns[dof]) for dof in DOFS}
+    force_error = {
+        dof: float(
+            np.sqrt(np.mean(base_errors[dof] ** 2))
+            / max(np.sqrt(np.mean(problems[dof].target ** 2)), 1e-300)
+        )
+        for dof in DOFS
+    }
+    index = {
+        dof: {t.canonical(scale=False): i for i, t in enumerate(union.terms[dof])} for dof in DOFS
+    }
+    jobs = []
+    for effect, new in candidates:
+        columns = {
+            dof: np.array(
+                sorted(
+                    set(base_columns[dof].tolist())
+                    | {index[dof][Term(t).canonical(scale=False)] for t in new[dof]}
+                ),
+                dtype=int,
+            )
+            for dof in DOFS
+        }
+        jobs.append(
+            delayed(_score)(effect, columns, grouped, base_errors, residuals, new, threshold)
+        )
+    ranking = list(Parallel(n_jobs=n_jobs, prefer="threads")(jobs)) if jobs else []
+    ranking.sort(key=lambda s: (-s.explained, s.effect.name))
+
+    sets = ([("training", records)] if fly_training else []) + [("held-out", test)]
+    sets = [(kind, recs) for kind, recs in sets if recs]
+    chosen = [s for s in ranking if s.meaningful][: max(int(confirm), 0)] if sets else []
+    models = [model]
+    for score in chosen:
+        lib = base.extended(score.effect)
+        models.append(
+            _fit(
+                records,
+                ship,
+                lib,
+                design(records, ship, lib, **settings),
+                optimizer=optimizer,
+                **settings,
+            )
+        )
+    flown = _fly_many(
+        [(m, recs) for m in models for _, recs in sets],
+        n_jobs=n_jobs,
+        progress=progress,
+        what="flights",
+    )
+    comparisons = []
+    for k, (kind, recs) in enumerate(sets):
+        comparisons += compare(model, recs, kind=kind, flights=flown[k])
+    n_sets = len(sets)
+    for j, score in enumerate(chosen, start=1):
+        rows = _change_rows(sets, flown[:n_sets], flown[j * n_sets : (j + 1) * n_sets], ship.L)
+        score.confirmation = BeforeAfter(
+            base.name,
+            models[j].library.name,
+            (score.effect.name,),
+            rows,
+            model_before=model,
+            model_after=models[j],
+        )
+    return Diagnosis(
+        ship=ship,
+        library=base,
+        model=model,
+        threshold=threshold,
+        ranking=ranking,
+        not_testable=not_testable,
+        in_library=in_library,
+        comparisons=comparisons,
+        residuals=residuals,
+        force_error=force_error,
+        settings={
+            **settings,
+            "optimizer": optimizer,
+            "confirm": confirm,
+            "fly_training": fly_training,
+            "scoring": "least squares, leave-one-manoeuvre-out",
+        },
+        seconds=time.perf_counter() - start,
+    )
+
+

@@ -1,0 +1,214 @@
+"""Rounds of diagnosis and addition until no effect explains a meaningful share."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import pandas as pd
+
+from .._io import clean_json
+from ..identify import resolve_library
+from ..library import (
+    TermLibrary,
+)
+from ..ships import Ship
+from ..trajectory import Trajectory
+from .before_after import BeforeAfter, before_after
+from .diagnosis import Diagnosis, diagnose
+
+
+@dataclass
+class Round:
+    """One round of :func:`diagnose_iteratively`.
+
+    Attributes
+    ----------
+    diagnosis : Diagnosis
+        Of the library at the start of the round.
+    added : str or None
+        The effect added in this round (None in the last round).
+    change : BeforeAfter or None
+        The errors before and after adding it.
+    """
+
+    diagnosis: Diagnosis
+    added: str | None
+    change: BeforeAfter | None
+
+
+@dataclass
+class IterativeDiagnosis:
+    """Rounds of diagnosis and addition, until no effect explains a meaningful share.
+
+    Attributes
+    ----------
+    rounds : list of Round
+    stopped : str
+        Why the iteration ended.
+    """
+
+    rounds: list[Round]
+    stopped: str
+
+    @property
+    def final_library(self) -> TermLibrary:
+        """The library of the last round (every added effect)."""
+        last = self.rounds[-1]
+        if last.change is not None and last.change.model_after is not None:
+            return last.change.model_after.library
+        return last.diagnosis.library
+
+    @property
+    def added(self) -> list[str]:
+        return [r.added for r in self.rounds if r.added]
+
+    @property
+    def table(self) -> pd.DataFrame:
+        """Mean distance of every flown manoeuvre with the library of each round."""
+        rows = []
+        for k, rnd in enumerate(self.rounds):
+            for c in rnd.diagnosis.comparisons:
+                rows.append(
+                    {
+                        "round": k + 1,
+                        "library": rnd.diagnosis.library.name,
+                        "manoeuvre": c.name,
+                        "set": c.set,
+                        **c.errors,
+                    }
+                )
+            if k == len(self.rounds) - 1 and rnd.change is not None:
+                for row in rnd.change.rows:
+                    rows.append(
+                        {
+                            "round": k + 2,
+                            "library": rnd.change.after,
+                            "manoeuvre": row["manoeuvre"],
+                            "set": row["set"],
+                            **row["after"],
+                        }
+                    )
+        return pd.DataFrame(rows)
+
+
+    def report(self) -> str:
+        """One paragraph per round, then the errors of every library
+        (:func:`sindyship.reports.iteration_report`)."""
+        from ..reports import iteration_report
+
+        return iteration_report(self)
+
+    def to_json(self) -> dict:
+        return clean_json(
+            {
+                "rounds": [
+                    {
+                        "round": k + 1,
+                        "library": r.diagnosis.library.name,
+                        "ranking": [
+                            {"effect": s.effect.name, "explained": s.explained}
+                            for s in r.diagnosis.ranking
+                        ],
+                        "complete": r.diagnosis.complete,
+                        "added": r.added,
+                        "errors": r.diagnosis.errors(),
+                        "change": None if r.change is None else r.change.to_json(),
+                    }
+                    for k, r in enumerate(self.rounds)
+                ],
+                "final_library": self.final_library.name,
+                "added": self.added,
+                "stopped": self.stopped,
+            }
+        )
+
+    def figure(self, ax=None):
+        """Mean distance per manoeuvre after each round."""
+        from ..plotting.diagnosis import plot_rounds
+
+        return plot_rounds(self, ax=ax)
+
+
+def diagnose_iteratively(
+    records: Sequence[Trajectory],
+    ship: Ship,
+    *,
+    library: str | TermLibrary = "abkowitz",
+    test: Sequence[Trajectory] = (),
+    max_rounds: int = 4,
+    progress: bool = False,
+    **options,
+) -> IterativeDiagnosis:
+    """Diagnose, add the best effect, diagnose again, until the library is complete.
+
+    Each round adds the best meaningful effect that re-flying the training records
+    confirms (the best meaningful one when training records are not flown); the iteration
+    stops when no effect explains a meaningful share, when no meaningful effect is
+    confirmed, or after ``max_rounds`` additions.  Held-out records are flown every round
+    and never used to choose.
+
+    Parameters
+    ----------
+    records, ship, library, test
+        As :func:`diagnose`.
+    max_rounds : int
+        Most effects to add.
+    progress : bool
+        Progress bar over the rounds on stderr.
+    **options
+        Passed to :func:`diagnose` (``effects``, ``threshold``, ``confirm``, ``fly_training``,
+        ``optimizer``, ``n_jobs``, ...).
+
+    Returns
+    -------
+    IterativeDiagnosis
+    """
+    from tqdm.auto import tqdm
+
+    lib = resolve_library(library)
+    rounds: list[Round] = []
+    stopped = f"after {max_rounds} rounds"
+    bar = tqdm(total=max_rounds, desc="rounds", file=sys.stderr, disable=not progress)
+    for _ in range(max_rounds):
+        result = diagnose(records, ship, library=lib, test=test, progress=progress, **options)
+        meaningful = [s for s in result.ranking if s.meaningful]
+        if not meaningful:
+            rounds.append(Round(result, None, None))
+            stopped = "no effect explains a meaningful share"
+            break
+        verdicts = [
+            s
+            for s in meaningful
+            if s.confirmation is not None and s.confirmation.confirmed is not None
+        ]
+        if verdicts:
+            pick = next((s for s in verdicts if s.confirmation.confirmed), None)
+        else:
+            pick = meaningful[0]
+        if pick is None:
+            rounds.append(Round(result, None, None))
+            stopped = "no meaningful effect was confirmed by re-flying the training records"
+            break
+        change = pick.confirmation
+        if change is None:
+            change = before_after(
+                records,
+                ship,
+                library=lib,
+                effects=[pick.effect],
+                test=test,
+                fly_training=options.get("fly_training", True),
+                optimizer=options.get("optimizer", "ls"),
+                n_jobs=options.get("n_jobs", 1),
+                **{
+                    k: options[k] for k in ("rudder_signal", "derivative", "window") if k in options
+                },
+            )
+        rounds.append(Round(result, pick.effect.name, change))
+        lib = lib.extended(pick.effect)
+        bar.update()
+    bar.close()
+    return IterativeDiagnosis(rounds, stopped)
+

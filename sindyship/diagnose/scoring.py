@@ -1,0 +1,270 @@
+"""Scoring catalogued effects by the share of the cross-validated force error they explain."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from .._io import clean_json
+from ..library import (
+    DOFS,
+    Effect,
+)
+from ..terms import describe_variable
+from ..trajectory import Trajectory
+from ._constants import DOF_NAMES
+from .before_after import BeforeAfter
+from .residuals import STATE_BINS, Residuals, _bin_index, _bin_labels
+
+
+# =============================================================================== scoring
+def _least_squares(features: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """Least squares on norm-scaled columns (LAPACK gelsd), as ``make_optimizer("ls")``."""
+    scale = np.linalg.norm(features, axis=0)
+    scale[~(scale > 0)] = 1.0
+    solution = scipy.linalg.lstsq(
+        features / scale, target, lapack_driver="gelsd", check_finite=False
+    )[0]
+    return solution / scale
+
+
+class _GroupedProblem:
+    """One equation's regression problem, compressed per record for fast refits.
+
+    Columns are scaled to unit norm; each record's rows are reduced to their QR factor
+    (``X_g = Q_g R_g``, ``Z_g = Q_g^T y_g``), so a least-squares fit of any column subset on
+    any subset of records is a solve on the small stacked ``R_g`` and ``Z_g``.
+    """
+
+    def __init__(self, features: np.ndarray, target: np.ndarray, groups: np.ndarray) -> None:
+        scale = np.linalg.norm(features, axis=0)
+        scale[~(scale > 0)] = 1.0
+        self.scale = scale
+        self.x = features / scale
+        self.y = target
+        self.members = [np.flatnonzero(groups == g) for g in np.unique(groups)]
+        self.r, self.z = [], []
+        for rows in self.members:
+            q, r = np.linalg.qr(self.x[rows])
+            self.r.append(r)
+            self.z.append(q.T @ target[rows])
+
+    def solve(self, columns: np.ndarray, leave_out: int | None = None) -> np.ndarray:
+        """Scaled coefficients of ``columns`` fitted on all records but ``leave_out``."""
+        keep = [g for g in range(len(self.members)) if g != leave_out]
+        a = np.vstack([self.r[g][:, columns] for g in keep])
+        b = np.concatenate([self.z[g] for g in keep])
+        return scipy.linalg.lstsq(a, b, lapack_driver="gelsd", check_finite=False)[0]
+
+    def lomo_errors(self, columns: np.ndarray) -> np.ndarray:
+        """Leave-one-record-out prediction errors of a fit on ``columns``, per sample."""
+        errors = self.y.copy()
+        if len(columns) == 0:
+            return errors
+        for g, rows in enumerate(self.members):
+            w = self.solve(columns, leave_out=g)
+            errors[rows] = self.y[rows] - self.x[np.ix_(rows, columns)] @ w
+        return errors
+
+
+@dataclass(frozen=True)
+class NotTestable:
+    """An effect the data cannot test, and the channels to record.
+
+    Attributes
+    ----------
+    effect : Effect
+    needs : tuple of str
+        Channels absent from some record, or with one value throughout all of them.
+    reason : str
+    """
+
+    effect: Effect
+    needs: tuple[str, ...]
+    reason: str
+
+    def to_json(self) -> dict:
+        return {
+            "effect": self.effect.name,
+            "title": self.effect.title,
+            "needs": list(self.needs),
+            "reason": self.reason,
+        }
+
+
+def _untestable(effect: Effect, records: Sequence[Trajectory]) -> NotTestable | None:
+    """Why the data cannot test ``effect``, or None if they can.
+
+    A channel is missing when some record lacks it, and carries no information when it has
+    one value throughout all the records (a channel constant within each record but
+    different between records, such as the depth of runs in two waters, is testable).
+    """
+    needs, reasons = [], []
+    for channel in effect.channels:
+        variable = describe_variable(channel)
+        what = "" if variable.description.startswith("channel ") else f" ({variable.description})"
+        missing = [r.name for r in records if not r.has(variable.column)]
+        if missing:
+            needs.append(channel)
+            where = "every record" if len(missing) == len(records) else ", ".join(missing)
+            reasons.append(f"{channel}{what} is absent from {where}")
+            continue
+        values = np.concatenate([r[variable.column] for r in records])
+        finite = values[np.isfinite(values)]
+        spread = float(np.ptp(finite)) if finite.size else 0.0
+        if spread <= 1e-12 * max(1.0, float(np.max(np.abs(finite), initial=0.0))):
+            needs.append(channel)
+            value = f" ({finite[0]:g})" if finite.size else ""
+            reasons.append(f"{channel}{what} has one value{value} throughout all the records")
+    if not needs:
+        return None
+    advice = f"record {', '.join(needs)} in every record, with values that change"
+    return NotTestable(effect, tuple(needs), "; ".join(reasons) + f": {advice}.")
+
+
+@dataclass
+class EffectScore:
+    """How much of the remaining force error one catalogued effect explains.
+
+    Attributes
+    ----------
+    effect : Effect
+    explained : float
+        Mean over X, Y and N of clip(1 - SSE_with / SSE_without, 0, 1) on
+        leave-one-manoeuvre-out predictions (see the module docstring).
+    explained_by_dof : dict of str to float
+        The three terms of that mean.
+    new_terms : dict of str to list of str
+        The effect's terms the library did not have, per degree of freedom.
+    regime : str
+        Where the effect matters: the state bin and the manoeuvres that gain most.
+    regime_detail : dict
+        The numbers behind ``regime``.
+    meaningful : bool
+        ``explained`` reaches the threshold of :func:`diagnose`.
+    confirmation : BeforeAfter or None
+        The refit with the effect and its flights, for the best candidates.
+    """
+
+    effect: Effect
+    explained: float
+    explained_by_dof: dict[str, float]
+    new_terms: dict[str, list[str]]
+    regime: str
+    regime_detail: dict
+    meaningful: bool
+    confirmation: BeforeAfter | None = None
+
+    def to_json(self) -> dict:
+        return clean_json(
+            {
+                "effect": self.effect.name,
+                "title": self.effect.title,
+                "explained": self.explained,
+                "explained_by_dof": self.explained_by_dof,
+                "meaningful": self.meaningful,
+                "regime": self.regime,
+                "regime_detail": self.regime_detail,
+                "physics": self.effect.physics,
+                "channels": list(self.effect.channels),
+                "new_terms": self.new_terms,
+                "confirmation": None if self.confirmation is None else self.confirmation.to_json(),
+            }
+        )
+
+
+def _regime(
+    gain: np.ndarray,
+    gain_by_dof: Mapping[str, float],
+    residuals: Residuals,
+    *,
+    uses_heading: bool = False,
+) -> tuple[str, dict]:
+    """Describe where an effect's gain (per-sample error reduction) is concentrated."""
+    total = float(gain.sum())
+    if not total > 0:
+        return "nowhere: it explains nothing on held-out manoeuvres", {}
+    best = None
+    for variable, bins in STATE_BINS.items():
+        index = _bin_index(residuals.state[variable], bins)
+        labels = _bin_labels(bins, variable)
+        for b, label in enumerate(labels):
+            mask = index == b
+            share = float(gain[mask].sum()) / total
+            samples = float(mask.mean())
+            if samples == 0 or share < 0.25:
+                continue
+            lift = share / samples
+            if best is None or lift > best["lift"]:
+                best = {
+                    "variable": variable,
+                    "bin": f"{label} {bins.unit}".strip(),
+                    "description": bins.name,
+                    "gain_share": share,
+                    "sample_share": samples,
+                    "lift": lift,
+                }
+    by_record = {
+        name: float(gain[residuals.groups == g].sum()) / total
+        for g, name in enumerate(residuals.names)
+    }
+    ranked = sorted(by_record.items(), key=lambda item: -item[1])
+    dof = max(gain_by_dof, key=gain_by_dof.get)
+    parts = [f"mostly in the {DOF_NAMES[dof]}"]
+    if best is not None and best["lift"] >= 1.2:
+        parts.append(
+            f"at {best['description']} {best['bin']} ({best['gain_share']:.0%} of the "
+            f"gain in {best['sample_share']:.0%} of the samples)"
+        )
+    else:
+        parts.append("spread over all drift angles, yaw rates, rudder angles and headings")
+    top = [f"{name} ({share:.0%})" for name, share in ranked[:2] if share > 0]
+    if top:
+        parts.append("largest on " + " and ".join(top))
+    detail = {"dof": dof, "bin": best, "by_manoeuvre": by_record}
+    if uses_heading:
+        covered = _heading_coverage(residuals.state["heading"])
+        detail["heading_coverage_deg"] = covered
+        if covered < 180.0:
+            parts.append(
+                f"caution: the records cover only {covered:.0f} deg of heading, over "
+                "which sin and cos of psi can stand in for any slow drift"
+            )
+    return "; ".join(parts), detail
+
+
+def _heading_coverage(heading_deg: np.ndarray) -> float:
+    """Degrees of the compass the records visit (in 10-degree sectors)."""
+    sectors = np.unique(np.floor(np.mod(heading_deg, 360.0) / 10.0))
+    return 10.0 * len(sectors)
+
+
+def _score(
+    effect: Effect,
+    columns: Mapping[str, np.ndarray],
+    grouped: Mapping[str, _GroupedProblem],
+    base_errors: Mapping[str, np.ndarray],
+    residuals: Residuals,
+    new_terms: dict,
+    threshold: float,
+) -> EffectScore:
+    explained, gain = {}, np.zeros(len(residuals.t))
+    for dof in DOFS:
+        e0 = base_errors[dof]
+        sse0 = float(e0 @ e0)
+        if not new_terms[dof] or not sse0 > 0:
+            explained[dof] = 0.0
+            continue
+        e1 = grouped[dof].lomo_errors(columns[dof])
+        explained[dof] = float(np.clip(1.0 - float(e1 @ e1) / sse0, 0.0, 1.0))
+        if explained[dof] > 0.0:  # the regime follows the equations the effect helps
+            gain += (e0**2 - e1**2) / sse0 / len(DOFS)
+    share = float(np.mean([explained[dof] for dof in DOFS]))
+    regime, detail = _regime(gain, explained, residuals, uses_heading="psi" in effect.variables)
+    return EffectScore(
+        effect, share, explained, new_terms, regime, detail, meaningful=share >= threshold
+    )
+

@@ -1,0 +1,299 @@
+"""Every text table: results hold numbers, this module turns them into text for people.
+
+The command line prints these; notebooks call them (or a result's ``report()`` method, which
+calls them).
+"""
+
+from __future__ import annotations
+
+import math
+import textwrap
+
+from .errors import SindyshipInputError
+from .library import DOFS
+
+__all__ = [
+    "DOF_NAMES",
+    "SETS",
+    "before_after_report",
+    "diagnosis_report",
+    "error_cell",
+    "evaluation_report",
+    "iteration_report",
+    "reproduce_report",
+]
+
+#: The equations by name, for text.
+DOF_NAMES = {"X": "surge force X", "Y": "sway force Y", "N": "yaw moment N"}
+#: The two sets a flown record belongs to.
+SETS = ("training", "held-out")
+
+
+def before_after_report(change) -> str:
+    """A plain-text table of the errors before and after."""
+    w = max([16, *(len(row["manoeuvre"]) for row in change.rows)])
+    lines = [
+        f"Before/after: {change.before} -> {change.after} (mean / max distance in ship "
+        "lengths; div = the flight diverged at that time)",
+        f"  {'manoeuvre':{w}s} {'set':9s} {'before':>22s} {'after':>22s} {'ratio':>7s}",
+    ]
+    for row in change.rows:
+        cells = [error_cell(row[when]) for when in ("before", "after")]
+        b, a = row["before"]["mean_distance_L"], row["after"]["mean_distance_L"]
+        ratio = f"{b / a:6.1f}x" if a > 0 and math.isfinite(a) and math.isfinite(b) else ""
+        lines.append(
+            f"  {row['manoeuvre']:{w}s} {row['set']:9s} {cells[0]:>22s} "
+            f"{cells[1]:>22s} {ratio:>7s}"
+        )
+    for kind in SETS:
+        ratio = change.ratio(kind)
+        if math.isfinite(ratio):
+            lines.append(
+                f"  {kind}: error x {ratio:.2f} (geometric mean over the finished "
+                f"flights); diverged {change.divergences(kind)[0]} -> "
+                f"{change.divergences(kind)[1]}"
+            )
+    return "\n".join(lines)
+
+
+def error_cell(err: dict) -> str:
+    cell = f"{err['mean_distance_L']:.3f} / {err['max_distance_L']:.3f}"
+    if err["diverged_at_s"] is not None:
+        cell += f" div {err['diverged_at_s']:.0f}s"
+    return cell
+
+
+
+def _ship_argument(ship) -> str:
+    """The ``--ship`` argument that loads ``ship``: its name if built in, else a placeholder."""
+    from .ships import load_ship
+
+    try:
+        return ship.name if load_ship(ship.name) == ship else "SHIP.toml"
+    except SindyshipInputError:
+        return "SHIP.toml"
+
+
+def _confirmation_text(change) -> str:
+    parts = []
+    for kind in SETS:
+        ratio = change.ratio(kind)
+        before, after = change.divergences(kind)
+        if not any(row["set"] == kind for row in change.rows):
+            continue
+        text = f"{kind} error x {ratio:.2f}" if math.isfinite(ratio) else f"{kind} error n/a"
+        if before or after:
+            text += f" (diverged flights {before} -> {after})"
+        parts.append(text)
+    verdict = {True: "confirmed", False: "not confirmed", None: "flown"}[change.confirmed]
+    return (
+        f"{verdict} by refitting and re-flying: "
+        + ", ".join(parts)
+        + " (geometric mean of after/before mean distance)"
+    )
+
+
+
+def _fill(text: str, indent: str = "    ", subsequent: str = "      ") -> str:
+    return textwrap.fill(text, width=96, initial_indent=indent, subsequent_indent=subsequent)
+
+
+def _compare_lines(comparisons) -> list[str]:
+    if not comparisons:
+        return []
+    w = max([16, *(len(c.name) for c in comparisons)])
+    lines = [
+        "Compare: the identified model flown like each record",
+        f"  {'manoeuvre':{w}s} {'set':9s} {'mean L':>8s} {'max L':>8s} "
+        f"{'heading deg':>12s} {'speed m/s':>10s}  diverged",
+    ]
+    for c in comparisons:
+        e = c.errors
+        div = "-" if e["diverged_at_s"] is None else f"at {e['diverged_at_s']:.0f} s"
+        lines.append(
+            f"  {c.name:{w}s} {c.set:9s} {e['mean_distance_L']:8.3f} "
+            f"{e['max_distance_L']:8.3f} {e['rms_heading_deg']:12.2f} "
+            f"{e['rms_speed_m_s']:10.3f}  {div}"
+        )
+    return [*lines, ""]
+
+
+def _residual_lines(diagnosis) -> list[str]:
+    summary = diagnosis.residuals.summary()
+    worst = diagnosis.residuals.worst_bins()
+    lines = [
+        "Where it fails: force residual (measured - model), RMS over the RMS "
+        "measured force; the bin of the largest RMS"
+    ]
+    for dof in DOFS:
+        lines.append(
+            f"  {DOF_NAMES[dof]:13s} {100 * summary[dof]['relative']:7.2f} %   "
+            f"cross-validated {100 * diagnosis.force_error[dof]:7.2f} %   worst at "
+            f"{worst[dof]}"
+        )
+    return [*lines, ""]
+
+
+def _score_lines(k: int, score) -> list[str]:
+    by = ", ".join(f"{d} {100 * score.explained_by_dof[d]:.0f} %" for d in DOFS)
+    mark = "" if score.meaningful else "  (not meaningful)"
+    lines = [
+        f" {k}. {score.effect.name} - {score.effect.title}: explains "
+        f"{100 * score.explained:.1f} % ({by}){mark}"
+    ]
+    if score.meaningful:
+        lines.append(_fill(f"where: {score.regime}"))
+        if score.confirmation is not None:
+            lines.append(_fill(_confirmation_text(score.confirmation)))
+        lines.append(_fill(f"physics: {score.effect.physics}"))
+    return lines
+
+
+def _ranking_lines(diagnosis) -> list[str]:
+    lines = [
+        f"Which effect is missing: share of the leave-one-manoeuvre-out force "
+        f"error each effect explains (meaningful from {100 * diagnosis.threshold:.0f} %)"
+    ]
+    if not diagnosis.ranking:
+        lines.append("  (no testable effect)")
+    for k, score in enumerate(diagnosis.ranking, 1):
+        lines += _score_lines(k, score)
+    if diagnosis.not_testable:
+        lines += ["", "Not testable with these data (record the channel named):"]
+        for item in diagnosis.not_testable:
+            lines.append(_fill(f"- {item.effect.name} ({item.effect.title}): {item.reason}",
+                               "  ", "    "))
+    if diagnosis.in_library:
+        lines.append(f"Already in the library: {', '.join(diagnosis.in_library)}.")
+    return [*lines, ""]
+
+
+def _verdict_lines(diagnosis) -> list[str]:
+    lines = [textwrap.fill(f"Caution: {warning}.", width=96, subsequent_indent="  ")
+             for warning in diagnosis.warnings]
+    if diagnosis.complete:
+        lines.append(
+            f"Verdict: complete - no catalogued effect explains "
+            f"{100 * diagnosis.threshold:.0f} % or more of the remaining force error."
+        )
+    else:
+        top = diagnosis.top
+        lines.append(
+            f"Verdict: add {top.effect.name}: sindyship fit DATA.csv... --ship "
+            f"{_ship_argument(diagnosis.ship)} --effects "
+            f"{','.join([*diagnosis.library.effects, top.effect.name])}; then diagnose "
+            "again with the same --effects."
+        )
+    return lines
+
+
+def diagnosis_report(diagnosis) -> str:
+    """The diagnosis as text a person reads, best effect first.
+
+    Parameters
+    ----------
+    diagnosis : sindyship.diagnose.Diagnosis
+
+    Returns
+    -------
+    str
+    """
+    n_terms = sum(len(diagnosis.library.terms[d]) for d in DOFS)
+    held_out = sum(c.set == "held-out" for c in diagnosis.comparisons)
+    lines = [
+        f"sindyship diagnose: ship {diagnosis.ship.name}, library {diagnosis.library.name} "
+        f"({n_terms} terms), {len(diagnosis.residuals.names)} training records"
+        + (f", {held_out} held-out" if held_out else ""),
+        "",
+    ]
+    lines += _compare_lines(diagnosis.comparisons)
+    lines += _residual_lines(diagnosis)
+    lines += _ranking_lines(diagnosis)
+    lines += _verdict_lines(diagnosis)
+    return "\n".join(lines)
+
+
+def iteration_report(iterative) -> str:
+    """One paragraph per round, then the errors of every library."""
+    lines = []
+    for k, rnd in enumerate(iterative.rounds, 1):
+        d = rnd.diagnosis
+        top = ", ".join(f"{s.effect.name} {100 * s.explained:.1f} %" for s in d.ranking[:4])
+        lines.append(
+            f"Round {k}: library {d.library.name}: {top or 'no testable effect'}"
+            + (f" -> add {rnd.added}" if rnd.added else "")
+        )
+    lines.append(f"Stopped: {iterative.stopped}")
+    table = iterative.table
+    if not table.empty:
+        lines.append("")
+        lines.append("Mean distance [ship lengths] per manoeuvre and library:")
+        pivot = table.pivot_table(
+            index=["set", "manoeuvre"], columns="round", values="mean_distance_L", sort=False
+        )
+        lines.append(pivot.to_string(float_format=lambda x: f"{x:.3f}"))
+    return "\n".join(lines)
+
+
+def evaluation_report(errors: dict) -> str:
+    """One line per record: mean and maximum distance, and the divergence time if any."""
+    lines = []
+    for name, err in errors.items():
+        div = ("" if err["diverged_at_s"] is None
+               else f", diverged at {err['diverged_at_s']:.0f} s")
+        lines.append(f"{name}: mean {err['mean_distance_L']:.4f} L, "
+                     f"max {err['max_distance_L']:.4f} L{div}")
+    return "\n".join(lines)
+
+
+def reproduce_report(output: dict) -> str:
+    """Plain-text report: Table 10 beside the paper, and the LS agreement check."""
+    lines = ["Held-out mean distance [ship lengths] (paper Table 10 in brackets; +effect: the",
+             "least-squares model with the terms of effects the diagnosis found missing)", ""]
+    names = list(output["results"][0]["errors"]) if output["results"] else []
+    header = f"{'method':30s}" + "".join(f"{n:>22s}" for n in names)
+    lines.append(header)
+    for res in output["results"]:
+        cells = []
+        for name in names:
+            err = res["errors"][name]
+            value = f"{err['mean_distance_L']:.4f}"
+            if err["diverged_at_s"] is not None:
+                value += f" (div {err['diverged_at_s']:.0f}s)"
+            paper_row = output.get("paper_table_10", {}).get(res["method"], {})
+            paper = None if res["effects"] else paper_row.get(name)
+            cells.append(f"{value} [{paper:.4f}]" if paper is not None else value)
+        label = res["method"] + "".join(f"+{e}" for e in res["effects"])
+        lines.append(f"{label:30s}" + "".join(f"{c:>22s}" for c in cells))
+    if output.get("diagnosis"):
+        lines.append("")
+        lines.append("Missing-effect diagnosis (share of the force error each effect explains on "
+                     "manoeuvres left out):")
+        lines.extend("  " + line for line in output["diagnosis"]["report"].splitlines()[:4])
+    paper_flown = output.get("paper_ls_flown")
+    if paper_flown:
+        lines.append("")
+        lines.append("The paper's own LS coefficients flown here: " + ", ".join(
+            f"{k} {v['mean_distance_L']:.3f} L" for k, v in paper_flown.items()))
+    agreement = output.get("paper_ls_agreement")
+    if agreement:
+        lines.append(
+            f"LS coefficients vs paper Tables 7-9: median relative deviation "
+            f"{agreement['median_rel_dev']:.3f}, "
+            f"same sign {100 * agreement['sign_agreement']:.1f} %"
+            f" ({agreement['n_coefficients']} non-zero coefficients)")
+    linear = output.get("linear_derivatives")
+    if linear:
+        lines.append("")
+        lines.append("Linear derivatives x 1e-5: the MMG's Taylor reference beside the fits")
+        methods = [k for k in linear[0] if k not in ("name", "MMG_Taylor", "paper_LS")]
+        widths = [max(10, len(m) + 2) for m in methods]
+        lines.append(f"{'':8s}{'MMG':>10s}{'paper LS':>10s}" + "".join(
+            f"{m.upper():>{w}s}" for m, w in zip(methods, widths, strict=True)))
+        for row in linear:
+            lines.append(f"{row['name']:8s}{row['MMG_Taylor']:10.1f}{row['paper_LS']:10.1f}"
+                         + "".join(f"{row[m]:{w}.1f}"
+                                   for m, w in zip(methods, widths, strict=True)))
+        lines.append("(all coefficients: coefficients.csv in the output folder)")
+    lines.append(f"Finished in {output['seconds']:.1f} s.")
+    return "\n".join(lines)
