@@ -111,28 +111,93 @@ def fly_like_batch(dynamics, records: Sequence[Trajectory], *, step: float | Non
     return out  # type: ignore[return-value]
 
 
+def _before_divergence(flown: Trajectory) -> np.ndarray:
+    """Samples a flight covers: finite, and before its divergence (PROTOCOL.md, Divergence)."""
+    ok = np.isfinite(flown["x"]) & np.isfinite(flown["y"])
+    diverged_at = flown.meta.get("diverged_at")
+    if diverged_at is not None:
+        ok &= flown.t < diverged_at
+    return ok
+
+
+def flown_seconds(flown: Trajectory) -> float:
+    """How long a flight flew [s]: to its divergence, else over the whole record."""
+    diverged_at = flown.meta.get("diverged_at")
+    end = float(flown.t[-1]) if diverged_at is None else float(diverged_at)
+    return end - float(flown.t[0])
+
+
 def distance_errors(flown: Trajectory, reference: Trajectory, L: float) -> dict:
     """Table-10 metric: mean and maximum Euclidean distance [ship lengths] between tracks.
 
-    The mean is over every sample up to a divergence (which is reported with its time, never
-    dropped).
+    A diverged flight has failed (``completed`` is False): its mean is over the samples
+    before the divergence, reported with that time and never alone; a flight that diverges
+    at its first sample has no mean (NaN, ``null`` in JSON), never 0.
 
     Returns
     -------
     dict
-        ``mean_distance_L``, ``max_distance_L``, ``diverged_at_s`` (None if it did not).
+        ``mean_distance_L``, ``max_distance_L``, ``diverged_at_s`` (None if it did not),
+        ``completed`` (bool) and ``flown_s`` [s].
     """
     dist = np.hypot(flown["x"] - reference["x"], flown["y"] - reference["y"]) / L
     diverged_at = flown.meta.get("diverged_at")
-    valid = np.isfinite(dist)
-    if not valid.any():
-        return {"mean_distance_L": math.nan, "max_distance_L": math.nan,
-                "diverged_at_s": diverged_at}
-    return {
-        "mean_distance_L": float(dist[valid].mean()),
-        "max_distance_L": float(dist[valid].max()),
-        "diverged_at_s": diverged_at,
-    }
+    valid = _before_divergence(flown) & np.isfinite(dist)
+    out = {"mean_distance_L": math.nan, "max_distance_L": math.nan,
+           "diverged_at_s": diverged_at, "completed": diverged_at is None and bool(valid.all()),
+           "flown_s": flown_seconds(flown)}
+    if valid.any():
+        out["mean_distance_L"] = float(dist[valid].mean())
+        out["max_distance_L"] = float(dist[valid].max())
+    return out
+
+
+def compare_flights(before: Trajectory, after: Trajectory, reference: Trajectory, L: float
+                    ) -> dict:
+    """Two flights of one record compared over the samples both cover (PROTOCOL.md).
+
+    A flight that diverges where the other does not (or earlier) is the worse one, whatever
+    the means; otherwise the smaller mean distance over the common window is the better.
+
+    Returns
+    -------
+    dict
+        ``window_s`` (length of the common window [s]), ``before_mean_L`` and
+        ``after_mean_L`` over it, and ``worse``: ``"before"``, ``"after"`` or None (equal).
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> from sindyship.mmg import MMGModel
+    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> (run,) = fly(MMGModel(load_ship("kcs")), [Manoeuvre("turning-circle", duration=100)])
+    >>> from dataclasses import replace
+    >>> cut = replace(run, meta={**run.meta, "diverged_at": 50.0})
+    >>> result = compare_flights(run, cut, run, 230.0)
+    >>> result["worse"], result["window_s"]
+    ('after', 50.0)
+    """
+    common = _before_divergence(before) & _before_divergence(after)
+    means = {}
+    for when, flown in (("before", before), ("after", after)):
+        dist = np.hypot(flown["x"] - reference["x"], flown["y"] - reference["y"]) / L
+        means[when] = float(dist[common].mean()) if common.any() else math.nan
+    ends = {when: flown.meta.get("diverged_at") for when, flown in (("before", before),
+                                                                   ("after", after))}
+    window = float(common.sum()) * reference.dt if len(reference.t) > 1 else 0.0
+    if ends["before"] != ends["after"]:
+        if ends["before"] is None:
+            worse = "after"
+        elif ends["after"] is None:
+            worse = "before"
+        else:
+            worse = "before" if ends["before"] < ends["after"] else "after"
+    elif means["before"] == means["after"] or not common.any():
+        worse = None
+    else:
+        worse = "after" if means["after"] > means["before"] else "before"
+    return {"window_s": window, "before_mean_L": means["before"],
+            "after_mean_L": means["after"], "worse": worse}
 
 
 def error_summary(flown: Trajectory, reference: Trajectory, L: float) -> dict:
@@ -146,8 +211,27 @@ def error_summary(flown: Trajectory, reference: Trajectory, L: float) -> dict:
     return out
 
 
+def flown_as(record: Trajectory) -> dict:
+    """How :func:`fly_like` flies a record, for reports.
+
+    Returns
+    -------
+    dict
+        ``{"flown_as": "zigzag", "amplitude_deg": A, "check_deg": C}`` for a recognised
+        zig-zag (closed loop), else ``{"flown_as": "replay-commanded"}`` (the commanded rudder
+        through the servo) or ``{"flown_as": "replay-actual"}`` (the recorded actual rudder).
+    """
+    zigzag = detect_zigzag(record)
+    if zigzag is not None:
+        return {"flown_as": "zigzag", "amplitude_deg": zigzag[0], "check_deg": zigzag[1]}
+    return {"flown_as": "replay-commanded" if record.has("delta_c") else "replay-actual"}
+
+
 def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None) -> dict:
-    """Fly a model like each record and report the Table-10 distances per record name."""
+    """Fly a model like each record and report the Table-10 distances per record name.
+
+    Each entry is :func:`distance_errors` plus :func:`flown_as`.
+    """
     flown = fly_like_batch(model.dynamics(), records, step=step)
-    return {rec.name: distance_errors(f, rec, model.ship.L)
+    return {rec.name: {**distance_errors(f, rec, model.ship.L), **flown_as(rec)}
             for f, rec in zip(flown, records, strict=True)}

@@ -29,35 +29,52 @@ DOF_NAMES = {"X": "surge force X", "Y": "sway force Y", "N": "yaw moment N"}
 SETS = ("training", "held-out")
 
 
+def _common_cell(row: dict) -> str:
+    """The comparison over the window both flights cover: gain, or which one diverged."""
+    common = row["common"]
+    b, a = common["before_mean_L"], common["after_mean_L"]
+    if row["before"]["diverged_at_s"] != row["after"]["diverged_at_s"]:
+        return f"{common['worse']} diverged first; over {common['window_s']:.0f} s " + (
+            f"{b:.3f} -> {a:.3f}" if math.isfinite(a) and math.isfinite(b) else "n/a")
+    if a > 0 and math.isfinite(a) and math.isfinite(b):
+        return f"{b / a:6.1f}x"
+    return ""
+
+
 def before_after_report(change) -> str:
-    """A plain-text table of the errors before and after."""
+    """A plain-text table of the errors before and after.
+
+    Distances are mean / max in ship lengths; a diverged flight shows its divergence time
+    beside its mean.  The last column compares the two flights over the window both cover
+    (PROTOCOL.md): the gain before/after, or which one diverged first.
+    """
     w = max([16, *(len(row["manoeuvre"]) for row in change.rows)])
     lines = [
         f"Before/after: {change.before} -> {change.after} (mean / max distance in ship "
-        "lengths; div = the flight diverged at that time)",
-        f"  {'manoeuvre':{w}s} {'set':9s} {'before':>22s} {'after':>22s} {'ratio':>7s}",
+        "lengths; div = the flight diverged at that time and has failed)",
+        f"  {'manoeuvre':{w}s} {'set':9s} {'before':>22s} {'after':>22s}  common window",
     ]
     for row in change.rows:
         cells = [error_cell(row[when]) for when in ("before", "after")]
-        b, a = row["before"]["mean_distance_L"], row["after"]["mean_distance_L"]
-        ratio = f"{b / a:6.1f}x" if a > 0 and math.isfinite(a) and math.isfinite(b) else ""
         lines.append(
             f"  {row['manoeuvre']:{w}s} {row['set']:9s} {cells[0]:>22s} "
-            f"{cells[1]:>22s} {ratio:>7s}"
+            f"{cells[1]:>22s}  {_common_cell(row)}"
         )
     for kind in SETS:
         ratio = change.ratio(kind)
         if math.isfinite(ratio):
+            before, after = change.divergences(kind)
             lines.append(
-                f"  {kind}: error x {ratio:.2f} (geometric mean over the finished "
-                f"flights); diverged {change.divergences(kind)[0]} -> "
-                f"{change.divergences(kind)[1]}"
+                f"  {kind}: error x {ratio:.2f} (geometric mean over the windows both "
+                f"flights cover); diverged flights {before} -> {after}"
             )
     return "\n".join(lines)
 
 
 def error_cell(err: dict) -> str:
-    cell = f"{err['mean_distance_L']:.3f} / {err['max_distance_L']:.3f}"
+    """Mean / max distance, with the divergence time of a failed flight."""
+    mean, peak = err["mean_distance_L"], err["max_distance_L"]
+    cell = (f"{mean:.3f} / {peak:.3f}" if math.isfinite(mean) else "n/a")
     if err["diverged_at_s"] is not None:
         cell += f" div {err['diverged_at_s']:.0f}s"
     return cell
@@ -89,7 +106,7 @@ def _confirmation_text(change) -> str:
     return (
         f"{verdict} by refitting and re-flying: "
         + ", ".join(parts)
-        + " (geometric mean of after/before mean distance)"
+        + " (geometric mean of after/before mean distance over the windows both flights cover)"
     )
 
 
@@ -168,22 +185,66 @@ def _ranking_lines(diagnosis) -> list[str]:
     return [*lines, ""]
 
 
+def _stability_text(diagnosis) -> str:
+    stability = diagnosis.stability
+    if stability is None:
+        return "the straight-run stability could not be evaluated"
+    values = ", ".join(f"{z.real:.3g}" + (f"{z.imag:+.3g}i" if z.imag else "")
+                       for z in stability.eigenvalues)
+    if stability.stable:
+        return f"straight-run eigenvalues {values} (per L/U0): stable on a straight course"
+    doubling = stability.doubling_time_L_over_U
+    return (f"straight-run eigenvalues {values} (per L/U0): unstable, a disturbance doubles "
+            f"in {doubling:.2g} L/U0")
+
+
+def _collinear_text(diagnosis) -> str:
+    groups: dict[tuple, list[str]] = {}
+    for dof, terms in diagnosis.collinear.items():
+        if terms:
+            groups.setdefault(tuple(terms.items()), []).append(DOF_NAMES[dof])
+    parts = [" and ".join(names) + ": " + ", ".join(f"{term} (VIF {vif:.1e})"
+                                                    for term, vif in terms)
+             for terms, names in groups.items()]
+    if not parts:
+        return ""
+    return "; terms the data cannot separate, " + "; ".join(parts)
+
+
+_REMEDIES = (
+    "what can help: another optimizer (--optimizer lasso or stlsq keeps fewer collinear "
+    "terms), smoothing noisy records (--smoothing auto), manoeuvres that separate the terms "
+    "(turning circles at several rudder angles, pull-outs, spirals), or terms beyond the "
+    "catalogue"
+)
+
+
 def _verdict_lines(diagnosis) -> list[str]:
     lines = [textwrap.fill(f"Caution: {warning}.", width=96, subsequent_indent="  ")
              for warning in diagnosis.warnings]
-    if diagnosis.complete:
-        lines.append(
-            f"Verdict: complete - no catalogued effect explains "
-            f"{100 * diagnosis.threshold:.0f} % or more of the remaining force error."
-        )
-    else:
+    verdict = diagnosis.verdict
+    if verdict == "complete":
+        text = (f"Verdict: complete - no catalogued effect explains "
+                f"{100 * diagnosis.threshold:.0f} % or more of the remaining force error, "
+                "every training flight completed and the library predicts most of every force.")
+    elif verdict == "add-effect":
         top = diagnosis.top
-        lines.append(
-            f"Verdict: add {top.effect.name}: sindyship fit DATA.csv... --ship "
-            f"{_ship_argument(diagnosis.ship)} --effects "
-            f"{','.join([*diagnosis.library.effects, top.effect.name])}; then diagnose "
-            "again with the same --effects."
-        )
+        text = (f"Verdict: add {top.effect.name}: sindyship fit DATA.csv... --ship "
+                f"{_ship_argument(diagnosis.ship)} --effects "
+                f"{','.join([*diagnosis.library.effects, top.effect.name])}; then diagnose "
+                "again with the same --effects.")
+    elif verdict == "unstable":
+        flights = ", ".join(f"{name} at {when:.0f} s" for name, when in diagnosis.diverged.items())
+        text = (f"Verdict: the model fails - its training flights diverged ({flights}) and no "
+                f"catalogued effect is meaningful; {_stability_text(diagnosis)}"
+                f"{_collinear_text(diagnosis)}; {_REMEDIES}.")
+    else:
+        share = ", ".join(f"{DOF_NAMES[dof]} {100 * (1 - diagnosis.force_error[dof] ** 2):.0f} %"
+                          for dof in diagnosis.unexplained)
+        text = (f"Verdict: the model is wrong - on held-out manoeuvres the library predicts "
+                f"only {share} of the measured force (variance explained), and no catalogued "
+                f"effect explains the rest; {_REMEDIES}.")
+    lines.append(textwrap.fill(text, width=96, subsequent_indent="  "))
     return lines
 
 

@@ -36,6 +36,7 @@ from sindyship.manoeuvres import Manoeuvre, fly, protocol_manoeuvres
 from sindyship.measurements import trajectory_from_frame, write_csv
 from sindyship.mmg import MMGModel
 from sindyship.model import AbkowitzModel, paper_model
+from sindyship.ships import load_ship
 from sindyship.trajectory import Trajectory
 
 SHORT = 1000.0  # s, length of the grid's manoeuvres
@@ -393,3 +394,60 @@ def kvlcc2_marin():
     )
     assert math.isfinite(result.ranking[0].explained)
     return result, result.top
+
+
+def _rudder_sensor_late(record: Trajectory, seconds: float) -> Trajectory:
+    """The record with its actual-rudder channel recorded ``seconds`` late."""
+    data = record.data.copy()
+    k = int(round(seconds / record.dt))
+    delta = data["delta"].to_numpy()
+    data["delta"] = np.concatenate([np.full(k, delta[0]), delta[:-k]])
+    return Trajectory(data, name=record.name, meta=dict(record.meta))
+
+
+def test_a_model_whose_flights_diverge_is_never_complete():
+    ship = load_ship("kcs").with_rudder(gamma_R_stbd=0.415, gamma_R_port=0.415)
+    runs = fly(MMGModel(ship), protocol_manoeuvres()["train"])
+    result = diagnose([_rudder_sensor_late(r, 4.0) for r in runs], ship, confirm=0)
+    assert not result.complete
+    assert result.verdict == "unstable"
+    assert len(result.diverged) == 8 and max(result.diverged.values()) < 600.0
+    assert result.stability is not None and not result.stability.stable
+    assert max(z.real for z in result.stability.eigenvalues) > 0.05
+    text = result.report()
+    assert "Verdict: the model fails" in text and "diverged" in text
+    document = result.to_json()
+    assert document["complete"] is False and document["verdict"] == "unstable"
+    for entry in document["errors"].values():
+        assert entry["completed"] is False and entry["flown_s"] < 600.0
+
+
+def test_a_before_after_whose_after_diverges_is_judged_worse(kcs):
+    from sindyship.diagnose import BeforeAfter
+    from sindyship.evaluation import compare_flights, error_summary
+
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=35, duration=600)])
+    off = run.data.copy()
+    off["x"] = off["x"] + 0.2 * kcs.L  # a complete flight 0.2 L off the record throughout
+    before = Trajectory(off, name=run.name, meta={"diverged_at": None})
+    after = replace(run, meta={"diverged_at": 100.0})  # exact, but diverges at 100 s
+    row = {"manoeuvre": run.name, "set": "training",
+           "before": error_summary(before, run, kcs.L),
+           "after": error_summary(after, run, kcs.L),
+           "common": compare_flights(before, after, run, kcs.L)}
+    assert row["after"]["mean_distance_L"] < row["before"]["mean_distance_L"]  # smaller mean...
+    assert row["common"]["worse"] == "after"  # ...but it failed
+    assert row["common"]["window_s"] == pytest.approx(100.0)
+    assert row["after"]["completed"] is False and row["after"]["flown_s"] == pytest.approx(100.0)
+    change = BeforeAfter("abkowitz", "abkowitz+x", ("x",), [row])
+    assert change.confirmed is False
+
+
+def test_a_flight_diverging_at_its_first_sample_has_no_mean(kcs):
+    from sindyship.evaluation import distance_errors
+
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("straight", duration=50)])
+    failed = replace(run, meta={"diverged_at": float(run.t[0])})
+    errors = distance_errors(failed, run, kcs.L)
+    assert np.isnan(errors["mean_distance_L"]) and errors["completed"] is False
+    assert errors["flown_s"] == 0.0

@@ -4,7 +4,14 @@ from __future__ import annotations
 
 from ..reports import DOF_NAMES, SETS
 
-__all__ = ["CONFIRMING_RATIO", "DOF_NAMES", "MEANINGFUL_SHARE", "SETS"]
+__all__ = [
+    "COLLINEAR_VIF",
+    "CONFIRMING_RATIO",
+    "DOF_NAMES",
+    "MEANINGFUL_SHARE",
+    "SETS",
+    "UNEXPLAINED_SHARE",
+]
 
 #: Smallest share of the cross-validated force error an effect must explain to matter (see
 #: :mod:`sindyship.diagnose` for why 5 %).
@@ -13,3 +20,9 @@ MEANINGFUL_SHARE = 0.05
 #: manoeuvres) that confirms an effect: a 10 % gain, above the few per cent by which any
 #: extra term moves a flight.
 CONFIRMING_RATIO = 0.9
+#: Share of a measured force (squared relative RMS error of the leave-one-manoeuvre-out
+#: predictions) above which most of it is unexplained and the library cannot be complete.
+UNEXPLAINED_SHARE = 0.5
+#: Variance inflation factor above which a term is reported as collinear with others: its
+#: coefficient's variance is inflated 100 times (its standard error 10 times) by the others.
+COLLINEAR_VIF = 100.0

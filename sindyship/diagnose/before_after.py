@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import pandas as pd
 
 from .._io import clean_json
-from ..evaluation import error_summary
+from ..evaluation import compare_flights, error_summary
 from ..identify import Design, design, fit, resolve_library
 from ..library import (
     Effect,
@@ -25,17 +25,25 @@ from ._flights import _fly_many
 
 
 # =============================================================================== before/after
-def _geometric_mean_ratio(pairs: Iterable[tuple[dict, dict]]) -> float:
-    """Geometric mean of after/before mean distances over flights that both finished."""
-    logs = [
-        math.log(max(a["mean_distance_L"], 1e-9) / max(b["mean_distance_L"], 1e-9))
-        for b, a in pairs
-        if b["diverged_at_s"] is None
-        and a["diverged_at_s"] is None
-        and math.isfinite(b["mean_distance_L"])
-        and math.isfinite(a["mean_distance_L"])
-    ]
+def _geometric_mean_ratio(rows: Iterable[dict]) -> float:
+    """Geometric mean of after/before mean distance over the window both flights cover."""
+    logs = []
+    for row in rows:
+        common = row["common"]
+        b, a = common["before_mean_L"], common["after_mean_L"]
+        if math.isfinite(a) and math.isfinite(b):
+            logs.append(math.log(max(a, 1e-9) / max(b, 1e-9)))
     return math.exp(sum(logs) / len(logs)) if logs else math.nan
+
+
+def _worse_by_divergence(row: dict) -> str | None:
+    """Which flight of a row diverges where the other does not (or earlier), if one does."""
+    b, a = row["before"]["diverged_at_s"], row["after"]["diverged_at_s"]
+    if b == a:
+        return None
+    if b is None or (a is not None and a < b):
+        return "after"
+    return "before"
 
 
 @dataclass
@@ -49,8 +57,10 @@ class BeforeAfter:
     added : tuple of str
         The effects added.
     rows : list of dict
-        Per manoeuvre: ``manoeuvre``, ``set`` (training or held-out) and the error summaries
-        ``before`` and ``after`` (:func:`sindyship.evaluation.error_summary`).
+        Per manoeuvre: ``manoeuvre``, ``set`` (training or held-out), the error summaries
+        ``before`` and ``after`` (:func:`sindyship.evaluation.error_summary`) and their
+        comparison over the window both flights cover, ``common``
+        (:func:`sindyship.evaluation.compare_flights`).
     model_before, model_after : AbkowitzModel
     """
 
@@ -63,7 +73,8 @@ class BeforeAfter:
 
     @property
     def table(self) -> pd.DataFrame:
-        """One row per manoeuvre: mean and max distance and divergence, before and after."""
+        """One row per manoeuvre: mean and max distance and divergence, before and after, and
+        the ratio of the means over the window both flights cover."""
         records = []
         for row in self.rows:
             entry = {"manoeuvre": row["manoeuvre"], "set": row["set"]}
@@ -72,19 +83,21 @@ class BeforeAfter:
                 entry[f"{when}_mean_L"] = err["mean_distance_L"]
                 entry[f"{when}_max_L"] = err["max_distance_L"]
                 entry[f"{when}_diverged_at_s"] = err["diverged_at_s"]
+            common = row["common"]
+            entry["common_window_s"] = common["window_s"]
             entry["ratio"] = (
-                entry["after_mean_L"] / entry["before_mean_L"]
-                if entry["before_mean_L"] > 0
+                common["after_mean_L"] / common["before_mean_L"]
+                if common["before_mean_L"] > 0
                 else math.nan
             )
+            entry["worse"] = common["worse"]
             records.append(entry)
         return pd.DataFrame(records)
 
     def ratio(self, kind: str = "training") -> float:
-        """Geometric mean of after/before mean distance over the set's finished flights."""
-        return _geometric_mean_ratio(
-            (row["before"], row["after"]) for row in self.rows if row["set"] == kind
-        )
+        """Geometric mean of after/before mean distance over the set's flights, each pair
+        compared over the window both flights cover (PROTOCOL.md, "Comparing two flights")."""
+        return _geometric_mean_ratio(row for row in self.rows if row["set"] == kind)
 
     def divergences(self, kind: str = "training") -> tuple[int, int]:
         """Number of flights of the set (training or held-out) that diverged, before and after."""
@@ -98,20 +111,23 @@ class BeforeAfter:
     def confirmed(self) -> bool | None:
         """Whether re-flying the training manoeuvres confirms the effect.
 
-        True when the geometric-mean distance falls below :data:`CONFIRMING_RATIO` times
-        its value before and no more training flights diverge than before (or fewer
-        diverge); None without training flights.  Held-out flights never enter it (they
-        would select the model on the test set).
+        A flight that diverges where the other does not, or earlier, is the worse one
+        whatever the means (PROTOCOL.md): False when some training flight diverges after
+        adding the effect where it did not before (or earlier), True when only divergences
+        before are cured, else True when the geometric-mean distance over the common windows
+        falls below :data:`CONFIRMING_RATIO` times its value before.  None without training
+        flights.  Held-out flights never enter it (they would select the model on the test
+        set).
         """
-        if not any(row["set"] == "training" for row in self.rows):
+        rows = [row for row in self.rows if row["set"] == "training"]
+        if not rows:
             return None
-        before, after = self.divergences("training")
-        ratio = self.ratio("training")
-        if after > before:
+        worse = {_worse_by_divergence(row) for row in rows}
+        if "after" in worse:
             return False
-        if after < before:
+        if "before" in worse:
             return True
-        return bool(ratio <= CONFIRMING_RATIO)
+        return bool(self.ratio("training") <= CONFIRMING_RATIO)
 
 
     def report(self) -> str:
@@ -134,6 +150,7 @@ class BeforeAfter:
                         "set": row["set"],
                         "before": row["before"],
                         "after": row["after"],
+                        "common_window": row["common"],
                     }
                     for row in self.rows
                 },
@@ -187,6 +204,7 @@ def _change_rows(
                     "set": kind,
                     "before": error_summary(b, rec, L),
                     "after": error_summary(a, rec, L),
+                    "common": compare_flights(b, a, rec, L),
                 }
             )
     return rows

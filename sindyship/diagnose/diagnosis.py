@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import math
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -21,9 +22,11 @@ from ..library import (
 from ..model import AbkowitzModel
 from ..optimizers import _one_blas_thread
 from ..ships import Ship
+from ..stability import Stability, straight_run_stability
 from ..terms import Term
 from ..trajectory import Trajectory
-from ._constants import DOF_NAMES, MEANINGFUL_SHARE
+from ..uncertainty import library_conditioning
+from ._constants import COLLINEAR_VIF, DOF_NAMES, MEANINGFUL_SHARE, UNEXPLAINED_SHARE
 from ._flights import _fly_many
 from .before_after import BeforeAfter, _change_rows, _fit
 from .compare import ManoeuvreComparison, compare
@@ -72,11 +75,39 @@ class Diagnosis:
     force_error: dict[str, float]
     settings: dict
     seconds: float = 0.0
+    stability: Stability | None = None
+    collinear: dict[str, dict[str, float]] = field(default_factory=dict)
+
+    @property
+    def diverged(self) -> dict[str, float]:
+        """Training flights that diverged, by record: the time they diverged [s]."""
+        return {c.name: c.errors["diverged_at_s"] for c in self.comparisons
+                if c.set == "training" and c.errors["diverged_at_s"] is not None}
+
+    @property
+    def unexplained(self) -> list[str]:
+        """Equations whose cross-validated force error leaves most of the measured force
+        unexplained (the squared relative RMS error above :data:`UNEXPLAINED_SHARE`)."""
+        return [dof for dof in DOFS if self.force_error[dof] ** 2 > UNEXPLAINED_SHARE]
+
+    @property
+    def verdict(self) -> str:
+        """``"add-effect"`` (a meaningful effect is missing), ``"unstable"`` (training flights
+        diverged and no catalogued effect is meaningful), ``"unexplained"`` (most of a force
+        is unexplained and no catalogued effect is meaningful) or ``"complete"``."""
+        if self.top is not None:
+            return "add-effect"
+        if self.diverged:
+            return "unstable"
+        if self.unexplained:
+            return "unexplained"
+        return "complete"
 
     @property
     def complete(self) -> bool:
-        """No testable effect explains a meaningful share of the force error."""
-        return not any(score.meaningful for score in self.ranking)
+        """No testable effect explains a meaningful share of the force error, no training
+        flight diverged and the library predicts most of every force (:attr:`verdict`)."""
+        return self.verdict == "complete"
 
     @property
     def warnings(self) -> list[str]:
@@ -155,6 +186,10 @@ class Diagnosis:
                 "effects_in_library": list(self.library.effects),
                 "threshold": self.threshold,
                 "complete": self.complete,
+                "verdict": self.verdict,
+                "diverged": self.diverged,
+                "stability": None if self.stability is None else self.stability.to_json(),
+                "collinear_terms": self.collinear,
                 "ranking": [score.to_json() for score in self.ranking],
                 "not_testable": [item.to_json() for item in self.not_testable],
                 "in_library": list(self.in_library),
@@ -170,6 +205,26 @@ class Diagnosis:
         )
 
     # ------------------------------------------------------------------------------- figures
+
+def _stability(model: AbkowitzModel) -> Stability | None:
+    """Straight-run stability, or None when the model has no linear sway-yaw dynamics."""
+    try:
+        return straight_run_stability(model)
+    except (SindyshipInputError, np.linalg.LinAlgError, ValueError):
+        return None
+
+
+def _collinear_terms(problems: Mapping[str, Design]) -> dict[str, dict[str, float]]:
+    """The sway and yaw terms the data cannot separate: VIF above :data:`COLLINEAR_VIF`,
+    largest first (at most four per equation)."""
+    vifs = library_conditioning({dof: problems[dof] for dof in ("Y", "N")})
+    out = {}
+    for dof, report in vifs.items():
+        ranked = sorted(((v, term) for term, v in report["vif"].items()
+                         if math.isfinite(v) and v > COLLINEAR_VIF), reverse=True)
+        out[dof] = {term: float(v) for v, term in ranked[:4]}
+    return out
+
 
 def _catalogue(effects: Sequence[str | Effect] | None) -> list[Effect]:
     names = available_effects() if effects is None else effects
@@ -376,6 +431,8 @@ def diagnose(
         comparisons=comparisons,
         residuals=residuals,
         force_error=force_error,
+        stability=_stability(model),
+        collinear=_collinear_terms(base_problems),
         settings={
             **settings,
             "optimizer": optimizer,
