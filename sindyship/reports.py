@@ -143,20 +143,33 @@ def _residual_lines(diagnosis) -> list[str]:
         "measured force; the bin of the largest RMS"
     ]
     for dof in DOFS:
+        floor = diagnosis.noise_floor.get(dof)
+        noise = "" if floor is None else f"   noise {100 * min(floor, 1.0):3.0f} % of it"
         lines.append(
             f"  {DOF_NAMES[dof]:13s} {100 * summary[dof]['relative']:7.2f} %   "
-            f"cross-validated {100 * diagnosis.force_error[dof]:7.2f} %   worst at "
+            f"cross-validated {100 * diagnosis.force_error[dof]:7.2f} %{noise}   worst at "
             f"{worst[dof]}"
+        )
+    level = diagnosis.noise_level
+    if level:
+        lines.append(
+            f"  noise in the records (rough part over one L/U0): u {100 * level['u']:.2g} %, "
+            f"v {100 * level['v']:.2g} %, r {100 * level['r']:.2g} % of their RMS, heading "
+            f"{level['psi_deg']:.2g} deg"
         )
     return [*lines, ""]
 
 
 def _score_lines(k: int, score) -> list[str]:
-    by = ", ".join(f"{d} {100 * score.explained_by_dof[d]:.0f} %" for d in DOFS)
+    by = ", ".join(f"{d} {100 * score.explained_by_dof[d]:.0f} %"
+                   + ("" if score.significant.get(d, True) else "?") for d in DOFS)
     mark = "" if score.meaningful else "  (not meaningful)"
+    signal = ""
+    if abs(score.explained_signal - score.explained) > 0.005:
+        signal = f"; {100 * score.explained_signal:.1f} % of the error above noise"
     lines = [
         f" {k}. {score.effect.name} - {score.effect.title}: explains "
-        f"{100 * score.explained:.1f} % ({by}){mark}"
+        f"{100 * score.explained:.1f} % ({by}){signal}{mark}"
     ]
     if score.meaningful:
         lines.append(_fill(f"where: {score.regime}"))
@@ -169,7 +182,9 @@ def _score_lines(k: int, score) -> list[str]:
 def _ranking_lines(diagnosis) -> list[str]:
     lines = [
         f"Which effect is missing: share of the leave-one-manoeuvre-out force "
-        f"error each effect explains (meaningful from {100 * diagnosis.threshold:.0f} %)"
+        f"error each effect explains (meaningful from {100 * diagnosis.threshold:.0f} % of the "
+        "error above the noise floor, counting equations whose gain holds when the "
+        "manoeuvres are resampled; ? marks one that does not)"
     ]
     if not diagnosis.ranking:
         lines.append("  (no testable effect)")
@@ -296,14 +311,29 @@ def iteration_report(iterative) -> str:
     return "\n".join(lines)
 
 
+def _flown_as_text(err: dict) -> str:
+    kind = err.get("flown_as")
+    if kind == "zigzag":
+        return (f"flown closed loop as a {err['amplitude_deg']:g}/{err['check_deg']:g} "
+                "zig-zag")
+    if kind == "replay-commanded":
+        return "replaying its commanded rudder through the servo"
+    if kind == "replay-actual":
+        return "replaying its recorded rudder angle"
+    return ""
+
+
 def evaluation_report(errors: dict) -> str:
-    """One line per record: mean and maximum distance, and the divergence time if any."""
+    """One line per record: how it was flown, mean and maximum distance, and whether the
+    flight completed (a diverged flight has failed; its mean covers the time before)."""
     lines = []
     for name, err in errors.items():
-        div = ("" if err["diverged_at_s"] is None
-               else f", diverged at {err['diverged_at_s']:.0f} s")
-        lines.append(f"{name}: mean {err['mean_distance_L']:.4f} L, "
-                     f"max {err['max_distance_L']:.4f} L{div}")
+        how = _flown_as_text(err)
+        cell = (f"mean {err['mean_distance_L']:.4f} L, max {err['max_distance_L']:.4f} L"
+                if math.isfinite(err["mean_distance_L"]) else "no distance")
+        if err["diverged_at_s"] is not None:
+            cell = (f"FAILED: diverged at {err['diverged_at_s']:.0f} s; before it {cell}")
+        lines.append(f"{name}: {cell}" + (f" ({how})" if how else ""))
     return "\n".join(lines)
 
 

@@ -85,6 +85,8 @@ from .trajectory import Trajectory
 
 __all__ = [
     "DEFAULT_CANDIDATES",
+    "SHIP_TIME_WINDOWS",
+    "default_candidates",
     "SMOOTHING_METHODS",
     "SmoothingSetting",
     "choose_smoothing",
@@ -186,7 +188,14 @@ class SmoothingSetting:
         return cls(method, window, order)
 
 
-#: The candidates :func:`choose_smoothing` compares by default.
+#: Windows of the default candidates in ship time, units of L/U0: 11, 21, 41 and 81 s for the
+#: full-scale KCS (L/U0 = 18.6 s), 3.5 to 26 s for the 7 m KVLCC2 model (L/U0 = 5.9 s).  A
+#: manoeuvre's motions change over a few L/U0, so a window of a fixed number of seconds smooths
+#: a model-scale record far more than a full-scale one.
+SHIP_TIME_WINDOWS = (0.6, 1.13, 2.2, 4.35)
+
+#: The candidates :func:`choose_smoothing` compares by default for the full-scale KCS
+#: (:func:`default_candidates` of another ship scales the windows with its L/U0).
 DEFAULT_CANDIDATES: tuple[SmoothingSetting, ...] = (
     SmoothingSetting("none"),
     SmoothingSetting("savgol", 11.0),
@@ -196,6 +205,26 @@ DEFAULT_CANDIDATES: tuple[SmoothingSetting, ...] = (
     SmoothingSetting("rts", 21.0),
     SmoothingSetting("rts", 41.0),
 )
+
+
+def default_candidates(ship: Ship) -> tuple[SmoothingSetting, ...]:
+    """The default candidates of :func:`choose_smoothing` with windows in ship time.
+
+    Savitzky-Golay over 0.6, 1.13, 2.2 and 4.35 L/U0 and Kalman (RTS) over 1.13 and 2.2 L/U0,
+    rounded to 0.1 s (:data:`SHIP_TIME_WINDOWS`), and no smoothing.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> [s.window for s in default_candidates(load_ship("kvlcc2"))][1:5]
+    [3.5, 6.7, 13.0, 25.7]
+    """
+    windows = [round(factor * ship.time_scale, 1) for factor in SHIP_TIME_WINDOWS]
+    return (
+        SmoothingSetting("none"),
+        *(SmoothingSetting("savgol", w) for w in windows),
+        *(SmoothingSetting("rts", w) for w in windows[1:3]),
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -719,7 +748,7 @@ def choose_smoothing(records: Sequence[Trajectory], ship: Ship,
         The ship (L, U0, inertia, rudder servo).
     candidates : iterable of SmoothingSetting or str, optional
         Settings to compare (``"savgol:21"`` style text is accepted); default
-        :data:`DEFAULT_CANDIDATES`.
+        :func:`default_candidates` of the ship (windows in ship time).
     optimizer : str
         Regression method of the folds (:func:`sindyship.optimizers.make_optimizer`).
     library, effects, params, rudder_signal
@@ -757,7 +786,7 @@ def choose_smoothing(records: Sequence[Trajectory], ship: Ship,
             "choosing the smoothing by leave-one-manoeuvre-out cross-validation needs at "
             f"least two training records, not {len(records)}."
         )
-    settings = [_as_setting(c) for c in (DEFAULT_CANDIDATES if candidates is None
+    settings = [_as_setting(c) for c in (default_candidates(ship) if candidates is None
                                          else candidates)]
     if not settings:
         raise SindyshipInputError("give at least one smoothing candidate.")

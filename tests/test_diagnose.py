@@ -217,7 +217,12 @@ def test_kcs_with_asymmetry_beats_the_papers_best_on_every_held_out_row(kcs_roun
 
 
 def test_kcs_rounds_continue_until_no_effect_is_meaningful(kcs_rounds):
-    assert kcs_rounds.added == ["asymmetry", "higher_order", "crossflow"]
+    # crossflow explains 33 % of the error after two rounds, but 85 % of that error is in one
+    # manoeuvre (zz35_10) and the straight run gets worse: its gain does not hold when the
+    # manoeuvres are resampled, so it is not meaningful
+    assert kcs_rounds.added == ["asymmetry", "higher_order"]
+    third = kcs_rounds.rounds[-1].diagnosis.score("crossflow")
+    assert third.explained > 0.3 and not any(third.significant.values())
     assert kcs_rounds.stopped == "no effect explains a meaningful share"
     last = kcs_rounds.rounds[-1].diagnosis
     assert last.complete

@@ -51,6 +51,11 @@ def add_parser(sub) -> None:
                    f"(default {MEANINGFUL_SHARE})")
     p.add_argument("--confirm", type=int, default=2,
                    help="best candidates to confirm by refitting and re-flying (default 2)")
+    p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",
+                   help="smooth noisy training records before differencing: a Savitzky-Golay "
+                   "or a Kalman (RTS) smoother over W seconds, or 'auto' to choose the setting "
+                   "by leave-one-manoeuvre-out flights (windows in ship time L/U0); the flights "
+                   "are compared with the records as measured (default: none)")
     add_resample(p)
     add_n_jobs(p)
 
@@ -94,6 +99,7 @@ def run(args) -> int:
         "derivative": args.derivative,
         "window": args.window,
         "n_jobs": args.n_jobs,
+        "smoothing": None if args.smoothing == "none" else args.smoothing,
     }
     bar = sys.stderr.isatty()
     progress(f"sindyship diagnose: {len(records)} training and {len(test)} held-out records, "

@@ -5,6 +5,9 @@ from __future__ import annotations
 from ..reports import DOF_NAMES, SETS
 
 __all__ = [
+    "BOOTSTRAP",
+    "NOISE_CAP",
+    "SIGNIFICANCE",
     "COLLINEAR_VIF",
     "CONFIRMING_RATIO",
     "DOF_NAMES",
@@ -26,3 +29,10 @@ UNEXPLAINED_SHARE = 0.5
 #: Variance inflation factor above which a term is reported as collinear with others: its
 #: coefficient's variance is inflated 100 times (its standard error 10 times) by the others.
 COLLINEAR_VIF = 100.0
+#: Bootstrap resamples of the manoeuvres behind an effect's significance.
+BOOTSTRAP = 1000
+#: Quantile of the resampled gain that must stay above zero for a significant gain (5 %).
+SIGNIFICANCE = 0.05
+#: Largest share of an equation's error taken for noise: the share above the noise floor is
+#: then at most 20 times the plain share, however noisy the records.
+NOISE_CAP = 0.95

@@ -223,6 +223,7 @@ def before_after(
     derivative: str = "five-point",
     window: float = 21.0,
     fly_training: bool = True,
+    smoothing=None,
     n_jobs: int = 1,
     progress: bool = False,
 ) -> BeforeAfter:
@@ -243,6 +244,9 @@ def before_after(
         As :func:`sindyship.identify.fit`.
     fly_training : bool
         Also fly the training records.
+    smoothing : SmoothingSetting or str, optional
+        Smoothing of the training records before the fits (``"savgol:W"``, ``"rts:W"``); the
+        flights are compared with the records as measured.
     n_jobs : int
         Processes for the flights (joblib).
     progress : bool
@@ -275,10 +279,15 @@ def before_after(
     added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
     extended = base.extended(*added)
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
+    fitted = list(train)
+    if smoothing is not None and smoothing != "none":
+        from ..smoothing import smooth_records
+
+        fitted = smooth_records(fitted, smoothing)
     models = []
     for lib in (base, extended):
-        problems = design(train, ship, lib, **settings)
-        models.append(_fit(train, ship, lib, problems, optimizer=optimizer, **settings))
+        problems = design(fitted, ship, lib, **settings)
+        models.append(_fit(fitted, ship, lib, problems, optimizer=optimizer, **settings))
     sets = ([("training", list(train))] if fly_training else []) + [("held-out", list(test))]
     sets = [(kind, records) for kind, records in sets if records]
     jobs = [(model, records) for model in models for _, records in sets]

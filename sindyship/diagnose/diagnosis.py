@@ -22,14 +22,16 @@ from ..library import (
 from ..model import AbkowitzModel
 from ..optimizers import _one_blas_thread
 from ..ships import Ship
+from ..smoothing import SmoothingSetting, choose_smoothing, smooth_records
 from ..stability import Stability, straight_run_stability
 from ..terms import Term
 from ..trajectory import Trajectory
 from ..uncertainty import library_conditioning
-from ._constants import COLLINEAR_VIF, DOF_NAMES, MEANINGFUL_SHARE, UNEXPLAINED_SHARE
+from ._constants import COLLINEAR_VIF, DOF_NAMES, MEANINGFUL_SHARE, NOISE_CAP, UNEXPLAINED_SHARE
 from ._flights import _fly_many
 from .before_after import BeforeAfter, _change_rows, _fit
 from .compare import ManoeuvreComparison, compare
+from .noise import channel_noise, noise_sse
 from .residuals import Residuals, _residuals
 from .scoring import EffectScore, NotTestable, _GroupedProblem, _score, _untestable
 
@@ -77,6 +79,8 @@ class Diagnosis:
     seconds: float = 0.0
     stability: Stability | None = None
     collinear: dict[str, dict[str, float]] = field(default_factory=dict)
+    noise_floor: dict[str, float] = field(default_factory=dict)
+    noise_level: dict[str, float] = field(default_factory=dict)
 
     @property
     def diverged(self) -> dict[str, float]:
@@ -87,8 +91,15 @@ class Diagnosis:
     @property
     def unexplained(self) -> list[str]:
         """Equations whose cross-validated force error leaves most of the measured force
-        unexplained (the squared relative RMS error above :data:`UNEXPLAINED_SHARE`)."""
-        return [dof for dof in DOFS if self.force_error[dof] ** 2 > UNEXPLAINED_SHARE]
+        unexplained (:meth:`unexplained_share` above :data:`UNEXPLAINED_SHARE`)."""
+        return [dof for dof in DOFS if self.unexplained_share(dof) > UNEXPLAINED_SHARE]
+
+    def unexplained_share(self, dof: str) -> float:
+        """Share of the measured force above the noise floor that the library leaves
+        unexplained on held-out manoeuvres (squared relative RMS error, noise removed)."""
+        error = self.force_error[dof] ** 2
+        floor = min(self.noise_floor.get(dof, 0.0), NOISE_CAP) * error
+        return float((error - floor) / max(1.0 - floor, 1e-12))
 
     @property
     def verdict(self) -> str:
@@ -113,25 +124,25 @@ class Diagnosis:
     def warnings(self) -> list[str]:
         """Cautions about the data behind the verdict (empty when there are none)."""
         out = []
-        noisy = [dof for dof in DOFS if self.force_error[dof] > 0.5]
+        poor = [dof for dof in DOFS if self.force_error[dof] > 0.5]
+        noisy = [dof for dof in poor if self.noise_floor.get(dof, 0.0) > 0.5]
         if noisy:
             names = " and ".join(DOF_NAMES[dof] for dof in noisy)
-            if self.settings.get("derivative") == "savgol":
-                advice = (
-                    f"the accelerations are already smoothed over "
-                    f"{self.settings.get('window')} s; a verdict of 'complete' then means "
-                    "that no catalogued effect describes the rest"
-                )
-            else:
-                advice = (
-                    "with noisy or quantised data, smooth the accelerations (derivative "
-                    "savgol) before trusting a verdict of 'complete'"
-                )
+            smoothed = self.settings.get("smoothing") or self.settings.get("derivative") == "savgol"
+            out.append(
+                f"most of the error in the {names} is measurement noise amplified by the "
+                "differentiation (the noise floor above); effects are judged on the error above "
+                "it" + ("" if smoothed else ", and smoothing the records (--smoothing auto) "
+                        "lowers it")
+            )
+        other = [dof for dof in poor if dof not in noisy]
+        if other:
+            names = " and ".join(DOF_NAMES[dof] for dof in other)
             out.append(
                 f"the library predicts less than half of the measured {names} on "
-                "held-out manoeuvres (noise in the accelerations, manoeuvres too unlike "
-                "each other for one to be predicted from the rest, or physics no catalogued "
-                f"effect describes); {advice}"
+                "held-out manoeuvres although the records are not noisy there: manoeuvres too "
+                "unlike each other for one to be predicted from the rest, or physics no "
+                "catalogued effect describes"
             )
         diverged = [c.name for c in self.comparisons if c.errors["diverged_at_s"] is not None]
         if diverged:
@@ -190,6 +201,7 @@ class Diagnosis:
                 "diverged": self.diverged,
                 "stability": None if self.stability is None else self.stability.to_json(),
                 "collinear_terms": self.collinear,
+                "noise": {"floor_share_of_error": self.noise_floor, "level": self.noise_level},
                 "ranking": [score.to_json() for score in self.ranking],
                 "not_testable": [item.to_json() for item in self.not_testable],
                 "in_library": list(self.in_library),
@@ -226,6 +238,21 @@ def _collinear_terms(problems: Mapping[str, Design]) -> dict[str, dict[str, floa
     return out
 
 
+def _smoothing_setting(smoothing, records, ship, library, optimizer, rudder_signal, n_jobs
+                       ) -> SmoothingSetting | None:
+    """The smoothing to apply: None, the given setting, or the one ``"auto"`` chooses."""
+    if smoothing is None or smoothing == "none":
+        return None
+    if isinstance(smoothing, SmoothingSetting):
+        return None if smoothing.method == "none" else smoothing
+    if smoothing == "auto":
+        setting, _ = choose_smoothing(records, ship, optimizer=optimizer, library=library,
+                                      rudder_signal=rudder_signal, n_jobs=n_jobs)
+        return None if setting.method == "none" else setting
+    setting = SmoothingSetting.parse(smoothing)
+    return None if setting.method == "none" else setting
+
+
 def _catalogue(effects: Sequence[str | Effect] | None) -> list[Effect]:
     names = available_effects() if effects is None else effects
     out = [e if isinstance(e, Effect) else load_effect(e) for e in names]
@@ -252,6 +279,7 @@ def diagnose(
     rudder_signal: str = "actual",
     derivative: str = "five-point",
     window: float = 21.0,
+    smoothing: SmoothingSetting | str | None = None,
     n_jobs: int = 1,
     progress: bool = False,
 ) -> Diagnosis:
@@ -280,6 +308,11 @@ def diagnose(
         uses least squares).
     rudder_signal, derivative, window
         As :func:`sindyship.identify.fit`.
+    smoothing : SmoothingSetting, str or None
+        Smooth the training records before differencing (``"savgol:W"``, ``"rts:W"`` with W in
+        seconds, ``"auto"`` to choose by leave-one-manoeuvre-out flights,
+        :func:`sindyship.smoothing.choose_smoothing`); the models are fitted and the effects
+        scored on the smoothed records, the flights compared with the measured ones.
     n_jobs : int
         Parallel jobs: threads for scoring the effects, processes for the flights (joblib).
     progress : bool
@@ -312,6 +345,8 @@ def diagnose(
         raise SindyshipInputError("two records share a name; give each file a distinct name.")
     base = resolve_library(library)
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
+    smoothing = _smoothing_setting(smoothing, records, ship, base, optimizer, rudder_signal, n_jobs)
+    fitted = records if smoothing is None else smooth_records(records, smoothing)
     candidates, not_testable, in_library = [], [], []
     for effect in _catalogue(effects):
         if effect.name in base.effects:
@@ -331,7 +366,7 @@ def diagnose(
             continue
         candidates.append((effect, new))
     union = base.extended(*[effect for effect, _ in candidates])
-    problems = design(records, ship, union, **settings)
+    problems = design(fitted, ship, union, **settings)
     n_base = {dof: len(base.terms[dof]) for dof in DOFS}
     base_problems = {
         dof: Design(
@@ -342,11 +377,11 @@ def diagnose(
         )
         for dof in DOFS
     }
-    model = _fit(records, ship, base, base_problems, optimizer=optimizer, **settings)
+    model = _fit(fitted, ship, base, base_problems, optimizer=optimizer, **settings)
     residuals = _residuals(
         base_problems,
         {dof: model.coefficient_vector(dof) for dof in DOFS},
-        records,
+        fitted,
         ship,
         rudder_signal,
     )
@@ -356,6 +391,8 @@ def diagnose(
     }
     base_columns = {dof: np.arange(n_base[dof]) for dof in DOFS}
     base_errors = {dof: grouped[dof].lomo_errors(base_columns[dof]) for dof in DOFS}
+    window = max(1, int(round(ship.time_scale / float(np.median([r.dt for r in records])))))
+    noise = {dof: noise_sse(base_errors[dof], problems[dof].groups, window) for dof in DOFS}
     force_error = {
         dof: float(
             np.sqrt(np.mean(base_errors[dof] ** 2))
@@ -379,7 +416,7 @@ def diagnose(
             for dof in DOFS
         }
         jobs.append(
-            delayed(_score)(effect, columns, grouped, base_errors, residuals, new, threshold)
+            delayed(_score)(effect, columns, grouped, base_errors, residuals, new, threshold, noise)
         )
     ranking = list(Parallel(n_jobs=n_jobs, prefer="threads")(jobs)) if jobs else []
     ranking.sort(key=lambda s: (-s.explained, s.effect.name))
@@ -392,10 +429,10 @@ def diagnose(
         lib = base.extended(score.effect)
         models.append(
             _fit(
-                records,
+                fitted,
                 ship,
                 lib,
-                design(records, ship, lib, **settings),
+                design(fitted, ship, lib, **settings),
                 optimizer=optimizer,
                 **settings,
             )
@@ -432,12 +469,16 @@ def diagnose(
         residuals=residuals,
         force_error=force_error,
         stability=_stability(model),
+        noise_floor={dof: noise[dof] / max(float(base_errors[dof] @ base_errors[dof]), 1e-300)
+                     for dof in DOFS},
+        noise_level=channel_noise(records),
         collinear=_collinear_terms(base_problems),
         settings={
             **settings,
             "optimizer": optimizer,
             "confirm": confirm,
             "fly_training": fly_training,
+            "smoothing": None if smoothing is None else smoothing.as_dict(),
             "scoring": "least squares, leave-one-manoeuvre-out",
         },
         seconds=time.perf_counter() - start,

@@ -168,6 +168,12 @@ def diagnose_iteratively(
     from tqdm.auto import tqdm
 
     lib = resolve_library(library)
+    if options.get("smoothing") == "auto":  # choose once, on the plain library
+        from ..smoothing import choose_smoothing
+
+        setting, _ = choose_smoothing(records, ship, optimizer=options.get("optimizer", "ls"),
+                                      library=lib, n_jobs=options.get("n_jobs", 1))
+        options["smoothing"] = setting
     rounds: list[Round] = []
     stopped = f"after {max_rounds} rounds"
     bar = tqdm(total=max_rounds, desc="rounds", file=sys.stderr, disable=not progress)
@@ -203,7 +209,9 @@ def diagnose_iteratively(
                 optimizer=options.get("optimizer", "ls"),
                 n_jobs=options.get("n_jobs", 1),
                 **{
-                    k: options[k] for k in ("rudder_signal", "derivative", "window") if k in options
+                    k: options[k]
+                    for k in ("rudder_signal", "derivative", "window", "smoothing")
+                    if k in options
                 },
             )
         rounds.append(Round(result, pick.effect.name, change))
