@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import SindyshipInputError
 from .ships import Ship
 
 
@@ -195,6 +196,12 @@ class MMGModel:
 
     def __post_init__(self):
         ship = self.ship
+        if not ship.has_mmg:
+            raise SindyshipInputError(
+                f"ship {ship.name!r} has no MMG hull, propeller and rudder coefficients: it can "
+                "be identified and an identified model flown, but not simulated; add the "
+                "[hull], [propeller] and [rudder] sections (see sindyship/ships/kcs.toml)."
+            )
         scale = np.array([[1.0], [1.0], [1.0 / ship.L]]) * ship.U0**2 / ship.L
         object.__setattr__(self, "_scaled_inverse_mass",
                            scale * np.linalg.inv(mass_matrix(ship)))

@@ -189,7 +189,8 @@ class Ship:
         ``"rigid-body"`` (paper eq. 11; added-mass terms inside the hull coefficients) or
         ``"with-added-mass"``.
     hull : dict
-        Hull coefficients by name, Prime II.
+        Hull coefficients by name, Prime II (empty for a ship file made for identification
+        only, which has no propeller and rudder either: :attr:`has_mmg`).
     abkowitz : dict
         Prime I acceleration derivatives X_udot, Y_vdot, Y_rdot, N_vdot, N_rdot used by the
         identification (paper Table 6); derived from the Prime II added masses when absent.
@@ -209,10 +210,16 @@ class Ship:
     particulars: Particulars
     mass: MassProperties
     hull: dict[str, float]
-    propeller: Propeller
-    rudder: Rudder
+    propeller: Propeller | None
+    rudder: Rudder | None
     servo: Servo
     abkowitz: dict[str, float]
+
+    @property
+    def has_mmg(self) -> bool:
+        """Whether the ship carries the MMG hull, propeller and rudder coefficients (needed to
+        simulate it with :class:`sindyship.mmg.MMGModel`, not to identify or fly a model)."""
+        return self.propeller is not None and self.rudder is not None and bool(self.hull)
 
     @property
     def L(self) -> float:
@@ -441,8 +448,94 @@ def _abkowitz_added_masses(data: dict, source: str) -> dict[str, float]:
     return {k: float(_finite(v, f"[abkowitz] {k}", source)) for k, v in abkowitz.items()}
 
 
+#: Rudder servo of a ship file that gives none: a time constant of 0.1 L/U0, the rate of the
+#: IMO steering-gear rule (35 deg to 30 deg the other side in 28 s, 2.32 deg/s full scale,
+#: Froude-scaled by the ship's ``scale``) and 35 deg hard over.
+DEFAULT_SERVO = {"T_R": 0.1, "rate_max": 65.0 / 28.0, "delta_max": 35.0}
+
+
+def clarke_added_masses(p: Particulars, m_prime_i: float) -> dict[str, float]:
+    """Acceleration derivatives (Prime I) estimated from the main dimensions.
+
+    The sway and yaw derivatives are the empirical formulas of Clarke, Gedling & Hine (1983),
+    *The application of manoeuvring criteria in hull design using linear theory*, Trans. RINA
+    125, 45-68, with C_B from the displacement; the surge derivative, which Clarke does not
+    give, is taken as 5 % of the mass, a common estimate for slender hulls.
+
+    Parameters
+    ----------
+    p : Particulars
+    m_prime_i : float
+        Mass / (0.5 rho L^3).
+
+    Returns
+    -------
+    dict
+        ``X_udot``, ``Y_vdot``, ``Y_rdot``, ``N_vdot``, ``N_rdot`` (Prime I).
+
+    Examples
+    --------
+    >>> ship = load_ship("kcs")
+    >>> est = clarke_added_masses(ship.particulars, ship.prime_i_inertia()["m"])
+    >>> round(est["Y_vdot"] * 1e5), round(est["N_rdot"] * 1e5)  # paper Table 6: -732, -43
+    (-838, -49)
+    """
+    c_b = p.displacement / (p.L * p.B * p.d)
+    base = math.pi * (p.d / p.L) ** 2
+    b_l, b_t = p.B / p.L, p.B / p.d
+    return {
+        "X_udot": -0.05 * m_prime_i,
+        "Y_vdot": -base * (1.0 + 0.16 * c_b * b_t - 5.1 * b_l**2),
+        "Y_rdot": -base * (0.67 * b_l - 0.0033 * b_t**2),
+        "N_vdot": -base * (1.1 * b_l - 0.041 * b_t),
+        "N_rdot": -base * (1.0 / 12.0 + 0.017 * c_b * b_t - 0.33 * b_l),
+    }
+
+
+def _identification_ship(data: dict, source: str) -> Ship:
+    """A ship file without [hull], [propeller] and [rudder]: enough to identify and fly an
+    Abkowitz model (particulars, mass, inertia; added masses estimated when absent)."""
+    if not isinstance(data.get("name"), str):
+        raise SindyshipInputError(f"{source}: top-level key 'name' (a string) is missing.")
+    for section in ("mass", "abkowitz", "servo"):
+        if section in data and not isinstance(data[section], dict):
+            raise SindyshipInputError(f"{source}: [{section}] must be a table of numbers.")
+    particulars = _group(Particulars, data.get("particulars"), "particulars", source)
+    mass_table = {"m_x": 0.0, "m_y": 0.0, "J_zz": 0.0, **dict(data.get("mass") or {})}
+    mass = _mass_properties({"mass": mass_table}, particulars, source)
+    k = particulars.d / particulars.L
+    abkowitz = clarke_added_masses(particulars, mass.m * k)
+    abkowitz.update(_abkowitz_added_masses(data, source))
+    servo_table = {**DEFAULT_SERVO, **dict(data.get("servo") or {})}
+    if "servo" not in data:
+        servo_table["rate_max"] = DEFAULT_SERVO["rate_max"] / math.sqrt(particulars.scale)
+    return Ship(
+        name=data["name"],
+        title=str(data.get("title", data["name"])),
+        hull_form="none",
+        speed_reference="design",
+        coriolis="with-added-mass",
+        particulars=particulars,
+        mass=replace(mass, m_x=-abkowitz["X_udot"] / k, m_y=-abkowitz["Y_vdot"] / k,
+                     J_zz=-abkowitz["N_rdot"] / k),
+        hull={},
+        propeller=None,
+        rudder=None,
+        servo=_group(Servo, servo_table, "servo", source),
+        abkowitz=abkowitz,
+    )
+
+
 def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
-    """Build a :class:`Ship` from the parsed TOML layout, validating every field."""
+    """Build a :class:`Ship` from the parsed TOML layout, validating every field.
+
+    A file with none of [hull], [propeller] and [rudder] describes a ship for identification
+    only (:func:`_identification_ship`): it needs ``name``, [particulars] and [mass] (``I_zz``
+    or ``k_zz``); [abkowitz] and [servo] are optional (Clarke's added masses,
+    :data:`DEFAULT_SERVO`).
+    """
+    if not any(section in data for section in ("hull", "propeller", "rudder", "hull_form")):
+        return _identification_ship(data, source)
     _check_top_level(data, source)
     particulars = _group(Particulars, data.get("particulars"), "particulars", source)
     if particulars.L <= 0 or particulars.d <= 0 or particulars.U0 <= 0 or particulars.rho <= 0:
