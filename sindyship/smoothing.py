@@ -189,7 +189,7 @@ class SmoothingSetting:
 
 
 #: Windows of the default candidates in ship time, units of L/U0: 11, 21, 41 and 81 s for the
-#: full-scale KCS (L/U0 = 18.6 s), 3.5 to 26 s for the 7 m KVLCC2 model (L/U0 = 5.9 s).  A
+#: full-scale KCS (L/U0 = 18.6 s), 3.6 to 26 s for the 7 m KVLCC2 model (L/U0 = 5.9 s).  A
 #: manoeuvre's motions change over a few L/U0, so a window of a fixed number of seconds smooths
 #: a model-scale record far more than a full-scale one.
 SHIP_TIME_WINDOWS = (0.6, 1.13, 2.2, 4.35)
@@ -217,7 +217,7 @@ def default_candidates(ship: Ship) -> tuple[SmoothingSetting, ...]:
     --------
     >>> from sindyship.ships import load_ship
     >>> [s.window for s in default_candidates(load_ship("kvlcc2"))][1:5]
-    [3.5, 6.7, 13.0, 25.7]
+    [3.6, 6.7, 13.1, 25.8]
     """
     windows = [round(factor * ship.time_scale, 1) for factor in SHIP_TIME_WINDOWS]
     return (

@@ -419,7 +419,7 @@ def diagnose(
             delayed(_score)(effect, columns, grouped, base_errors, residuals, new, threshold, noise)
         )
     ranking = list(Parallel(n_jobs=n_jobs, prefer="threads")(jobs)) if jobs else []
-    ranking.sort(key=lambda s: (-s.explained, s.effect.name))
+    ranking.sort(key=lambda s: (-s.explained_signal, -s.explained, s.effect.name))
 
     sets = ([("training", records)] if fly_training else []) + [("held-out", test)]
     sets = [(kind, recs) for kind, recs in sets if recs]
