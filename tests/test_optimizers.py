@@ -14,7 +14,8 @@ import warnings
 import numpy as np
 import pysindy as ps
 import pytest
-from numpy.testing import assert_allclose
+import scipy.linalg
+from numpy.testing import assert_allclose, assert_array_equal
 from sklearn.base import clone
 from sklearn.linear_model import lasso_path
 from sklearn.model_selection import GroupKFold, KFold, LeaveOneGroupOut
@@ -27,6 +28,7 @@ from sindyship.optimizers import (
     OPTIMIZERS,
     STLSQ,
     SVR,
+    GroupedProblem,
     LassoCV,
     LeastSquares,
     make_optimizer,
@@ -414,6 +416,91 @@ def test_bad_groups(problem):
         STLSQ().fit(X, y, groups=groups[:-1])
     with pytest.raises(SindyshipInputError, match="at least two groups"):
         LassoCV(alphas=5).fit(X, y, groups=np.zeros(X.shape[0]))
+
+
+# ------------------------------------------------------------------------------------------
+# The compression engine seen from outside: least squares, GroupedProblem, the fit template
+# ------------------------------------------------------------------------------------------
+
+
+def _norm_scaled(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    scale = np.linalg.norm(X, axis=0)
+    scale[~(scale > 0)] = 1.0
+    return X / scale, scale
+
+
+def _gelsd(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return scipy.linalg.lstsq(A, b, lapack_driver="gelsd")[0]
+
+
+@pytest.mark.parametrize("n_groups, n_per_group", [(8, 400), (8, 2600)])
+def test_least_squares_is_gelsd_on_norm_scaled_columns(n_groups, n_per_group):
+    # 20,800 samples (8 manoeuvres of 2600, as in the protocol): the compressed solve folds
+    # the rows in two blocks
+    X, S, _ = _problem(seed=3, n_groups=n_groups, n_per_group=n_per_group)
+    y = X @ W_DENSE + _misfit(S, 1e-4)
+    Xs, scale = _norm_scaled(X)
+    expected = _gelsd(Xs, y) / scale
+    assert_allclose(LeastSquares().fit(X, y).coef_[0], expected, rtol=1e-10, atol=0)
+
+
+def test_grouped_problem_is_least_squares_without_each_group():
+    X, S, groups = _problem(seed=4, n_groups=7, n_per_group=600)
+    y = X @ W_DENSE + _misfit(S, 1e-4)
+    X = np.column_stack([X, np.zeros(X.shape[0])])  # an all-zero column keeps scale 1
+    labels = np.array([30, 10, 20, 60, 50, 40, 0])[groups]  # groups in unsorted order
+    problem = GroupedProblem(X, y, labels)
+    Xs, scale = _norm_scaled(X)
+    assert_array_equal(problem.scale, scale)
+    assert problem.scale[-1] == 1.0
+    order = np.unique(labels)
+    assert [labels[m[0]] for m in problem.members] == order.tolist()
+    for columns in (np.arange(X.shape[1]), np.array([0, 2, 3, 4, 7, 10]), np.array([3])):
+        expected_errors = np.empty_like(y)
+        for g, label in enumerate(order):
+            out = labels == label
+            w = _gelsd(Xs[~out][:, columns], y[~out])
+            got = problem.solve(columns, leave_out=g)
+            assert_allclose(got, w, rtol=1e-10, atol=1e-10 * np.max(np.abs(w)))
+            expected_errors[out] = y[out] - Xs[out][:, columns] @ w
+        errors = problem.lomo_errors(columns)
+        assert_allclose(errors, expected_errors, rtol=0, atol=1e-10 * np.max(np.abs(y)))
+        w = _gelsd(Xs[:, columns], y)
+        assert_allclose(problem.solve(columns), w, rtol=1e-10, atol=1e-10 * np.max(np.abs(w)))
+    assert_array_equal(problem.lomo_errors([]), y)  # no columns: nothing is predicted
+    with pytest.raises(SindyshipInputError, match="one label per sample"):
+        GroupedProblem(X, y, labels[:-1])
+
+
+class _Ridge(opt._LinearModel):
+    """Ridge regression on the standardised problem: a subclass needs only ``_reduce``."""
+
+    _parameter_constraints: dict = {"penalty": [float]}
+
+    def __init__(self, *, penalty: float = 0.0) -> None:
+        self.penalty = penalty
+
+    def _uses_cv(self) -> bool:
+        return False
+
+    def _reduce(self, data):
+        full, R, Z, _ = data.full
+        ridge = np.sqrt(self.penalty) * np.eye(R.shape[1])
+        W = _gelsd(np.vstack([R, ridge]), np.vstack([Z, np.zeros((R.shape[1], Z.shape[1]))]))
+        return np.vstack(
+            [full.physical(W[:, t], 0.0, t, data.n_features) for t in range(data.n_targets)]
+        )
+
+
+def test_a_subclass_of_the_base_fits_through_the_template(problem):
+    X, S, groups = problem
+    y = X @ W_DENSE + _misfit(S, 1e-5)
+    ridge = _Ridge().fit(X, y)
+    assert_allclose(ridge.coef_, LeastSquares().fit(X, y).coef_, rtol=1e-10, atol=0)
+    assert ridge.predict(X).shape == y.shape and not hasattr(ridge, "cv_")
+    shrunk = _Ridge(penalty=1e3).fit(X, y)
+    assert np.linalg.norm(shrunk.coef_[0, 1:]) < np.linalg.norm(ridge.coef_[0, 1:])
+    assert shrunk.complexity == X.shape[1]
 
 
 # ------------------------------------------------------------------------------------------

@@ -1,0 +1,129 @@
+"""Cross-validation shared by the estimators: the splitter, its folds, and the choice.
+
+The conventions (leave one group out when ``groups`` is given, else contiguous blocks; ties
+go to the more regularised candidate) are those of the package docstring of
+:mod:`sindyship.optimizers`.
+"""
+
+from __future__ import annotations
+
+from numbers import Integral
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from sklearn.model_selection import KFold, LeaveOneGroupOut, check_cv
+
+from sindyship.errors import SindyshipInputError
+
+#: Number of contiguous blocks when neither ``cv`` nor ``groups`` is given.
+_DEFAULT_N_BLOCKS = 5
+#: Cross-validation errors within this relative tolerance of the smallest count as ties (ties
+#: go to the more regularised candidate) ...
+_TIE_RTOL = 1e-12
+#: ... and so do errors below this fraction of the target's mean square: a held-out RMS error
+#: under 1e-10 of the target's RMS is rounding, not a difference between models.
+_TIE_FLOOR = 1e-20
+
+
+def _resolve_cv(cv: Any, groups: NDArray | None) -> tuple[Any, NDArray | None]:
+    """The splitter that ``cv`` and ``groups`` select, and the groups to hand to it.
+
+    Leave one group out when ``groups`` is given and ``cv`` is not, else contiguous blocks;
+    an integer always means contiguous blocks (groups unused).
+
+    Parameters
+    ----------
+    cv : None, int, splitter or iterable
+        The estimator's ``cv`` parameter.
+    groups : ndarray or None
+        Group label of every sample.
+
+    Returns
+    -------
+    splitter : cross-validation splitter
+    groups : ndarray or None
+        What to pass to ``splitter.split``.
+
+    Examples
+    --------
+    >>> _resolve_cv(None, None)
+    (KFold(n_splits=5, random_state=None, shuffle=False), None)
+    >>> _resolve_cv(None, np.array([0, 0, 1, 1]))[0]
+    LeaveOneGroupOut()
+    """
+    if cv is None and groups is not None:
+        return LeaveOneGroupOut(), groups
+    if cv is None:
+        return KFold(n_splits=_DEFAULT_N_BLOCKS, shuffle=False), None
+    if isinstance(cv, Integral):
+        return KFold(n_splits=int(cv), shuffle=False), None
+    return check_cv(cv), groups
+
+
+def _splits(
+    splitter: Any, X: NDArray, Y: NDArray, groups: NDArray | None
+) -> list[tuple[NDArray, NDArray]]:
+    """The ``(train, test)`` index pairs of ``splitter`` on these samples.
+
+    Raises
+    ------
+    SindyshipInputError
+        For leave-one-group-out with fewer than two groups.
+    ValueError
+        When the splitter produces no folds.
+    """
+    if isinstance(splitter, LeaveOneGroupOut) and np.unique(groups).size < 2:
+        raise SindyshipInputError(
+            "leave-one-group-out cross-validation needs samples from at least two groups "
+            "(manoeuvres); pass more manoeuvres, or cv=<number of folds> for contiguous blocks."
+        )
+    splits = list(splitter.split(X, Y, groups))
+    if not splits:
+        raise ValueError("the cross-validation splitter produced no folds.")
+    return splits
+
+
+def _check_groups(groups: ArrayLike | None, n_samples: int) -> NDArray | None:
+    """``groups`` as an array with one label per sample, or None.
+
+    Raises
+    ------
+    SindyshipInputError
+        When ``groups`` is not 1-D with ``n_samples`` entries.
+    """
+    if groups is None:
+        return None
+    groups = np.asarray(groups)
+    if groups.ndim != 1 or groups.shape[0] != n_samples:
+        raise SindyshipInputError(
+            f"groups must be a 1-D array with one label per sample ({n_samples}); "
+            f"got shape {groups.shape}."
+        )
+    return groups
+
+
+def _pick(mean_mse: NDArray, prefer: NDArray, y_mean_square: float) -> int:
+    """Index of the smallest error; among ties, the one with the largest ``prefer``.
+
+    Parameters
+    ----------
+    mean_mse : ndarray, shape (n_candidates,)
+        Cross-validation error of every candidate.
+    prefer : ndarray, shape (n_candidates,)
+        Larger means more regularised (preferred among ties).
+    y_mean_square : float
+        Mean square of the target, which sets the absolute tie floor.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> _pick(np.array([1.0, 0.5, 0.5 + 1e-14]), np.array([3.0, 1.0, 2.0]), 1.0)
+    2
+    """
+    best = np.nanmin(mean_mse)
+    near = np.flatnonzero(mean_mse <= best + max(_TIE_RTOL * abs(best), _TIE_FLOOR * y_mean_square))
+    return int(near[np.argmax(prefer[near])])
