@@ -17,7 +17,7 @@ from ..library import (
     load_effect,
 )
 from ..model import AbkowitzModel
-from ..optimizers import _one_blas_thread
+from ..optimizers import one_blas_thread
 from ..ships import Ship
 from ..trajectory import Trajectory
 from ._constants import CONFIRMING_RATIO, SETS
@@ -210,7 +210,7 @@ def _change_rows(
     return rows
 
 
-@_one_blas_thread
+@one_blas_thread
 def before_after(
     train: Sequence[Trajectory],
     ship: Ship,

@@ -20,7 +20,7 @@ from ..library import (
     load_effect,
 )
 from ..model import AbkowitzModel
-from ..optimizers import _one_blas_thread
+from ..optimizers import GroupedProblem, one_blas_thread
 from ..ships import Ship
 from ..smoothing import SmoothingSetting, choose_smoothing, smooth_records
 from ..stability import Stability, straight_run_stability
@@ -33,7 +33,7 @@ from .before_after import BeforeAfter, _change_rows, _fit
 from .compare import ManoeuvreComparison, compare
 from .noise import channel_noise, noise_sse
 from .residuals import Residuals, _residuals
-from .scoring import EffectScore, NotTestable, _GroupedProblem, _score, _untestable
+from .scoring import EffectScore, NotTestable, _score, _untestable
 
 
 @dataclass
@@ -264,7 +264,7 @@ def _catalogue(effects: Sequence[str | Effect] | None) -> list[Effect]:
     return out
 
 
-@_one_blas_thread
+@one_blas_thread
 def diagnose(
     records: Sequence[Trajectory],
     ship: Ship,
@@ -386,7 +386,7 @@ def diagnose(
         rudder_signal,
     )
     grouped = {
-        dof: _GroupedProblem(problems[dof].features, problems[dof].target, problems[dof].groups)
+        dof: GroupedProblem(problems[dof].features, problems[dof].target, problems[dof].groups)
         for dof in DOFS
     }
     base_columns = {dof: np.arange(n_base[dof]) for dof in DOFS}

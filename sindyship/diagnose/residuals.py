@@ -14,7 +14,7 @@ from ..library import (
     DOFS,
 )
 from ..model import AbkowitzModel
-from ..optimizers import _one_blas_thread
+from ..optimizers import one_blas_thread
 from ..ships import Ship
 from ..trajectory import Trajectory
 from .phases import manoeuvre_phases
@@ -237,7 +237,7 @@ def _residuals(
     )
 
 
-@_one_blas_thread
+@one_blas_thread
 def force_residuals(
     model: AbkowitzModel,
     records: Sequence[Trajectory],

@@ -6,13 +6,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
 
 from .._io import clean_json
 from ..library import (
     DOFS,
     Effect,
 )
+from ..optimizers import GroupedProblem
 from ..terms import describe_variable
 from ..trajectory import Trajectory
 from ._constants import BOOTSTRAP, DOF_NAMES, NOISE_CAP, SIGNIFICANCE
@@ -21,55 +21,6 @@ from .residuals import STATE_BINS, Residuals, _bin_index, _bin_labels
 
 
 # =============================================================================== scoring
-def _least_squares(features: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """Least squares on norm-scaled columns (LAPACK gelsd), as ``make_optimizer("ls")``."""
-    scale = np.linalg.norm(features, axis=0)
-    scale[~(scale > 0)] = 1.0
-    solution = scipy.linalg.lstsq(
-        features / scale, target, lapack_driver="gelsd", check_finite=False
-    )[0]
-    return solution / scale
-
-
-class _GroupedProblem:
-    """One equation's regression problem, compressed per record for fast refits.
-
-    Columns are scaled to unit norm; each record's rows are reduced to their QR factor
-    (``X_g = Q_g R_g``, ``Z_g = Q_g^T y_g``), so a least-squares fit of any column subset on
-    any subset of records is a solve on the small stacked ``R_g`` and ``Z_g``.
-    """
-
-    def __init__(self, features: np.ndarray, target: np.ndarray, groups: np.ndarray) -> None:
-        scale = np.linalg.norm(features, axis=0)
-        scale[~(scale > 0)] = 1.0
-        self.scale = scale
-        self.x = features / scale
-        self.y = target
-        self.members = [np.flatnonzero(groups == g) for g in np.unique(groups)]
-        self.r, self.z = [], []
-        for rows in self.members:
-            q, r = np.linalg.qr(self.x[rows])
-            self.r.append(r)
-            self.z.append(q.T @ target[rows])
-
-    def solve(self, columns: np.ndarray, leave_out: int | None = None) -> np.ndarray:
-        """Scaled coefficients of ``columns`` fitted on all records but ``leave_out``."""
-        keep = [g for g in range(len(self.members)) if g != leave_out]
-        a = np.vstack([self.r[g][:, columns] for g in keep])
-        b = np.concatenate([self.z[g] for g in keep])
-        return scipy.linalg.lstsq(a, b, lapack_driver="gelsd", check_finite=False)[0]
-
-    def lomo_errors(self, columns: np.ndarray) -> np.ndarray:
-        """Leave-one-record-out prediction errors of a fit on ``columns``, per sample."""
-        errors = self.y.copy()
-        if len(columns) == 0:
-            return errors
-        for g, rows in enumerate(self.members):
-            w = self.solve(columns, leave_out=g)
-            errors[rows] = self.y[rows] - self.x[np.ix_(rows, columns)] @ w
-        return errors
-
-
 @dataclass(frozen=True)
 class NotTestable:
     """An effect the data cannot test, and the channels to record.
@@ -307,7 +258,7 @@ def _dof_shares(e0: np.ndarray, e1: np.ndarray, noise: float, groups: np.ndarray
 def _score(
     effect: Effect,
     columns: Mapping[str, np.ndarray],
-    grouped: Mapping[str, _GroupedProblem],
+    grouped: Mapping[str, GroupedProblem],
     base_errors: Mapping[str, np.ndarray],
     residuals: Residuals,
     new_terms: dict,
