@@ -39,17 +39,22 @@ import csv
 import io
 import math
 import os
+import re
 import secrets
+import warnings
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from sindyship.errors import SindyshipInputError
+from sindyship.plausibility import check_record, resolve_skip
 from sindyship.trajectory import REQUIRED_COLUMNS, RUDDER_COLUMNS, Trajectory
 from sindyship.units import UNITS, Column, parse_headers
 
 __all__ = [
+    "PlausibilityNote",
     "MAX_REVOLUTIONS",
     "MAX_RUDDER_ANGLE",
     "MAX_SPEED",
@@ -73,8 +78,17 @@ _FILE_ROW = "spreadsheet row"
 _REQUIRED_TEXT = "t, u, v, r, x, y, psi and delta and/or delta_c"
 
 
+class PlausibilityNote(UserWarning):
+    """A one-line note about something the reader repaired on load (a wrapped heading)."""
+
+
 def read_csv(
-    path: str | os.PathLike[str], *, resample: float | None = None, rudder_check: bool = True
+    path: str | os.PathLike[str],
+    *,
+    resample: float | None = None,
+    rudder_check: bool = True,
+    ship=None,
+    skip_checks: str | Iterable[str] = (),
 ) -> Trajectory:
     """Read a measurement CSV into a validated :class:`Trajectory` in SI units.
 
@@ -92,12 +106,22 @@ def read_csv(
         Refuse ``delta``/``delta_c`` beyond 1 rad and ``r`` beyond 0.5 rad/s, which look like
         degrees or deg/s in a radian column.  Switch off only for craft that really turn
         their rudder past 57 deg or yaw faster than 29 deg/s.
+    ship : Ship or str, optional
+        The ship measured (a :class:`~sindyship.ships.Ship`, a built-in name or a TOML path).
+        Enables the plausibility checks scaled by its L and U0 (``sampling``, ``speed``).
+    skip_checks : str or iterable of str, optional
+        Plausibility checks not to run, by name (:data:`sindyship.plausibility.CHECKS`:
+        ``motion``, ``sampling``, ``heading``, ``frame``, ``speed``, ``forward-speed``), or
+        ``"all"``.  The checks and their thresholds are described in
+        :mod:`sindyship.plausibility`; a wrapped heading is unwrapped with a
+        :class:`PlausibilityNote` warning and the note kept in ``meta["notes"]``.
 
     Returns
     -------
     Trajectory
         Named after the file stem; ``meta`` holds ``source`` (the path), ``units`` (the units
-        the headers gave, by column) and ``resampled`` (the step, or None).
+        the headers gave, by column), ``resampled`` (the step, or None) and ``notes`` (what
+        the plausibility checks changed, e.g. an unwrapped heading).
 
     Raises
     ------
@@ -105,8 +129,9 @@ def read_csv(
         For any problem with the file or its contents: missing or unreadable file, empty file,
         header only or one data row, missing or duplicate column, unknown unit, text, NaN or
         inf in a column, non-increasing time, irregular sampling, degree-like rudder angles or
-        yaw rates, absurd values.  The message names the file, the column and the row
-        (numbered as in a spreadsheet: the header is row 1).
+        yaw rates, absurd values, decimal commas, a record that fails a plausibility check.
+        The message names the file, the column and the row (numbered as in a spreadsheet:
+        the header is row 1).
 
     Examples
     --------
@@ -127,7 +152,8 @@ def read_csv(
     source = str(path)
     frame = _parse_csv_text(_read_text(Path(path), source), source)
     return trajectory_from_frame(
-        frame, Path(path).stem, source=source, resample=resample, rudder_check=rudder_check
+        frame, Path(path).stem, source=source, resample=resample, rudder_check=rudder_check,
+        ship=ship, skip_checks=skip_checks,
     )
 
 
@@ -138,6 +164,8 @@ def trajectory_from_frame(
     source: str = "<data>",
     resample: float | None = None,
     rudder_check: bool = True,
+    ship=None,
+    skip_checks: str | Iterable[str] = (),
 ) -> Trajectory:
     """Validate an in-memory table and return it as a :class:`Trajectory` in SI units.
 
@@ -156,6 +184,10 @@ def trajectory_from_frame(
         Time step [s] of a regular grid to interpolate onto; see :func:`read_csv`.
     rudder_check : bool, default True
         Refuse degree-like ``delta``, ``delta_c`` and ``r``; see :func:`read_csv`.
+    ship : Ship or str, optional
+        Enables the plausibility checks scaled by the ship; see :func:`read_csv`.
+    skip_checks : str or iterable of str, optional
+        Plausibility checks not to run; see :func:`read_csv`.
 
     Returns
     -------
@@ -195,6 +227,11 @@ def trajectory_from_frame(
         )
     if resample is not None:
         _check_step(resample, source)
+    skip = resolve_skip(skip_checks)
+    if isinstance(ship, (str, os.PathLike)):
+        from sindyship.ships import load_ship
+
+        ship = load_ship(ship)
 
     index = frame.index
     raw: dict[str, np.ndarray] = {}
@@ -213,6 +250,11 @@ def trajectory_from_frame(
 
     _check_time(si["t"], columns, index, source, resample)
     _check_plausible(si, raw, columns, index, source, rudder_check)
+    headers = {column.name: (column.header, column.unit) for column in columns}
+    si, notes = check_record(si, headers, source=source, ship=ship, skip=skip,
+                             row=lambda position: _row(index, position))
+    for note in notes:
+        warnings.warn(note, PlausibilityNote, stacklevel=2)
     if resample is not None:
         si = _resample(si, resample, source)
 
@@ -221,6 +263,7 @@ def trajectory_from_frame(
         "source": source,
         "units": {column.name: column.unit for column in columns if column.unit is not None},
         "resampled": None if resample is None else float(resample),
+        "notes": notes,
     }
     return Trajectory(data, name=name, meta=meta)
 
@@ -326,6 +369,7 @@ def _parse_csv_text(text: str, source: str) -> pd.DataFrame:
                 header = record
                 continue
             if len(record) != len(header):
+                _refuse_decimal_commas(header, record, reader.line_num, source)
                 raise SindyshipInputError(
                     f"{source}: row {reader.line_num} (counting the header as row 1) has "
                     f"{len(record)} values but the header names {len(header)} columns; "
@@ -343,12 +387,40 @@ def _parse_csv_text(text: str, source: str) -> pd.DataFrame:
             f"({_REQUIRED_TEXT}) and at least two rows of samples."
         )
     if len(header) == 1 and (";" in header[0] or "\t" in header[0]):
+        if rows:
+            _refuse_decimal_commas(header, rows[0], numbers[0], source)
         raise SindyshipInputError(
             f"{source}: the header has a single column '{header[0].strip()}'; "
             "separate the columns with commas, not semicolons or tabs."
         )
     index = pd.Index(numbers, name=_FILE_ROW)
     return pd.DataFrame(rows, columns=header, index=index, dtype=object)
+
+
+_DECIMAL_COMMA = re.compile(r"(?<![\d.])-?\d+,\d+(?:[eE][-+]?\d+)?(?![\d.,])")
+
+
+def _refuse_decimal_commas(header: list[str], record: list[str], line: int, source: str) -> None:
+    """Refuse a row written with decimal commas (``0,5``), which a column count would hide.
+
+    A row has decimal commas when it splits into more cells than the header names and its
+    text holds numbers like ``12,5``, or when the header is one semicolon-separated cell and
+    the row's cells hold such numbers.
+    """
+    if len(header) == 1:
+        example = _DECIMAL_COMMA.search(",".join(record).replace(";", " ").replace("\t", " "))
+        if example is None:
+            return
+        found = f"(e.g. '{example.group(0)}') and semicolons between the columns"
+    elif len(record) > len(header) and _DECIMAL_COMMA.search(",".join(record)):
+        found = f"({len(record)} comma-separated values for {len(header)} columns)"
+    else:
+        return
+    raise SindyshipInputError(
+        f"{source}: row {line} (counting the header as row 1) looks written with decimal "
+        f"commas {found}; save the file with decimal points and commas between the columns "
+        "(e.g. '12.5,0.3')."
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -398,6 +470,8 @@ def _as_float(values: np.ndarray, column: Column, index: pd.Index, source: str) 
         except (TypeError, ValueError):
             if value is None or value is pd.NA or (isinstance(value, str) and not value.strip()):
                 what = "an empty cell"
+            elif _DECIMAL_COMMA.fullmatch(str(value).strip()):
+                what = f"the decimal comma '{str(value).strip()}'"
             else:
                 what = f"the text '{str(value).strip()}'"
             raise SindyshipInputError(
