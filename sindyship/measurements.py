@@ -41,16 +41,20 @@ import math
 import os
 import re
 import secrets
-from dataclasses import dataclass
+import warnings
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from sindyship.errors import SindyshipInputError
+from sindyship.plausibility import check_record, resolve_skip
 from sindyship.trajectory import REQUIRED_COLUMNS, RUDDER_COLUMNS, Trajectory
+from sindyship.units import UNITS, Column, parse_headers
 
 __all__ = [
+    "PlausibilityNote",
     "MAX_REVOLUTIONS",
     "MAX_RUDDER_ANGLE",
     "MAX_SPEED",
@@ -68,103 +72,23 @@ MAX_SPEED = 100.0  # m/s
 MAX_REVOLUTIONS = 100.0  # rps
 SAMPLING_TOLERANCE = 0.01  # fraction of the median time step
 
-_DEG = math.pi / 180.0
-
-#: Recognised units: spelling -> (quantity, factor to the SI unit of that quantity).  Spaces in
-#: a unit are ignored; the case must match unless only one entry matches case-insensitively
-#: (``KN`` is refused because it could be knots ``kn`` or kilonewtons ``kN``).
-UNITS: dict[str, tuple[str, float]] = {
-    "-": ("dimensionless", 1.0),
-    "1": ("dimensionless", 1.0),
-    "rad": ("angle", 1.0),
-    "deg": ("angle", _DEG),
-    "degree": ("angle", _DEG),
-    "degrees": ("angle", _DEG),
-    "\u00b0": ("angle", _DEG),
-    "rad/s": ("angular rate", 1.0),
-    "deg/s": ("angular rate", _DEG),
-    "\u00b0/s": ("angular rate", _DEG),
-    "deg/min": ("angular rate", _DEG / 60.0),
-    "m/s": ("speed", 1.0),
-    "kn": ("speed", 1852.0 / 3600.0),
-    "kt": ("speed", 1852.0 / 3600.0),
-    "kts": ("speed", 1852.0 / 3600.0),
-    "knot": ("speed", 1852.0 / 3600.0),
-    "knots": ("speed", 1852.0 / 3600.0),
-    "km/h": ("speed", 1.0 / 3.6),
-    "m": ("length", 1.0),
-    "km": ("length", 1000.0),
-    "cm": ("length", 0.01),
-    "mm": ("length", 0.001),
-    "nmi": ("length", 1852.0),
-    "s": ("time", 1.0),
-    "ms": ("time", 0.001),
-    "min": ("time", 60.0),
-    "h": ("time", 3600.0),
-    "rps": ("revolutions", 1.0),
-    "rev/s": ("revolutions", 1.0),
-    "1/s": ("revolutions", 1.0),
-    "Hz": ("revolutions", 1.0),
-    "rpm": ("revolutions", 1.0 / 60.0),
-    "rev/min": ("revolutions", 1.0 / 60.0),
-    "N": ("force", 1.0),
-    "kN": ("force", 1000.0),
-    "MN": ("force", 1.0e6),
-    "Nm": ("moment", 1.0),
-    "N*m": ("moment", 1.0),
-    "kNm": ("moment", 1000.0),
-    "kN*m": ("moment", 1000.0),
-}
-
-_SI_UNIT = {
-    "dimensionless": "-",
-    "angle": "rad",
-    "angular rate": "rad/s",
-    "speed": "m/s",
-    "length": "m",
-    "time": "s",
-    "revolutions": "rps",
-    "force": "N",
-    "moment": "Nm",
-}
-
-# The quantity of the channels the contract names; other channels accept any recognised unit.
-_QUANTITY = {
-    "t": "time",
-    "u": "speed",
-    "v": "speed",
-    "r": "angular rate",
-    "p": "angular rate",
-    "x": "length",
-    "y": "length",
-    "psi": "angle",
-    "phi": "angle",
-    "delta": "angle",
-    "delta_c": "angle",
-    "n": "revolutions",
-    "wind_speed": "speed",
-    "wind_dir": "angle",
-    "depth": "length",
-}
-
-_HEADER = re.compile(r"^(?P<name>[^\[\]]*?)\s*(?:\[(?P<unit>[^\[\]]*)\])?$")
-
 # Index name that read_csv gives its frame, so that messages say "row 7 (...)" for files.
 _FILE_ROW = "spreadsheet row"
 
 _REQUIRED_TEXT = "t, u, v, r, x, y, psi and delta and/or delta_c"
 
 
-@dataclass(frozen=True)
-class _Column:
-    header: str  # as written, e.g. "psi [deg]"
-    name: str  # bare name, e.g. "psi"
-    unit: str | None  # as written, e.g. "deg", or None when the header has no unit
-    factor: float  # multiplies the values to give SI
+class PlausibilityNote(UserWarning):
+    """A one-line note about something the reader repaired on load (a wrapped heading)."""
 
 
 def read_csv(
-    path: str | os.PathLike[str], *, resample: float | None = None, rudder_check: bool = True
+    path: str | os.PathLike[str],
+    *,
+    resample: float | None = None,
+    rudder_check: bool = True,
+    ship=None,
+    skip_checks: str | Iterable[str] = (),
 ) -> Trajectory:
     """Read a measurement CSV into a validated :class:`Trajectory` in SI units.
 
@@ -182,12 +106,22 @@ def read_csv(
         Refuse ``delta``/``delta_c`` beyond 1 rad and ``r`` beyond 0.5 rad/s, which look like
         degrees or deg/s in a radian column.  Switch off only for craft that really turn
         their rudder past 57 deg or yaw faster than 29 deg/s.
+    ship : Ship or str, optional
+        The ship measured (a :class:`~sindyship.ships.Ship`, a built-in name or a TOML path).
+        Enables the plausibility checks scaled by its L and U0 (``sampling``, ``speed``).
+    skip_checks : str or iterable of str, optional
+        Plausibility checks not to run, by name (:data:`sindyship.plausibility.CHECKS`:
+        ``motion``, ``sampling``, ``heading``, ``frame``, ``speed``, ``forward-speed``), or
+        ``"all"``.  The checks and their thresholds are described in
+        :mod:`sindyship.plausibility`; a wrapped heading is unwrapped with a
+        :class:`PlausibilityNote` warning and the note kept in ``meta["notes"]``.
 
     Returns
     -------
     Trajectory
         Named after the file stem; ``meta`` holds ``source`` (the path), ``units`` (the units
-        the headers gave, by column) and ``resampled`` (the step, or None).
+        the headers gave, by column), ``resampled`` (the step, or None) and ``notes`` (what
+        the plausibility checks changed, e.g. an unwrapped heading).
 
     Raises
     ------
@@ -195,8 +129,9 @@ def read_csv(
         For any problem with the file or its contents: missing or unreadable file, empty file,
         header only or one data row, missing or duplicate column, unknown unit, text, NaN or
         inf in a column, non-increasing time, irregular sampling, degree-like rudder angles or
-        yaw rates, absurd values.  The message names the file, the column and the row
-        (numbered as in a spreadsheet: the header is row 1).
+        yaw rates, absurd values, decimal commas, a record that fails a plausibility check.
+        The message names the file, the column and the row (numbered as in a spreadsheet:
+        the header is row 1).
 
     Examples
     --------
@@ -217,7 +152,8 @@ def read_csv(
     source = str(path)
     frame = _parse_csv_text(_read_text(Path(path), source), source)
     return trajectory_from_frame(
-        frame, Path(path).stem, source=source, resample=resample, rudder_check=rudder_check
+        frame, Path(path).stem, source=source, resample=resample, rudder_check=rudder_check,
+        ship=ship, skip_checks=skip_checks,
     )
 
 
@@ -228,6 +164,8 @@ def trajectory_from_frame(
     source: str = "<data>",
     resample: float | None = None,
     rudder_check: bool = True,
+    ship=None,
+    skip_checks: str | Iterable[str] = (),
 ) -> Trajectory:
     """Validate an in-memory table and return it as a :class:`Trajectory` in SI units.
 
@@ -246,6 +184,10 @@ def trajectory_from_frame(
         Time step [s] of a regular grid to interpolate onto; see :func:`read_csv`.
     rudder_check : bool, default True
         Refuse degree-like ``delta``, ``delta_c`` and ``r``; see :func:`read_csv`.
+    ship : Ship or str, optional
+        Enables the plausibility checks scaled by the ship; see :func:`read_csv`.
+    skip_checks : str or iterable of str, optional
+        Plausibility checks not to run; see :func:`read_csv`.
 
     Returns
     -------
@@ -275,7 +217,7 @@ def trajectory_from_frame(
     """
     if not isinstance(frame, pd.DataFrame):
         raise TypeError(f"expected a pandas DataFrame, got {type(frame).__name__}")
-    columns = _parse_headers([str(header) for header in frame.columns], source)
+    columns = parse_headers([str(header) for header in frame.columns], source)
     _check_required(columns, frame, source)
     if len(frame) < 2:
         raise SindyshipInputError(
@@ -285,6 +227,11 @@ def trajectory_from_frame(
         )
     if resample is not None:
         _check_step(resample, source)
+    skip = resolve_skip(skip_checks)
+    if isinstance(ship, (str, os.PathLike)):
+        from sindyship.ships import load_ship
+
+        ship = load_ship(ship)
 
     index = frame.index
     raw: dict[str, np.ndarray] = {}
@@ -303,6 +250,11 @@ def trajectory_from_frame(
 
     _check_time(si["t"], columns, index, source, resample)
     _check_plausible(si, raw, columns, index, source, rudder_check)
+    headers = {column.name: (column.header, column.unit) for column in columns}
+    si, notes = check_record(si, headers, source=source, ship=ship, skip=skip,
+                             row=lambda position: _row(index, position))
+    for note in notes:
+        warnings.warn(note, PlausibilityNote, stacklevel=2)
     if resample is not None:
         si = _resample(si, resample, source)
 
@@ -311,6 +263,7 @@ def trajectory_from_frame(
         "source": source,
         "units": {column.name: column.unit for column in columns if column.unit is not None},
         "resampled": None if resample is None else float(resample),
+        "notes": notes,
     }
     return Trajectory(data, name=name, meta=meta)
 
@@ -416,6 +369,7 @@ def _parse_csv_text(text: str, source: str) -> pd.DataFrame:
                 header = record
                 continue
             if len(record) != len(header):
+                _refuse_decimal_commas(header, record, reader.line_num, source)
                 raise SindyshipInputError(
                     f"{source}: row {reader.line_num} (counting the header as row 1) has "
                     f"{len(record)} values but the header names {len(header)} columns; "
@@ -433,6 +387,8 @@ def _parse_csv_text(text: str, source: str) -> pd.DataFrame:
             f"({_REQUIRED_TEXT}) and at least two rows of samples."
         )
     if len(header) == 1 and (";" in header[0] or "\t" in header[0]):
+        if rows:
+            _refuse_decimal_commas(header, rows[0], numbers[0], source)
         raise SindyshipInputError(
             f"{source}: the header has a single column '{header[0].strip()}'; "
             "separate the columns with commas, not semicolons or tabs."
@@ -441,77 +397,37 @@ def _parse_csv_text(text: str, source: str) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=header, index=index, dtype=object)
 
 
+_DECIMAL_COMMA = re.compile(r"(?<![\d.])-?\d+,\d+(?:[eE][-+]?\d+)?(?![\d.,])")
+
+
+def _refuse_decimal_commas(header: list[str], record: list[str], line: int, source: str) -> None:
+    """Refuse a row written with decimal commas (``0,5``), which a column count would hide.
+
+    A row has decimal commas when it splits into more cells than the header names and its
+    text holds numbers like ``12,5``, or when the header is one semicolon-separated cell and
+    the row's cells hold such numbers.
+    """
+    if len(header) == 1:
+        example = _DECIMAL_COMMA.search(",".join(record).replace(";", " ").replace("\t", " "))
+        if example is None:
+            return
+        found = f"(e.g. '{example.group(0)}') and semicolons between the columns"
+    elif len(record) > len(header) and _DECIMAL_COMMA.search(",".join(record)):
+        found = f"({len(record)} comma-separated values for {len(header)} columns)"
+    else:
+        return
+    raise SindyshipInputError(
+        f"{source}: row {line} (counting the header as row 1) looks written with decimal "
+        f"commas {found}; save the file with decimal points and commas between the columns "
+        "(e.g. '12.5,0.3')."
+    )
+
+
 # ---------------------------------------------------------------------------------------------
 # Validation
 
 
-def _parse_headers(headers: list[str], source: str) -> list[_Column]:
-    columns: list[_Column] = []
-    seen: dict[str, str] = {}
-    for position, text in enumerate(headers, start=1):
-        header = text.strip()
-        match = _HEADER.match(header)
-        if match is None:
-            raise SindyshipInputError(
-                f"{source}: column {position} has the malformed header '{header}'; write a "
-                "name optionally followed by one unit in brackets, e.g. 'psi [deg]'."
-            )
-        name = match["name"].strip()
-        unit = match["unit"]
-        if not name:
-            raise SindyshipInputError(
-                f"{source}: column {position} has no name; give every column a name in the "
-                "header row."
-            )
-        if name in seen:
-            raise SindyshipInputError(
-                f"{source}: the columns '{seen[name]}' and '{header}' are both '{name}'; "
-                "keep one of them or rename the other."
-            )
-        seen[name] = header
-        factor = 1.0
-        if unit is not None:
-            unit = unit.strip()
-            factor = _unit_factor(name, header, unit, source)
-        columns.append(_Column(header=header, name=name, unit=unit, factor=factor))
-    return columns
-
-
-def _unit_factor(name: str, header: str, unit: str, source: str) -> float:
-    key = unit.replace(" ", "")
-    if key not in UNITS:
-        matches = [spelling for spelling in UNITS if spelling.lower() == key.lower()]
-        if len(matches) > 1:
-            raise SindyshipInputError(
-                f"{source}: column '{header}' has the ambiguous unit '{unit}' (it could be "
-                f"{' or '.join(matches)}); write the unit with the right upper and lower case."
-            )
-        key = matches[0] if matches else ""
-    if not key:
-        known = _units_for(_QUANTITY.get(name))
-        raise SindyshipInputError(
-            f"{source}: column '{header}' has the unknown unit '{unit}'; use one of {known}."
-        )
-    quantity, factor = UNITS[key]
-    expected = _QUANTITY.get(name)
-    if expected is not None and quantity != expected:
-        raise SindyshipInputError(
-            f"{source}: column '{header}' gives a unit of {quantity} but '{name}' is "
-            f"{_article(expected)} {expected}; use one of {_units_for(expected)}."
-        )
-    return factor
-
-
-def _units_for(quantity: str | None) -> str:
-    spellings = [key for key, (kind, _) in UNITS.items() if quantity in (None, kind)]
-    return ", ".join(spellings)
-
-
-def _article(word: str) -> str:
-    return "an" if word[0] in "aeiou" else "a"
-
-
-def _check_required(columns: list[_Column], frame: pd.DataFrame, source: str) -> None:
+def _check_required(columns: list[Column], frame: pd.DataFrame, source: str) -> None:
     names = [column.name for column in columns]
     missing = [f"'{name}'" for name in REQUIRED_COLUMNS if name not in names]
     wanted = [name for name in REQUIRED_COLUMNS if name not in names]
@@ -543,7 +459,7 @@ def _row(index: pd.Index, position: int) -> str:
     return f"the row with index label {label}"
 
 
-def _as_float(values: np.ndarray, column: _Column, index: pd.Index, source: str) -> np.ndarray:
+def _as_float(values: np.ndarray, column: Column, index: pd.Index, source: str) -> np.ndarray:
     try:
         return np.asarray(values, dtype=float)
     except (TypeError, ValueError):
@@ -554,6 +470,8 @@ def _as_float(values: np.ndarray, column: _Column, index: pd.Index, source: str)
         except (TypeError, ValueError):
             if value is None or value is pd.NA or (isinstance(value, str) and not value.strip()):
                 what = "an empty cell"
+            elif _DECIMAL_COMMA.fullmatch(str(value).strip()):
+                what = f"the decimal comma '{str(value).strip()}'"
             else:
                 what = f"the text '{str(value).strip()}'"
             raise SindyshipInputError(
@@ -579,7 +497,7 @@ def _check_step(step: float, source: str) -> None:
 
 def _check_time(
     t: np.ndarray,
-    columns: list[_Column],
+    columns: list[Column],
     index: pd.Index,
     source: str,
     resample: float | None,
@@ -612,7 +530,7 @@ def _check_time(
 def _check_plausible(
     si: dict[str, np.ndarray],
     raw: dict[str, np.ndarray],
-    columns: list[_Column],
+    columns: list[Column],
     index: pd.Index,
     source: str,
     rudder_check: bool,

@@ -88,6 +88,7 @@ def test_earth_fixed_velocity_is_rotated_into_body_axes(tmp_path):
     rows = straight_rows(3, heading_deg=30.0)
     for row in rows:  # ship heading 30 deg, moving north-east at 45 deg: drifting to starboard
         row[5], row[6] = 8.0 * math.cos(math.radians(45.0)), 8.0 * math.sin(math.radians(45.0))
+        row[1], row[2] = row[5] * row[0], row[6] * row[0]  # the track follows the velocity
     record = read_marin(write(tmp_path, marin_text(rows, digits=17)))
     np.testing.assert_allclose(record["u"], 8.0 * math.cos(math.radians(15.0)), rtol=1e-12)
     np.testing.assert_allclose(record["v"], 8.0 * math.sin(math.radians(15.0)), rtol=1e-12)

@@ -1,0 +1,314 @@
+"""Trials as logged: find the part of a record a model can fly, and recognise a zig-zag.
+
+A logged trial is rarely the clean record a simulator writes: it starts at rest or at low
+speed with the propeller stopped, the helmsman steers by hand before the zig-zag, the rudder
+plateaus sit a degree or so off the nominal angle, and the log ends with blank rows.
+:func:`underway_window` and :func:`trim` cut a record to the part under way;
+:func:`recognise_zigzag` recognises a zig-zag despite a manual lead-in and imperfect plateaus
+(the strict recognition that flies zig-zags closed loop is
+:func:`sindyship.evaluation.detect_zigzag`).
+
+Thresholds (module constants) and why:
+
+- ``UNDERWAY_SPEED = 0.25``: under way means the surge speed, averaged over one L/U0, is at
+  least 0.25 U0.  A 35 deg turning circle slows the KCS to 0.53 U0 and a full tanker to about
+  0.35 U0, so a manoeuvre never drops below it; a ship getting under way passes it early.
+- ``STEADY_ACCELERATION = 0.03``: the window starts once the ship no longer speeds up by more
+  than 0.03 U0 per L/U0 (slope of a straight line fitted to u over one L/U0).  Getting under
+  way takes 0.1 to 0.2 U0 per L/U0; 1 % noise on u moves the fitted slope by about 0.008.
+- ``PROPELLER_RUNNING = 0.5``: where ``n`` is recorded the propeller runs when n (averaged
+  over one L/U0) is at least half its median while under way.
+- Zig-zag: the rudder (commanded if recorded) holds an angle when it stays within a range of
+  ``HOLD_RANGE = 1`` deg for at least ``HOLD_SAMPLES = 5`` samples (a rudder turning at
+  2.3 deg/s passes any 1 deg band in under 0.5 s at model scale and in one sample at 1 s
+  logging).  A plateau is a hold within ``PLATEAU_SPREAD = 2.5`` deg of the amplitude (the
+  median magnitude of the holds at least half the largest one).  The zig-zag is the longest
+  run of at least three plateaus that alternate in sign; its amplitude and check angle are
+  rounded to the nearest multiple of 5 deg when one lies within ``ROUNDING = 1.5`` deg,
+  else to 0.1 deg.  The heading change (from the execute) at the rudder reversals must
+  agree within ``CHECK_SPREAD = 3`` deg.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from sindyship.errors import SindyshipInputError
+from sindyship.trajectory import Trajectory
+
+__all__ = [
+    "UNDERWAY_SPEED",
+    "STEADY_ACCELERATION",
+    "PROPELLER_RUNNING",
+    "Window",
+    "ZigZag",
+    "explain_zigzag",
+    "recognise_zigzag",
+    "trim",
+    "underway_window",
+]
+
+UNDERWAY_SPEED = 0.25  # of U0
+STEADY_ACCELERATION = 0.03  # U0 per L/U0
+PROPELLER_RUNNING = 0.5  # of the median n under way
+HOLD_RANGE = 1.0  # deg
+HOLD_SAMPLES = 5
+PLATEAU_SPREAD = 2.5  # deg
+ROUNDING = 1.5  # deg
+CHECK_SPREAD = 3.0  # deg
+_MOVING = 0.25  # deg per sample: the rudder is moving toward a plateau
+
+
+class Window(NamedTuple):
+    """The part of a record under way: ``start`` and ``stop`` times [s] and why."""
+
+    start: float
+    stop: float
+    reason: str
+
+
+class ZigZag(NamedTuple):
+    """A recognised zig-zag: amplitude and check angle [deg], first rudder sign, execute [s]."""
+
+    amplitude_deg: float
+    check_deg: float
+    first_sign: int
+    start_time: float
+
+
+def _samples(record: Trajectory, ship) -> int:
+    """An odd number of samples spanning about one L/U0."""
+    count = int(round(ship.time_scale / record.dt))
+    count = max(1, min(count, record.n_samples))
+    return count if count % 2 else max(1, count - 1)
+
+
+def _moving_mean(values: np.ndarray, count: int) -> np.ndarray:
+    half = count // 2
+    padded = np.pad(values, half, mode="edge")
+    return np.convolve(padded, np.full(count, 1.0 / count), mode="valid")
+
+
+def _moving_slope(t: np.ndarray, values: np.ndarray, count: int) -> np.ndarray:
+    """Slope of a straight line fitted over ``count`` samples centred on each sample."""
+    half = count // 2
+    if half == 0:
+        return np.gradient(values, t)
+    offsets = np.arange(-half, half + 1, dtype=float)
+    padded = np.pad(values, half, mode="edge")
+    step = float(np.median(np.diff(t)))
+    return np.convolve(padded, offsets[::-1], mode="valid") / (np.sum(offsets**2) * step)
+
+
+def underway_window(record: Trajectory, ship) -> Window:
+    """The part of ``record`` a model can fly: under way, propeller running, not from rest.
+
+    Parameters
+    ----------
+    record : Trajectory
+        A record in SI units (as :func:`sindyship.measurements.read_csv` returns it).
+    ship : Ship or str
+        The ship measured (its L/U0 sets the averaging window, its U0 the speed threshold).
+
+    Returns
+    -------
+    Window
+        ``(start, stop, reason)``: times [s] of the first and last sample of the longest
+        stretch under way, the start moved past any speeding up (module docstring).
+
+    Raises
+    ------
+    SindyshipInputError
+        When the ship is never under way.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> t = np.arange(400.0)
+    >>> u = np.clip((t - 100.0) / 100.0, 0.0, 1.0) * 12.348
+    >>> frame = pd.DataFrame({"t": t, "u": u, "v": 0.0, "r": 0.0, "x": np.cumsum(u), "y": 0.0,
+    ...                       "psi": 0.0, "delta": 0.0})
+    >>> start, stop, reason = underway_window(Trajectory(frame, "run"), "kcs")
+    >>> 200.0 <= start <= 210.0, stop
+    (True, 399.0)
+    """
+    ship = _as_ship(ship)
+    t, count = record.t, _samples(record, ship)
+    speed = _moving_mean(record["u"], count) / ship.U0
+    underway = speed >= UNDERWAY_SPEED
+    running = np.ones_like(underway)
+    n_text = ""
+    if record.has("n") and underway.any():
+        n = _moving_mean(record["n"], count)
+        reference = float(np.median(n[underway]))
+        running = n >= PROPELLER_RUNNING * reference
+        n_text = f", n >= {PROPELLER_RUNNING:g} x {reference:.3g} rps"
+    usable = underway & running
+    if not usable.any():
+        raise SindyshipInputError(
+            f"{record.name or '<data>'}: the ship is never under way (u averaged over L/U0 "
+            f"stays below {UNDERWAY_SPEED:g} U0 = {UNDERWAY_SPEED * ship.U0:.3g} m/s"
+            f"{' or the propeller is stopped' if n_text else ''}); give a record under way."
+        )
+    first, last = _longest_run(usable)
+    slope = _moving_slope(t, record["u"], count) * ship.time_scale / ship.U0
+    begin = first
+    while begin < last and slope[begin] > STEADY_ACCELERATION:
+        begin += 1
+    ends = "at the end of the record" if last == len(t) - 1 else (
+        "where the propeller slows" if not running[last + 1] else "where the ship slows")
+    reason = (
+        f"under way (u >= {UNDERWAY_SPEED:g} U0{n_text}) from t = {t[first]:.6g} s, no longer "
+        f"speeding up (< {STEADY_ACCELERATION:g} U0 per L/U0) from t = {t[begin]:.6g} s, "
+        f"until t = {t[last]:.6g} s {ends}"
+    )
+    return Window(float(t[begin]), float(t[last]), reason)
+
+
+def trim(record: Trajectory, window: Window | tuple[float, float]) -> Trajectory:
+    """The samples of ``record`` with ``start <= t <= stop``, times and channels unchanged.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> frame = pd.DataFrame({"t": [0.0, 1.0, 2.0, 3.0], "u": 1.0})
+    >>> trim(Trajectory(frame, "run"), (1.0, 2.0))["t"].tolist()
+    [1.0, 2.0]
+    """
+    start, stop = float(window[0]), float(window[1])
+    t = record.t
+    keep = (t >= start - 1e-9) & (t <= stop + 1e-9)
+    data = record.data.loc[keep].reset_index(drop=True)
+    return Trajectory(data, name=record.name, meta={**record.meta, "trimmed": (start, stop)})
+
+
+def _longest_run(mask: np.ndarray) -> tuple[int, int]:
+    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    best = int(np.argmax(stops - starts))
+    return int(starts[best]), int(stops[best])
+
+
+def _as_ship(ship):
+    if isinstance(ship, str):
+        from sindyship.ships import load_ship
+
+        return load_ship(ship)
+    return ship
+
+
+# ---------------------------------------------------------------------------------------------
+# zig-zag recognition
+
+
+def recognise_zigzag(record: Trajectory) -> ZigZag | None:
+    """``(amplitude_deg, check_deg, first_sign, start_time)`` of a zig-zag, else None.
+
+    Tolerates a manual lead-in before the zig-zag and plateaus a degree or two off the
+    nominal angle (module docstring); :func:`explain_zigzag` says why a record is not one.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> from sindyship.mmg import MMGModel
+    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> (run,) = fly(MMGModel(load_ship("kcs")), [Manoeuvre("zigzag", rudder=20, check=20,
+    ...                                                        duration=600)])
+    >>> recognise_zigzag(run)
+    ZigZag(amplitude_deg=20.0, check_deg=20.0, first_sign=1, start_time=0.0)
+    """
+    return explain_zigzag(record)[0]
+
+
+def explain_zigzag(record: Trajectory) -> tuple[ZigZag | None, str]:
+    """The recognised zig-zag (or None) and a sentence saying what was found or missing."""
+    command = np.degrees(record["delta_c"] if record.has("delta_c") else record.rudder)
+    holds = _holds(command)
+    if not holds:
+        return None, (f"the rudder never holds an angle of at least 1 deg for "
+                      f"{HOLD_SAMPLES} samples")
+    largest = max(abs(level) for _, _, level in holds)
+    amplitude = float(np.median([abs(level) for _, _, level in holds
+                                 if abs(level) >= 0.5 * largest]))
+    plateaus = [h for h in holds if abs(abs(h[2]) - amplitude) <= PLATEAU_SPREAD]
+    chain = _longest_alternation(plateaus)
+    if len(chain) < 3:
+        return None, (f"the rudder holds no run of three or more alternating angles near "
+                      f"+-{amplitude:.1f} deg (longest: {len(chain)})")
+    first_sign = int(np.sign(chain[0][2]))
+    start = _ramp_start(command, chain[0][0], first_sign)
+    reversals = [_ramp_start(command, h[0], int(np.sign(h[2]))) for h in chain[1:]]
+    psi = np.degrees(record["psi"] - record["psi"][start])
+    at = np.abs(psi[reversals])
+    before = np.abs(psi[np.maximum(np.array(reversals) - 1, 0)])
+    if np.ptp(at) > CHECK_SPREAD:
+        return None, (f"the heading change at the {len(reversals)} rudder reversals spreads "
+                      f"over {np.ptp(at):.1f} deg (more than {CHECK_SPREAD:g}): no common "
+                      "check angle")
+    levels = [abs(h[2]) for h in chain]
+    check = _roundest(float(np.median(before)), float(np.median(at)))
+    rudder = _roundest(float(np.mean(levels)), float(np.mean(levels)))
+    zigzag = ZigZag(rudder, check, first_sign, float(record.t[start]))
+    return zigzag, (f"a {rudder:g}/{check:g} zig-zag from t = {zigzag.start_time:.6g} s: "
+                    f"{len(chain)} plateaus at {', '.join(f'{v:.1f}' for v in levels)} deg")
+
+
+def _holds(command: np.ndarray) -> list[tuple[int, int, float]]:
+    """(first, last, level) of each stretch of at least HOLD_SAMPLES samples within HOLD_RANGE."""
+    holds = []
+    i, n = 0, len(command)
+    while i < n:
+        j, low, high = i + 1, command[i], command[i]
+        while j < n and max(high, command[j]) - min(low, command[j]) <= HOLD_RANGE:
+            low, high = min(low, command[j]), max(high, command[j])
+            j += 1
+        level = float(np.median(command[i:j]))
+        if j - i >= HOLD_SAMPLES and abs(level) >= 1.0:
+            holds.append((i, j - 1, level))
+        i = j
+    return holds
+
+
+def _longest_alternation(plateaus):
+    """The longest run of plateaus alternating in sign.
+
+    Neighbours of the same sign are merged into one plateau; a gap between two plateaus
+    longer than twice the longer of them (the rudder left elsewhere) ends a run.
+    """
+    runs: list[list[tuple[int, int, float]]] = []
+    for hold in plateaus:
+        run = runs[-1] if runs else None
+        if run is not None:
+            first, last, level = run[-1]
+            gap = hold[0] - last
+            if gap > 2 * max(last - first, hold[1] - hold[0]) + 2:
+                run = None
+            elif np.sign(level) == np.sign(hold[2]):
+                run[-1] = (first, hold[1], level)
+                continue
+        if run is None:
+            runs.append([hold])
+        else:
+            run.append(hold)
+    return max(runs, key=len) if runs else []
+
+
+def _ramp_start(command: np.ndarray, plateau: int, sign: int) -> int:
+    """The first sample at which the rudder left its previous value toward a plateau."""
+    index = plateau
+    while index > 0 and (command[index] - command[index - 1]) * sign > _MOVING:
+        index -= 1
+    if index == plateau or index == 0:
+        return index
+    return index + 1
+
+
+def _roundest(low: float, high: float) -> float:
+    """The multiple of 5 deg within ROUNDING of [low, high], else the midpoint to 0.1 deg."""
+    middle = 0.5 * (low + high)
+    candidate = 5.0 * round(middle / 5.0)
+    if low - ROUNDING <= candidate <= high + ROUNDING:
+        return float(candidate)
+    return round(middle, 1)

@@ -1,0 +1,320 @@
+"""Plausibility checks on load, and trials as logged (sindyship.plausibility, sindyship.trials)."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sindyship.effects import add_noise, parse_effects, simulate_with_effects
+from sindyship.errors import SindyshipInputError
+from sindyship.manoeuvres import fly, protocol_manoeuvres, result_to_trajectory
+from sindyship.marin import MARIN_FILES, default_marin_dir, read_marin
+from sindyship.measurements import PlausibilityNote, read_csv, trajectory_from_frame, write_csv
+from sindyship.mmg import MMGModel
+from sindyship.plausibility import CHECKS, frame_misfit, heading_gain
+from sindyship.ships import load_ship
+from sindyship.simulation import RudderCommand, simulate_batch
+from sindyship.trajectory import Trajectory
+from sindyship.trials import explain_zigzag, recognise_zigzag, trim, underway_window
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def refusal(frame: pd.DataFrame, **options) -> str:
+    with pytest.raises(SindyshipInputError) as caught:
+        trajectory_from_frame(frame, "run", source="run.csv", **options)
+    message = str(caught.value)
+    assert "\n" not in message and message.startswith("run.csv: ")
+    return message
+
+
+def loads(record: Trajectory, ship=None) -> Trajectory:
+    """The record through the reader's checks, with warnings turned into errors."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return trajectory_from_frame(record.data, record.name, ship=ship)
+
+
+@pytest.fixture(scope="module")
+def zigzag(protocol_runs):
+    return next(r for r in protocol_runs["train"] if r.name == "zz20_20")
+
+
+# --- refusals ----------------------------------------------------------------------------------
+
+
+def test_heading_in_degrees_under_a_bare_header_is_refused_by_fit(zigzag, tmp_path):
+    data = zigzag.data.assign(psi=np.degrees(zigzag["psi"]))
+    path = tmp_path / "zz.csv"
+    data.to_csv(path, index=False)
+    done = subprocess.run(
+        [sys.executable, "-m", "sindyship.cli", "fit", str(path), "--ship", "kcs", "--out",
+         str(tmp_path / "model.json")],
+        capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert done.returncode == 2
+    assert done.stdout == ""
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
+    assert str(path) in done.stderr and "heading check" in done.stderr
+    assert "57.3" in done.stderr and "'psi [deg]'" in done.stderr
+    assert "skip_checks=['heading']" in done.stderr
+    assert not (tmp_path / "model.json").exists()
+    # with its unit the same numbers load
+    record = trajectory_from_frame(data.rename(columns={"psi": "psi [deg]"}), ship="kcs")
+    np.testing.assert_allclose(record["psi"], zigzag["psi"], atol=1e-12)
+
+
+def test_flipped_heading_sign_is_refused(zigzag):
+    message = refusal(zigzag.data.assign(psi=-zigzag["psi"]))
+    assert "heading check" in message and "-1" in message and "opposite" in message
+
+
+def test_earth_fixed_velocities_are_refused(protocol_runs):
+    turn = protocol_runs["train"][1]  # tc35_stbd
+    psi, u, v = turn["psi"], turn["u"], turn["v"]
+    north, east = u * np.cos(psi) - v * np.sin(psi), u * np.sin(psi) + v * np.cos(psi)
+    data = turn.data.assign(u=north, v=east)
+    message = refusal(data)
+    assert "frame check" in message and "look earth-fixed" in message
+    assert "skip_checks=['frame']" in message
+    assert trajectory_from_frame(data, skip_checks=["frame"]).n_samples == turn.n_samples
+
+
+def test_time_in_milliseconds_is_refused(zigzag, protocol_runs):
+    data = zigzag.data.assign(t=zigzag["t"] * 1000.0)
+    with_ship = refusal(data, ship="kcs")
+    assert "sampling check" in with_ship and "'t [ms]'" in with_ship
+    assert "steps by 1000 s over 3.199e+06 s, 53.7 and 1.72e+05 times" in with_ship
+    without_ship = refusal(data)  # r then integrates to 1000 times the heading change
+    assert "heading check" in without_ship and "0.001 times" in without_ship
+    assert "'t [ms]'" in without_ship
+    straight = protocol_runs["train"][0]  # no turn: the track is 1000 times too short instead
+    message = refusal(straight.data.assign(t=straight["t"] * 1000.0))
+    assert "frame check" in message and "'t [ms]'" in message
+
+
+def test_knots_under_a_metre_per_second_header_are_refused(zigzag):
+    data = zigzag.data.assign(u=zigzag["u"] * 3600 / 1852, v=zigzag["v"] * 3600 / 1852)
+    message = refusal(data)
+    assert "frame check" in message and "the track is 0.514" in message
+    assert "'u [kn]'" in message
+    message = refusal(data, ship="kcs", skip_checks="frame")
+    assert "speed check" in message and "1.94 times the ship's design speed" in message
+
+
+def test_sample_interval_far_from_the_time_scale_is_refused(zigzag):
+    message = refusal(zigzag.data.assign(t=zigzag["t"] * 1e-9), ship="kcs")
+    assert "sampling check" in message and "steps by 1e-09 s" in message
+
+
+def test_no_motion_and_no_forward_speed_are_refused(zigzag):
+    still = zigzag.data.assign(u=0.0, v=0.0, r=0.0, x=0.0, y=0.0, psi=0.0)
+    assert "motion check" in refusal(still)
+    astern = zigzag.data.assign(u=-zigzag["u"], v=-zigzag["v"], x=-zigzag["x"], y=-zigzag["y"])
+    message = refusal(astern)
+    assert "forward-speed check" in message and "never positive" in message
+
+
+def test_unknown_check_name_is_refused(zigzag):
+    with pytest.raises(SindyshipInputError, match="unknown plausibility check 'speeed'"):
+        trajectory_from_frame(zigzag.data, skip_checks=["speeed"])
+    assert set(CHECKS) == {"motion", "sampling", "heading", "frame", "speed", "forward-speed"}
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [
+        ("t;u;v;r;x;y;psi;delta\n0;8,5;0;0;0;0;0;0\n1;8,5;0;0;8,5;0;0;0\n",
+         "decimal commas (e.g. '8,5') and semicolons"),
+        ("t,u,v,r,x,y,psi,delta\n0,8,5,0,0,0,0,0,0\n1,8,5,0,0,8,5,0,0,0\n",
+         "decimal commas (9 comma-separated values for 8 columns)"),
+        ('t,u,v,r,x,y,psi,delta\n0,"8,5",0,0,0,0,0,0\n1,"8,5",0,0,8.5,0,0,0\n',
+         "the decimal comma '8,5'"),
+    ],
+)
+def test_decimal_commas_are_recognised(tmp_path, text, fragment):
+    path = tmp_path / "run.csv"
+    path.write_text(text)
+    with pytest.raises(SindyshipInputError) as caught:
+        read_csv(path)
+    assert fragment in str(caught.value) and "columns; give every row" not in str(caught.value)
+
+
+def test_wrapped_heading_is_unwrapped_with_a_note(protocol_runs, tmp_path):
+    turn = protocol_runs["train"][1]
+    wrapped = np.angle(np.exp(1j * turn["psi"]))
+    path = write_csv(Trajectory(turn.data.assign(psi=wrapped), "tc"), tmp_path / "tc.csv")
+    with pytest.warns(PlausibilityNote, match=r"tc.csv: column 'psi' wraps around \d+ time"):
+        record = read_csv(path, ship="kcs")
+    np.testing.assert_allclose(record["psi"], turn["psi"], atol=1e-9)
+    assert len(record.meta["notes"]) == 1 and "unwrapped" in record.meta["notes"][0]
+
+
+def test_wrapped_heading_in_degrees_under_a_bare_header_is_refused(protocol_runs):
+    turn = protocol_runs["train"][1]
+    wrapped = np.degrees(np.angle(np.exp(1j * turn["psi"])))
+    message = refusal(turn.data.assign(psi=wrapped))
+    assert "heading check" in message and "degrees wrapped at +-180" in message
+
+
+# --- no false refusals ------------------------------------------------------------------------
+
+
+def test_protocol_records_load_with_every_check(protocol_runs):
+    for record in protocol_runs["train"] + protocol_runs["test"]:
+        loaded = loads(record, ship="kcs")
+        assert loaded.meta["notes"] == []
+        gain, span = heading_gain(record.t, record["r"], record["psi"])
+        assert span < 0.1 or abs(gain - 1) < 0.002, record.name
+        assert frame_misfit(record.data) < 0.003, record.name
+
+
+def test_noisy_records_load(kcs, seed):
+    plan = protocol_manoeuvres(duration=1200.0)
+    records = simulate_with_effects(kcs, plan["train"] + plan["test"],
+                                    parse_effects(["noise=0.01", f"seed={seed}"]))
+    for k, record in enumerate(records):
+        record = add_noise(record, {"psi": math.radians(0.1), "delta": math.radians(0.1),
+                                    "x": 0.5, "y": 0.5}, seed=seed + k)
+        loads(record, ship=kcs)
+        assert frame_misfit(record.data) < 0.01
+
+
+def test_records_in_a_current_load(kcs):
+    plan = protocol_manoeuvres(duration=1200.0)
+    effects = parse_effects(["current=1.0", "current_dir=60"])
+    for record in simulate_with_effects(kcs, plan["train"], effects):
+        loads(record, ship=kcs)
+
+
+def test_kvlcc2_model_records_load():
+    ship = load_ship("kvlcc2")
+    plan = protocol_manoeuvres(duration=600.0)
+    for record in fly(MMGModel(ship), plan["train"] + plan["test"]):
+        loads(record, ship=ship)
+
+
+def test_marin_records_load():
+    folder = default_marin_dir()
+    if folder is None:
+        pytest.skip("MARIN KVLCC2 data folder absent")
+    for name in MARIN_FILES.values():
+        record = read_marin(folder / name)  # read_marin runs every check without a ship
+        assert frame_misfit(record.data) < 0.05
+        gain, _ = heading_gain(record.t, record["r"], record["psi"])
+        assert abs(gain - 1) < 0.1
+
+
+# --- trials as logged --------------------------------------------------------------------------
+
+
+class LoggedZigZag(RudderCommand):
+    """Manual steering until ``execute``, then a zig-zag whose plateaus sit at ``levels``."""
+
+    def __init__(self, lead_times, lead_angles, execute, levels, check):
+        self.lead_times, self.lead_angles = list(lead_times), list(lead_angles)
+        self.execute, self.levels, self.check = execute, list(levels), check
+
+    def reset(self, state0):
+        self.reversals, self.psi0 = 0, None
+
+    def value(self, t, state):
+        if t < self.execute - 1e-9:
+            k = int(np.searchsorted(self.lead_times, t + 1e-9, side="right")) - 1
+            return self.lead_angles[max(k, 0)]
+        if self.psi0 is None:
+            self.psi0 = float(state[5])
+        level = self.levels[min(self.reversals, len(self.levels) - 1)]
+        return (-1) ** self.reversals * level
+
+    def next_change(self, t):
+        later = [time for time in [*self.lead_times, self.execute] if time > t + 1e-9]
+        return min(later) if later else math.inf
+
+    def event(self, state):
+        if self.psi0 is None:
+            return None
+        return (-1) ** self.reversals * (state[5] - self.psi0) - self.check
+
+    def on_event(self):
+        self.reversals += 1
+
+
+@pytest.fixture(scope="module")
+def logged_trial(kcs, tmp_path_factory):
+    """A 20/20 zig-zag as logged: 200 s from rest (propeller stopped for 100 s), 150 s of
+    manual steering, plateaus 1 deg off nominal, heading wrapped at +-180, blank trailing rows.
+    """
+    rng = np.random.default_rng(7)
+    lead_times = np.arange(0.0, 150.0, 15.0)
+    lead_angles = np.radians(rng.uniform(-3.0, 3.0, lead_times.size))
+    levels = np.radians([19.0, 21.0, 20.8, 19.2, 21.0, 19.0, 20.9, 19.1])
+    command = LoggedZigZag(lead_times, lead_angles, 150.0, levels, math.radians(20.0))
+    t = np.arange(0.0, 900.0, 1.0)
+    state0 = np.array([kcs.U0, 0, 0, 0, 0, 0, 0.0])
+    (result,) = simulate_batch(MMGModel(kcs), [command], t, state0)
+    run = result_to_trajectory(result, "zz").data
+    run["t"] += 200.0
+    run["n"] = 1.6
+    start = pd.DataFrame({"t": np.arange(200.0)})
+    start["u"] = np.clip((start["t"] - 100.0) / 100.0, 0.0, 1.0) * kcs.U0
+    start["n"] = np.where(start["t"] < 100.0, 0.0, 1.6)
+    start["x"] = np.cumsum(start["u"]) - start["u"].sum()
+    for column in ("v", "r", "y", "psi", "delta", "delta_c"):
+        start[column] = 0.0
+    data = pd.concat([start, run], ignore_index=True)[list(run.columns)]
+    heading = math.radians(170.0)  # turn the whole trial so that the heading passes 180 deg
+    track = np.exp(1j * heading) * (data["x"] + 1j * data["y"]).to_numpy()
+    data["x"], data["y"] = track.real, track.imag
+    data["psi"] = np.angle(np.exp(1j * (data["psi"] + heading)))
+    path = tmp_path_factory.mktemp("trial") / "trial.csv"
+    write_csv(Trajectory(data, "trial"), path)
+    with open(path, "a") as handle:
+        handle.write("\n" + "," * (len(data.columns) - 1) + "\n\n")
+    return path
+
+
+def test_logged_trial_loads_with_a_note_and_its_window_is_found(logged_trial, kcs):
+    with pytest.warns(PlausibilityNote, match="wraps around"):
+        record = read_csv(logged_trial, ship=kcs)
+    assert record.t[-1] == 1099.0  # the blank trailing rows are no samples
+    start, stop, reason = underway_window(record, kcs)
+    assert 200.0 <= start <= 210.0
+    assert stop == 1099.0
+    assert "from t = 1" in reason and "end of the record" in reason
+    cut = trim(record, (start, stop))
+    assert cut.t[0] == start and cut.t[-1] == stop
+    np.testing.assert_array_equal(cut["x"], record["x"][record.t >= start])
+
+
+def test_logged_zigzag_is_recognised(logged_trial, kcs):
+    with pytest.warns(PlausibilityNote):
+        record = read_csv(logged_trial, ship=kcs)
+    amplitude, check, first_sign, start_time = recognise_zigzag(record)
+    assert (amplitude, check, first_sign, start_time) == (20.0, 20.0, 1, 350.0)
+    zigzag, reason = explain_zigzag(trim(record, underway_window(record, kcs)))
+    assert zigzag == (20.0, 20.0, 1, 350.0) and "plateaus at 19.0, 21.0" in reason
+
+
+def test_protocol_zigzags_are_recognised_and_turns_are_not(protocol_runs):
+    found = {r.name: recognise_zigzag(r) for r in protocol_runs["train"] + protocol_runs["test"]}
+    assert found["zz35_10"] == (35.0, 10.0, 1, 0.0)
+    assert found["zz15_15"] == (15.0, 15.0, 1, 0.0)
+    assert found["zz10_10"] == (10.0, 10.0, 1, 0.0)
+    assert found["tc35_stbd"] is None and found["straight"] is None
+    zigzag, reason = explain_zigzag(protocol_runs["train"][1])
+    assert zigzag is None and "no run of three or more alternating angles" in reason
+
+
+def test_never_under_way_is_refused(zigzag, kcs):
+    still = Trajectory(zigzag.data.assign(u=0.1), "still")
+    with pytest.raises(SindyshipInputError, match="never under way"):
+        underway_window(still, kcs)
