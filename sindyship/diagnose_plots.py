@@ -2,18 +2,10 @@
 
 from __future__ import annotations
 
-from .plotting.diagnosis import (  # noqa: F401
-    diagnosis_figures,
-    plot_before_after,
-    plot_ranking,
-    plot_residual_bins,
-    plot_residual_time_series,
-    plot_rounds,
-    save_diagnosis_figures,
-)
-from .plotting.trajectories import (  # noqa: F401
-    CHANNEL_LABELS,
-    plot_comparison,
-    plot_time_series,
-    plot_track,
-)
+from . import plotting as _plotting
+
+__all__ = list(_plotting.__all__)
+
+
+def __getattr__(name: str):
+    return getattr(_plotting, name)

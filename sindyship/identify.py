@@ -59,9 +59,7 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
 
     Examples
     --------
-    >>> from sindyship.ships import load_ship
-    >>> from sindyship.mmg import MMGModel
-    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> from sindyship import load_ship, MMGModel, Manoeuvre, fly
     >>> ship = load_ship("kcs")
     >>> runs = fly(MMGModel(ship), [Manoeuvre("turning-circle", rudder=35, duration=300)])
     >>> problems = design(runs, ship, load_library("abkowitz"))

@@ -205,8 +205,8 @@ class _Context:
     def refuse(self, check: str, problem: str, fix: str) -> None:
         raise SindyshipInputError(
             f"{self.source}: the {check} check refuses the record: {problem}; {fix} (or, if "
-            f"the values are right, skip the check with skip_checks=['{check}']; the checks "
-            f"are {', '.join(CHECKS)})."
+            f"the values are right, skip the check: --skip-check {check} on the command line, "
+            f"skip_checks=['{check}'] in Python; the checks are {', '.join(CHECKS)})."
         )
 
 

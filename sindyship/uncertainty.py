@@ -302,9 +302,7 @@ def ensemble(records: Sequence[Trajectory], ship: Ship, optimizer: str = "ls",
 
     Examples
     --------
-    >>> from sindyship.ships import load_ship
-    >>> from sindyship.mmg import MMGModel
-    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> from sindyship import load_ship, MMGModel, Manoeuvre, fly
     >>> ship = load_ship("kcs")
     >>> runs = fly(MMGModel(ship), [Manoeuvre("zigzag", rudder=20, check=20, duration=800),
     ...                             Manoeuvre("turning-circle", rudder=-35, duration=800)])

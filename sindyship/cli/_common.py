@@ -74,3 +74,22 @@ def add_identification(p) -> None:
 def add_n_jobs(p, *, default: int | None = 1) -> None:
     p.add_argument("--n-jobs", type=int, default=default, metavar="N",
                    help=f"parallel workers (joblib; -1: every core; default {default})")
+
+
+def add_training_options(p, *, n_jobs_default: int | None) -> None:
+    """What every verb that fits a library on records takes (``fit``, ``diagnose``): the
+    records, the ship, how the library is fitted, smoothing, resampling, workers, JSON."""
+    p.add_argument("data", nargs="+", help="training measurement CSV files")
+    add_ship(p)
+    add_identification(p)
+    p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",
+                   help="smooth noisy training records before differencing: a Savitzky-Golay "
+                   "or a Kalman (RTS) smoother over W seconds, or 'auto' to choose the setting "
+                   "by leave-one-manoeuvre-out flights on the training records (its windows "
+                   "scale with the ship's L/U0) (default: none)")
+    add_resample(p)
+    from ._records import add_record_options
+
+    add_record_options(p)
+    add_n_jobs(p, default=n_jobs_default)
+    add_json(p)

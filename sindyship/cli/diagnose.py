@@ -8,16 +8,7 @@ import time
 from pathlib import Path
 
 from ..errors import SindyshipInputError
-from ._common import (
-    add_identification,
-    add_json,
-    add_n_jobs,
-    add_resample,
-    add_ship,
-    emit,
-    progress,
-    split_names,
-)
+from ._common import add_training_options, emit, progress, split_names
 from ._records import read_records
 
 
@@ -32,9 +23,7 @@ def add_parser(sub) -> None:
         "(libraries/effects/*.toml) by the share of the cross-validated force error they "
         "explain; confirm the best by refitting and re-flying.",
     )
-    p.add_argument("data", nargs="+", help="training measurement CSV files (two or more)")
-    add_ship(p)
-    add_identification(p)
+    add_training_options(p, n_jobs_default=1)
     p.add_argument("--candidates", default="", metavar="NAME,...",
                    help="comma-separated effects to score (default: the whole catalogue)")
     p.add_argument("--test", nargs="+", default=[], metavar="HELD_OUT.csv",
@@ -42,7 +31,6 @@ def add_parser(sub) -> None:
                    "(default: none)")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="folder for figures, report.txt and diagnose.json (default: none)")
-    add_json(p)
     p.add_argument("--rounds", type=int, default=1,
                    help="add the best confirmed effect and diagnose again, up to this many "
                    "times (default 1: diagnose once)")
@@ -51,13 +39,6 @@ def add_parser(sub) -> None:
                    f"(default {MEANINGFUL_SHARE})")
     p.add_argument("--confirm", type=int, default=2,
                    help="best candidates to confirm by refitting and re-flying (default 2)")
-    p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",
-                   help="smooth noisy training records before differencing: a Savitzky-Golay "
-                   "or a Kalman (RTS) smoother over W seconds, or 'auto' to choose the setting "
-                   "by leave-one-manoeuvre-out flights (windows in ship time L/U0); the flights "
-                   "are compared with the records as measured (default: none)")
-    add_resample(p)
-    add_n_jobs(p)
 
 
 def _write_folder(out: Path, result, iterative, text: str, document: dict, progress_bar: bool
@@ -85,8 +66,9 @@ def run(args) -> int:
 
     start = time.perf_counter()
     ship = load_ship(args.ship)
-    records = read_records(args.data, args.resample)
-    test = read_records(args.test, args.resample)
+    reading = {"ship": ship, "skip_checks": args.skip_check, "time_range": args.time_range}
+    records = read_records(args.data, args.resample, **reading)
+    test = read_records(args.test, args.resample, **reading)
     library = resolve_library(args.library, split_names(args.effects))
     if args.rounds < 1:
         raise SindyshipInputError(f"--rounds must be 1 or more, not {args.rounds}.")

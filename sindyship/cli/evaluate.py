@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ._common import add_json, add_resample, add_ship, emit
-from ._records import read_records
+from ._records import add_record_options, read_records
 
 
 def add_parser(sub) -> None:
@@ -14,6 +14,7 @@ def add_parser(sub) -> None:
     p.add_argument("data", nargs="+", help="measurement CSV files")
     add_ship(p, default=None)
     add_resample(p)
+    add_record_options(p)
     add_json(p)
 
 
@@ -25,7 +26,8 @@ def run(args) -> int:
 
     ship = load_ship(args.ship) if args.ship else None
     model = AbkowitzModel.load(args.model, ship=ship)
-    records = read_records(args.data, args.resample)
+    records = read_records(args.data, args.resample, ship=model.ship,
+                           skip_checks=args.skip_check, time_range=args.time_range)
     errors = evaluate(model, records)
     if args.json:
         emit({"errors": errors})

@@ -2,16 +2,7 @@
 
 from __future__ import annotations
 
-from ._common import (
-    add_identification,
-    add_json,
-    add_n_jobs,
-    add_resample,
-    add_ship,
-    emit,
-    progress,
-    split_names,
-)
+from ._common import add_training_options, emit, progress, split_names
 from ._records import read_records
 
 
@@ -19,19 +10,10 @@ def add_parser(sub) -> None:
     p = sub.add_parser("fit", help="identify an Abkowitz model from records",
                        description="Identify an Abkowitz model (paper eq. 14-17) from "
                        "measurement CSVs and save it as JSON.")
-    p.add_argument("data", nargs="+", help="measurement CSV files")
-    add_ship(p)
-    add_identification(p)
-    add_resample(p)
-    p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",
-                   help="smooth noisy records before differencing: a Savitzky-Golay or a "
-                   "Kalman (RTS) smoother over W seconds, or 'auto' to choose the setting by "
-                   "leave-one-manoeuvre-out flights on the training records (default: none)")
-    add_n_jobs(p, default=None)
+    add_training_options(p, n_jobs_default=None)
     p.add_argument("--seed", type=int, default=0,
                    help="seed of randomised optimizers (default 0)")
     p.add_argument("--out", required=True, metavar="FILE", help="output model JSON")
-    add_json(p)
 
 
 def _smoothing(args, records, ship, effects, params):
@@ -54,7 +36,8 @@ def run(args) -> int:
     from ..ships import load_ship
 
     ship = load_ship(args.ship)
-    records = read_records(args.data, args.resample)
+    records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
+                           time_range=args.time_range)
     effects = split_names(args.effects)
     params = {"random_state": args.seed} if args.optimizer == "svr" else {}
     smoothing = _smoothing(args, records, ship, effects, params)

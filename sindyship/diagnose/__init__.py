@@ -44,9 +44,7 @@ result is made by :mod:`sindyship.reports` and its figures by :mod:`sindyship.pl
 
 Examples
 --------
->>> from sindyship.ships import load_ship
->>> from sindyship.mmg import MMGModel
->>> from sindyship.manoeuvres import Manoeuvre, fly
+>>> from sindyship import load_ship, MMGModel, Manoeuvre, fly
 >>> ship = load_ship("kcs")
 >>> runs = fly(MMGModel(ship), [Manoeuvre("turning-circle", rudder=r, duration=400)
 ...                             for r in (35, -35, 20)])

@@ -259,9 +259,7 @@ def before_after(
 
     Examples
     --------
-    >>> from sindyship.ships import load_ship
-    >>> from sindyship.effects import parse_effects, simulate_with_effects
-    >>> from sindyship.manoeuvres import Manoeuvre
+    >>> from sindyship import load_ship, parse_effects, simulate_with_effects, Manoeuvre
     >>> ship = load_ship("kcs")
     >>> plan = [Manoeuvre("turning-circle", rudder=35, duration=800),
     ...         Manoeuvre("turning-circle", rudder=-35, duration=800),

@@ -60,9 +60,7 @@ def compare(
 
     Examples
     --------
-    >>> from sindyship.ships import load_ship
-    >>> from sindyship.model import paper_model
-    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> from sindyship import load_ship, paper_model, Manoeuvre, fly
     >>> ship = load_ship("kcs")
     >>> model = paper_model(ship)
     >>> (run,) = fly(model.dynamics(), [Manoeuvre("turning-circle", rudder=20, duration=300)])

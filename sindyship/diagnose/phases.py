@@ -54,9 +54,7 @@ def manoeuvre_phases(record: Trajectory, ship: Ship) -> tuple[Phase, ...]:
 
     Examples
     --------
-    >>> from sindyship.ships import load_ship
-    >>> from sindyship.mmg import MMGModel
-    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> from sindyship import load_ship, MMGModel, Manoeuvre, fly
     >>> ship = load_ship("kcs")
     >>> (zz,) = fly(MMGModel(ship), [Manoeuvre("zigzag", rudder=20, check=20, duration=600)])
     >>> [p.kind for p in manoeuvre_phases(zz, ship)][:3]

@@ -260,9 +260,7 @@ def force_residuals(
 
     Examples
     --------
-    >>> from sindyship.ships import load_ship
-    >>> from sindyship.model import paper_model
-    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> from sindyship import load_ship, paper_model, Manoeuvre, fly
     >>> ship = load_ship("kcs")
     >>> model = paper_model(ship)
     >>> runs = fly(model.dynamics(), [Manoeuvre("zigzag", rudder=20, check=20, duration=500)])
