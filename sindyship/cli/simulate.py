@@ -13,8 +13,11 @@ def add_parser(sub) -> None:
                        description="Fly a standard manoeuvre with the MMG model of a ship and "
                        "write the measurement CSV (bare SI headers).")
     add_ship(p)
-    p.add_argument("--manoeuvre", required=True, choices=MANOEUVRES,
-                   help="the manoeuvre to fly")
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--manoeuvre", choices=MANOEUVRES, help="the manoeuvre to fly")
+    what.add_argument("--protocol", action="store_true",
+                      help="fly the paper's 8 training and 3 held-out manoeuvres (3200 s at "
+                      "1 Hz) and write them to OUT/train/ and OUT/test/ (--out is then a folder)")
     p.add_argument("--rudder", type=float, default=35.0, metavar="DEG",
                    help="rudder angle [deg]: of the turn, the zig-zag, the largest spiral step, "
                    "the pull-out, or the random rudder's amplitude (default 35)")
@@ -36,7 +39,35 @@ def add_parser(sub) -> None:
                    "prop_side_force [Y' at the propeller], rudder_offset [deg: recorded = true "
                    "+ offset], noise [fraction of each channel's RMS], quantise [significant "
                    "figures]")
-    p.add_argument("--out", required=True, metavar="FILE", help="output measurement CSV")
+    p.add_argument("--out", required=True, metavar="FILE|DIR",
+                   help="output measurement CSV (a folder with --protocol)")
+
+
+def _check_flown(record) -> None:
+    if record.meta.get("diverged_at") is not None:
+        raise SindyshipInputError(
+            f"the simulation of {record.name} left the plausible range at t = "
+            f"{record.meta['diverged_at']:.0f} s; reduce the effects' magnitudes."
+        )
+
+
+def _protocol(args, ship, effects) -> int:
+    """The paper's manoeuvres (PROTOCOL.md) as OUT/train/*.csv and OUT/test/*.csv."""
+    from pathlib import Path
+
+    from ..effects import simulate_with_effects
+    from ..manoeuvres import protocol_manoeuvres
+    from ..measurements import write_csv
+
+    out = Path(args.out)
+    for kind, plan in protocol_manoeuvres().items():
+        (out / kind).mkdir(parents=True, exist_ok=True)
+        for record in simulate_with_effects(ship, plan, effects):
+            _check_flown(record)
+            write_csv(record, out / kind / f"{record.name}.csv")
+        progress(f"wrote {len(plan)} {kind}ing records to {out / kind}/" if kind == "train"
+                 else f"wrote {len(plan)} held-out records to {out / kind}/")
+    return 0
 
 
 def run(args) -> int:
@@ -47,17 +78,15 @@ def run(args) -> int:
 
     ship = load_ship(args.ship)
     effects = parse_effects(args.effect + ([f"seed={args.seed}"] if args.seed else []))
+    if args.protocol:
+        return _protocol(args, ship, effects)
     sign = 1 if args.first == "starboard" else -1
     check = args.check if args.check is not None else (args.rudder if args.manoeuvre == "zigzag"
                                                        else 0.0)
     manoeuvre = Manoeuvre(args.manoeuvre, rudder=args.rudder, check=check, first_sign=sign,
                           duration=args.duration, dt=args.dt, seed=args.seed)
     (record,) = simulate_with_effects(ship, [manoeuvre], effects)
-    if record.meta.get("diverged_at") is not None:
-        raise SindyshipInputError(
-            f"the simulation left the plausible range at t = {record.meta['diverged_at']:.0f} s; "
-            "reduce the effects' magnitudes."
-        )
+    _check_flown(record)
     write_csv(record, args.out)
     progress(f"wrote {args.out}: {record.n_samples} samples of {manoeuvre.label}")
     return 0
