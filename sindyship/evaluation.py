@@ -121,10 +121,11 @@ def _before_divergence(flown: Trajectory) -> np.ndarray:
 
 
 def flown_seconds(flown: Trajectory) -> float:
-    """How long a flight flew [s]: to its divergence, else over the whole record."""
-    diverged_at = flown.meta.get("diverged_at")
-    end = float(flown.t[-1]) if diverged_at is None else float(diverged_at)
-    return end - float(flown.t[0])
+    """How long a flight flew [s]: its samples before any divergence times the sample
+    interval (a complete 3200-sample record at 1 Hz flew 3200 s)."""
+    if flown.n_samples < 2:
+        return 0.0
+    return float(np.count_nonzero(_before_divergence(flown))) * flown.dt
 
 
 def distance_errors(flown: Trajectory, reference: Trajectory, L: float) -> dict:

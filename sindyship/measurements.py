@@ -40,7 +40,6 @@ import io
 import math
 import os
 import re
-import secrets
 import warnings
 from collections.abc import Iterable
 from pathlib import Path
@@ -48,6 +47,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from sindyship._io import write_text_atomic
 from sindyship.errors import SindyshipInputError
 from sindyship.plausibility import check_record, resolve_skip
 from sindyship.trajectory import REQUIRED_COLUMNS, RUDDER_COLUMNS, Trajectory
@@ -274,7 +274,8 @@ def write_csv(trajectory: Trajectory, path: str | os.PathLike[str]) -> Path:
     Values are written with ``repr``, the shortest text that reads back to the identical
     float, so ``read_csv(write_csv(x, p))`` reproduces the data of ``x`` exactly.  The file is
     first written to a hidden temporary file in the same folder and then renamed over
-    ``path`` with :func:`os.replace`, so a failure never leaves a half-written file.
+    ``path`` (:func:`sindyship._io.write_text_atomic`), so a failure never leaves a
+    half-written file; a missing folder is created.
 
     Parameters
     ----------
@@ -291,7 +292,7 @@ def write_csv(trajectory: Trajectory, path: str | os.PathLike[str]) -> Path:
     Raises
     ------
     SindyshipInputError
-        When the file cannot be written (missing folder, no permission, ...).
+        When the file cannot be written (no permission, a file in the way of its folder, ...).
 
     Examples
     --------
@@ -310,28 +311,21 @@ def write_csv(trajectory: Trajectory, path: str | os.PathLike[str]) -> Path:
     """
     target = Path(path)
     data = trajectory.data
-    header = [str(column) for column in data.columns]
     columns = [
         [repr(value) for value in data.iloc[:, position].to_numpy(dtype=float).tolist()]
         for position in range(data.shape[1])
     ]
-    temporary = target.with_name(f".{target.name}.{secrets.token_hex(6)}.tmp")
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow([str(column) for column in data.columns])
+    writer.writerows(zip(*columns, strict=True))
     try:
-        with open(temporary, "x", newline="", encoding="utf-8") as handle:
-            writer = csv.writer(handle, lineterminator="\n")
-            writer.writerow(header)
-            writer.writerows(zip(*columns, strict=True))
-        os.replace(temporary, target)
+        write_text_atomic(target, text.getvalue())
     except OSError as error:
-        temporary.unlink(missing_ok=True)
         reason = error.strerror or str(error)
         raise SindyshipInputError(
-            f"{target}: cannot write the file ({reason}); "
-            "check that the folder exists and is writable."
+            f"{target}: cannot write the file ({reason}); check that its folder can be written."
         ) from error
-    except BaseException:
-        temporary.unlink(missing_ok=True)
-        raise
     return target
 
 

@@ -69,7 +69,8 @@ def _diagnosis_rounds(train, test, ship, rounds, progress):
         d = rnd.diagnosis
         diagnosis["rounds"].append({
             "library": d.library.name,
-            "ranking": [{"effect": sc.effect.name, "explained": sc.explained}
+            "ranking": [{"effect": sc.effect.name, "explained": sc.explained,
+                         "explained_signal": sc.explained_signal, "meaningful": sc.meaningful}
                         for sc in d.ranking],
             "added": rnd.added,
         })

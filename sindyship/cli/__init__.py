@@ -13,7 +13,7 @@ import sys
 
 from .. import __version__
 from ..errors import SindyshipInputError
-from . import diagnose, evaluate, export, fit, reproduce, simulate
+from . import diagnose, effects, evaluate, export, fit, reproduce, simulate
 
 #: The verbs in the order ``sindyship --help`` lists them, each a module with
 #: ``add_parser(subparsers)`` and ``run(args) -> int``.
@@ -24,6 +24,7 @@ VERBS = {
     "reproduce": reproduce,
     "diagnose": diagnose,
     "export": export,
+    "effects": effects,
 }
 
 __all__ = ["VERBS", "build_parser", "main"]

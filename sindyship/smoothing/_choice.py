@@ -1,0 +1,190 @@
+"""Choosing the smoothing by leave-one-manoeuvre-out flights of the training records."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from ..errors import SindyshipInputError
+from ..ships import Ship
+from ..trajectory import Trajectory
+from ._filters import smooth_records
+from ._settings import SmoothingSetting, default_candidates
+
+
+# ---------------------------------------------------------------------------------------------
+# Choosing the setting by leave-one-manoeuvre-out cross-validation
+# ---------------------------------------------------------------------------------------------
+def _as_setting(candidate: SmoothingSetting | str | Mapping | tuple) -> SmoothingSetting:
+    if isinstance(candidate, SmoothingSetting):
+        return candidate
+    if isinstance(candidate, str):
+        return SmoothingSetting.parse(candidate)
+    if isinstance(candidate, Mapping):
+        return SmoothingSetting(candidate.get("method", "none"),
+                                float(candidate.get("window", candidate.get("window_s", 21.0))),
+                                int(candidate.get("order", 3)))
+    return SmoothingSetting(*candidate)
+
+
+def _fold_task(smoothed: Sequence[Trajectory], raw: Trajectory, held_out: int, ship: Ship,
+               library, optimizer: str, params: dict | None, rudder_signal: str,
+               step: float | None) -> dict:
+    """Fit on all smoothed records but one, fly like the raw held-out one, measure."""
+    from threadpoolctl import threadpool_limits
+
+    from ..evaluation import distance_errors, fly_like
+    from ..identify import fit
+
+    train = [r for k, r in enumerate(smoothed) if k != held_out]
+    start = _with_initial_state(raw, smoothed[held_out])
+    with threadpool_limits(limits=1, user_api="blas"):
+        model = fit(train, ship, library=library, optimizer=optimizer, params=params,
+                    rudder_signal=rudder_signal)
+        channels = _flight_channels(model, raw)
+        (flown,) = fly_like(model.dynamics(channels), [start], step=step)
+    return distance_errors(flown, raw, ship.L)
+
+
+def _with_initial_state(raw: Trajectory, smoothed: Trajectory) -> Trajectory:
+    """The raw record with its first row's motion state taken from the smoothed record.
+
+    A flight starts from the first row; the smoother's estimate of the initial velocities is
+    better than one noisy sample (a single sample's yaw-rate noise can turn a course-unstable
+    model away from a straight run).  Everything else, and so the rudder programme and the
+    zig-zag detection, stays as recorded.
+    """
+    data = raw.data.copy()
+    for column in ("u", "v", "r", "x", "y", "psi"):
+        data.loc[data.index[0], column] = float(smoothed[column][0])
+    return Trajectory(data, name=raw.name, meta=dict(raw.meta))
+
+
+def _flight_channels(model, record: Trajectory) -> dict[str, float] | None:
+    """Extra library channels held at their record mean for a flight (None if none)."""
+    from ..library import nondimensional_variables
+
+    extra = sorted(set(model.library.channels) - {"psi"})
+    if not extra:
+        return None
+    values = nondimensional_variables(record, model.ship.L, model.ship.U0, needed=extra)
+    return {name: float(np.mean(values[name])) for name in extra}
+
+
+def _cv_scores(means: np.ndarray, failed: np.ndarray) -> np.ndarray:
+    """Geometric mean over folds of the held-out flight distance, per candidate.
+
+    ``means[i, k]`` is candidate i's mean distance on held-out record k.  A flight that
+    diverged counts as the worst complete flight of any candidate on that record (at least
+    its own distance before diverging); where every candidate diverged, the largest distance
+    before divergence.  The geometric mean weighs every held-out manoeuvre alike, whatever
+    its scale: a record whose flights all miss by tens of ship lengths (a straight run of a
+    course-unstable ship, where any model drifts) neither dominates nor decides the choice.
+    """
+    filled = np.where(failed | ~np.isfinite(means), np.nan, means)
+    worst = np.nanmax(np.where(np.isfinite(means), means, np.nan), axis=0, initial=0.0)
+    complete_worst = np.nanmax(filled, axis=0, initial=-np.inf)
+    penalty = np.where(np.isfinite(complete_worst), complete_worst, worst)
+    own = np.where(np.isfinite(means), means, 0.0)
+    values = np.where(failed | ~np.isfinite(means), np.maximum(penalty[None, :], own), means)
+    values = np.maximum(values, 1e-12)
+    return np.exp(np.mean(np.log(values), axis=1))
+
+
+def choose_smoothing(records: Sequence[Trajectory], ship: Ship,
+                     candidates: Iterable[SmoothingSetting | str] | None = None,
+                     optimizer: str = "ls", *, library="abkowitz", effects: Sequence[str] = (),
+                     params: dict | None = None, rudder_signal: str = "actual",
+                     n_jobs: int | None = None, step: float | None = None
+                     ) -> tuple[SmoothingSetting, pd.DataFrame]:
+    """The smoothing setting with the smallest leave-one-manoeuvre-out flight error.
+
+    Uses the training records only (module docstring): for every candidate and record, the
+    model is fitted on the other records smoothed with the candidate, then flown the way the
+    held-out record was flown (zig-zags closed loop) from its first row, and compared with
+    the held-out record's measured track.
+
+    Parameters
+    ----------
+    records : sequence of Trajectory
+        Training records (at least two); nothing else is used.
+    ship : Ship
+        The ship (L, U0, inertia, rudder servo).
+    candidates : iterable of SmoothingSetting or str, optional
+        Settings to compare (``"savgol:21"`` style text is accepted); default
+        :func:`default_candidates` of the ship (windows in ship time).
+    optimizer : str
+        Regression method of the folds (:func:`sindyship.optimizers.make_optimizer`).
+    library, effects, params, rudder_signal
+        As for :func:`sindyship.identify.fit`.
+    n_jobs : int, optional
+        joblib workers for the smoothing and the folds (``None``: joblib's default, one
+        unless inside a ``joblib.parallel_config`` block; ``-1``: every core).  The result does
+        not depend on it.
+    step : float, optional
+        Runge-Kutta step of the flights [s].
+
+    Returns
+    -------
+    best : SmoothingSetting
+        The candidate with the smallest score.
+    table : pandas.DataFrame
+        One row per candidate: ``setting``, ``method``, ``window_s``, ``order``, ``score_L``
+        (the geometric mean over held-out records of the flight's mean distance in ship
+        lengths, a diverged flight counting as the worst complete one on its record),
+        ``n_diverged``, one column per held-out record (its mean distance, over the samples
+        before any divergence) and ``chosen``.
+
+    Raises
+    ------
+    SindyshipInputError
+        For fewer than two records, no candidates, or a bad candidate.
+    """
+    from joblib import Parallel, delayed
+
+    from ..identify import resolve_library
+
+    records = list(records)
+    if len(records) < 2:
+        raise SindyshipInputError(
+            "choosing the smoothing by leave-one-manoeuvre-out cross-validation needs at "
+            f"least two training records, not {len(records)}."
+        )
+    settings = [_as_setting(c) for c in (default_candidates(ship) if candidates is None
+                                         else candidates)]
+    if not settings:
+        raise SindyshipInputError("give at least one smoothing candidate.")
+    names = [r.name or f"record {k}" for k, r in enumerate(records)]
+    lib = resolve_library(library, effects)
+
+    parallel = Parallel(n_jobs=n_jobs)
+    smoothed = parallel(delayed(smooth_records)(records, setting) for setting in settings)
+    folds = parallel(
+        delayed(_fold_task)(smoothed[i], records[k], k, ship, lib, optimizer, params,
+                            rudder_signal, step)
+        for i in range(len(settings)) for k in range(len(records))
+    )
+    n_rec = len(records)
+    means = np.array([[e["mean_distance_L"] for e in folds[i * n_rec:(i + 1) * n_rec]]
+                      for i in range(len(settings))])
+    failed = np.array([[e["diverged_at_s"] is not None or not math.isfinite(e["mean_distance_L"])
+                        for e in folds[i * n_rec:(i + 1) * n_rec]]
+                       for i in range(len(settings))])
+    score = _cv_scores(means, failed)
+    rows = []
+    for i, setting in enumerate(settings):
+        row = {"setting": setting.label, "method": setting.method,
+               "window_s": setting.window if setting.method != "none" else math.nan,
+               "order": setting.order if setting.method == "savgol" else math.nan,
+               "score_L": float(score[i]),
+               "n_diverged": int(failed[i].sum())}
+        row.update({name: float(means[i, k]) for k, name in enumerate(names)})
+        rows.append(row)
+    table = pd.DataFrame(rows)
+    best = int(np.argmin(np.where(np.isfinite(score), score, np.inf)))
+    table["chosen"] = False
+    table.loc[best, "chosen"] = True
+    return settings[best], table

@@ -1,0 +1,115 @@
+"""The README stays true: its generated blocks, its shell blocks and its pinned numbers."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text(encoding="utf-8")
+NUMBERS = json.loads((ROOT / "docs" / "readme-numbers.json").read_text(encoding="utf-8"))
+
+
+def _script():
+    path = ROOT / "scripts" / "make_readme.py"
+    spec = importlib.util.spec_from_file_location("make_readme", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_readme_blocks_are_what_the_saved_numbers_render_to():
+    assert _script().render(README, NUMBERS) == README, (
+        "README.md and docs/readme-numbers.json disagree: run python scripts/make_readme.py"
+    )
+
+
+def _shell_blocks() -> list[str]:
+    first_hour = README.split("## Your first hour", 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"```bash\n(.*?)```", first_hour, re.S)
+
+
+def test_the_first_hour_runs_as_written(tmp_path):
+    blocks = _shell_blocks()
+    assert len(blocks) >= 4
+    env = {**os.environ, "MPLBACKEND": "Agg", "PATH": f"{Path(sys.executable).parent}:"
+           + os.environ.get("PATH", "")}
+    for block in blocks:
+        done = subprocess.run(["bash", "-e", "-c", block], cwd=tmp_path, env=env,
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, f"{block}\n{done.stderr[-2000:]}"
+    assert (tmp_path / "equations.tex").exists() and (tmp_path / "kcs_model.py").exists()
+    assert len(list((tmp_path / "diagnosis").glob("*.png"))) > 10
+
+
+def test_the_python_example_runs(tmp_path):
+    (code,) = re.findall(r"```python\n(.*?)```", README, re.S)
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=600, env={**os.environ, "MPLBACKEND": "Agg"})
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "Verdict: add asymmetry" in done.stdout
+
+
+# ------------------------------------------------------------------ numbers pinned to the code
+def _row(method: str, effects=()):
+    return next(r for r in NUMBERS["table10"]
+                if r["method"] == method and r["effects"] == list(effects))
+
+
+@pytest.mark.parametrize("method", ["ls", "stlsq", "lasso", "svr"])
+def test_table_10_rows_are_pinned(method, kcs, protocol_runs):
+    from sindyship.evaluation import evaluate
+    from sindyship.identify import fit
+
+    model = fit(protocol_runs["train"], kcs, optimizer=method)
+    errors = evaluate(model, protocol_runs["test"])
+    for name, saved in _row(method)["errors"].items():
+        assert errors[name]["mean_distance_L"] == pytest.approx(saved["mean_distance_L"],
+                                                                rel=1e-6), name
+        assert errors[name]["completed"]
+
+
+def test_the_diagnosed_rows_are_pinned(kcs, protocol_runs):
+    from sindyship.evaluation import evaluate
+    from sindyship.identify import fit
+
+    for effects in (["asymmetry"], ["asymmetry", "higher_order"]):
+        model = fit(protocol_runs["train"], kcs, effects=effects)
+        errors = evaluate(model, protocol_runs["test"])
+        for name, saved in _row("ls", effects)["errors"].items():
+            assert errors[name]["mean_distance_L"] == pytest.approx(saved["mean_distance_L"],
+                                                                    rel=1e-6), (effects, name)
+
+
+def test_the_paper_agreement_is_pinned(kcs, protocol_runs):
+    from sindyship.identify import fit
+    from sindyship.paper import ls_agreement
+
+    agreement = ls_agreement(fit(protocol_runs["train"], kcs).coefficients)
+    saved = NUMBERS["paper_ls_agreement"]
+    assert agreement["median_rel_dev"] == pytest.approx(saved["median_rel_dev"], rel=1e-6)
+    assert agreement["sign_agreement"] == saved["sign_agreement"]
+
+
+def test_the_diagnosis_shares_are_pinned(kcs, protocol_runs):
+    from sindyship.diagnose import diagnose
+
+    result = diagnose(protocol_runs["train"], kcs, fly_training=False, confirm=0)
+    saved = {s["effect"]: s["explained"] for s in NUMBERS["diagnosis"][0]["ranking"]}
+    assert {s.effect.name: s.explained for s in result.ranking} == pytest.approx(saved,
+                                                                                 abs=1e-6)
+
+
+def test_the_kvlcc2_turns_are_pinned():
+    script = _script()
+    fresh = script._kvlcc2_turns()
+    for side, figures in NUMBERS["kvlcc2_turns_yy"].items():
+        for key in ("advance_L", "tactical_diameter_L"):
+            assert fresh[side][key] == pytest.approx(figures[key], rel=1e-6), (side, key)
