@@ -1424,7 +1424,7 @@ class Diagnosis:
         return "\n".join(lines)
 
     def to_json(self) -> dict:
-        """The JSON document of ``sindyship diagnose --json`` (DESIGN.md)."""
+        """The JSON document of ``sindyship diagnose --json`` (docs/command-line.md)."""
         return _clean(
             {
                 "ship": self.ship.name,
