@@ -4,7 +4,7 @@ Six records (turning circles at +-35 deg, zig-zags 10/10 and 20/20 to both sides
 tanker, tested at model scale 1:45.7 (Lpp 7.0 m) and converted by MARIN to full scale (Lpp
 320 m).  :func:`read_marin` returns them as :class:`~sindyship.trajectory.Trajectory` objects in
 sindyship's conventions, still at full scale; :func:`to_model_scale` Froude-scales a record to
-the model (the KVLCC2 parameters in DESIGN.md are those of the 7 m model).
+the model (the built-in kvlcc2 ship, docs/ship-toml.md, is the 7 m model).
 
 File format
 -----------

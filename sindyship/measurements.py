@@ -1,7 +1,7 @@
 """Measurement CSV: read, validate, convert to SI and write manoeuvre records.
 
 A measurement CSV has one header row of column names and one row per sample (the contract in
-DESIGN.md, "Measurement CSV").  Required columns are ``t, u, v, r, x, y, psi`` and at least one
+docs/measurement-csv.md).  Required columns are ``t, u, v, r, x, y, psi`` and at least one
 of ``delta`` (actual rudder angle) and ``delta_c`` (commanded rudder angle); any other named
 channel is kept.  A header may carry its unit in brackets, ``psi [deg]``; recognised units are
 converted to SI on load (see ``UNITS``), so a :class:`~sindyship.trajectory.Trajectory` always

@@ -2,7 +2,7 @@
 
 :func:`check_record` runs on the SI values of every record that
 :func:`sindyship.measurements.read_csv` and :func:`~sindyship.measurements.trajectory_from_frame`
-load (DESIGN.md, "Measurement CSV", "Plausibility on load").  Each check compares channels
+load (docs/measurement-csv.md).  Each check compares channels
 that must agree by kinematics alone, so a record in the wrong unit, axis or sign is refused
 with one sentence that names the source, the check, the numbers and the fix, instead of being
 fitted silently.  A check a user knows to be wrong for their data is switched off by name

@@ -1,6 +1,6 @@
 """Units of measurement-CSV headers: ``name [unit]`` parsed into a name and a factor to SI.
 
-A header may carry its unit in brackets, ``psi [deg]`` (DESIGN.md, "Measurement CSV").
+A header may carry its unit in brackets, ``psi [deg]`` (docs/measurement-csv.md).
 :data:`UNITS` lists the recognised spellings; the channels the contract names must carry a unit
 of their quantity (``psi`` an angle, ``u`` a speed, ...), other channels accept any recognised
 unit.  Used by :mod:`sindyship.measurements`.

@@ -17,7 +17,6 @@ import json
 import math
 import re
 import string
-import tempfile
 import tomllib
 from pathlib import Path
 
@@ -70,6 +69,15 @@ def assert_nothing_written(folder: Path, before: set[str]) -> None:
 
 
 @pytest.fixture(scope="module")
+def new_folder(tmp_path_factory):
+    """Make a fresh empty folder under pytest's temporary directory (nothing left in /tmp).
+
+    Module-scoped, so that hypothesis tests may use it: call it once per example.
+    """
+    return lambda: tmp_path_factory.mktemp("bad")
+
+
+@pytest.fixture(scope="module")
 def good_csv(tmp_path_factory) -> str:
     """A valid measurement CSV (a 120 s zig-zag 20/20 of the KCS) as text."""
     path = tmp_path_factory.mktemp("good") / "zigzag.csv"
@@ -96,9 +104,8 @@ def join(header: list[str], body: list[list[str]]) -> str:
     return "\n".join([",".join(header)] + [",".join(r) for r in body]) + "\n"
 
 
-def fit_csv(text: str, *extra: str) -> tuple[int, str, str, Path]:
-    """Write ``text`` as data.csv in a fresh folder and run ``fit data.csv --json``."""
-    folder = Path(tempfile.mkdtemp(prefix="sindyship-bad-"))
+def fit_csv(folder: Path, text: str, *extra: str) -> tuple[int, str, str, Path]:
+    """Write ``text`` as data.csv in the empty ``folder`` and run ``fit data.csv --json``."""
     path = folder / "data.csv"
     path.write_text(text)
     before = {p.name for p in folder.iterdir()}
@@ -121,12 +128,12 @@ def is_number(text: str) -> bool:
 # ---------------------------------------------------------------------------------------------
 @PROPERTY
 @given(drop=st.sampled_from(REQUIRED + ("delta+delta_c",)))
-def test_csv_missing_column(good_csv, drop):
+def test_csv_missing_column(new_folder, good_csv, drop):
     header, body = rows(good_csv)
     gone = drop.split("+")
     keep = [i for i, h in enumerate(header) if h not in gone]
     text = join([header[i] for i in keep], [[r[i] for i in keep] for r in body])
-    code, out, err, path = fit_csv(text)
+    code, out, err, path = fit_csv(new_folder(), text)
     named = "'delta' or 'delta_c'" if len(gone) == 2 else f"'{drop}'"
     assert_one_line(code, out, err, 2, str(path), "missing column", named)
 
@@ -141,12 +148,12 @@ BAD_TOKENS = st.one_of(
 
 @PROPERTY
 @given(data=st.data(), token=BAD_TOKENS)
-def test_csv_bad_cell_names_column_and_row(good_csv, data, token):
+def test_csv_bad_cell_names_column_and_row(new_folder, good_csv, data, token):
     header, body = rows(good_csv)
     column = data.draw(st.integers(0, len(header) - 1), label="column")
     row = data.draw(st.integers(0, len(body) - 1), label="row")
     body[row][column] = token
-    code, out, err, path = fit_csv(join(header, body))
+    code, out, err, path = fit_csv(new_folder(), join(header, body))
     assert_one_line(code, out, err, 2, str(path), f"'{header[column]}'",
                     f"row {row + 2} (counting the header as row 1)")
     assert ("NaN" in err) or ("infinite" in err) or ("empty cell" in err) or \
@@ -155,33 +162,33 @@ def test_csv_bad_cell_names_column_and_row(good_csv, data, token):
 
 @PROPERTY
 @given(data=st.data(), back=st.sampled_from([0.0, 0.5, 1.0, 7.0, 1e6]))
-def test_csv_time_that_repeats_or_goes_back(good_csv, data, back):
+def test_csv_time_that_repeats_or_goes_back(new_folder, good_csv, data, back):
     header, body = rows(good_csv)
     row = data.draw(st.integers(1, len(body) - 1), label="row")
     body[row][0] = repr(float(body[row - 1][0]) - back)
-    code, out, err, path = fit_csv(join(header, body))
+    code, out, err, path = fit_csv(new_folder(), join(header, body))
     kind = "repeats" if back == 0.0 else "goes back"
     assert_one_line(code, out, err, 2, str(path), "'t'", kind, f"row {row + 2}")
 
 
 @PROPERTY
 @given(data=st.data(), factor=st.sampled_from([1.5, 3.0, 0.2]))
-def test_csv_irregular_sampling(good_csv, data, factor):
+def test_csv_irregular_sampling(new_folder, good_csv, data, factor):
     header, body = rows(good_csv)
     row = data.draw(st.integers(1, len(body) - 2), label="row")
     t_prev, t_next = float(body[row - 1][0]), float(body[row + 1][0])
     body[row][0] = repr(t_prev + factor * 0.5 * (t_next - t_prev) if factor < 1
                         else t_prev + 0.5 * (t_next - t_prev) * min(factor, 1.9))
-    code, out, err, path = fit_csv(join(header, body))
+    code, out, err, path = fit_csv(new_folder(), join(header, body))
     assert_one_line(code, out, err, 2, str(path), "irregular", "--resample")
 
 
 @PROPERTY
 @given(keep=st.integers(0, 1), blank_lines=st.integers(0, 3), header=st.booleans())
-def test_csv_empty_or_one_row(good_csv, keep, blank_lines, header):
+def test_csv_empty_or_one_row(new_folder, good_csv, keep, blank_lines, header):
     lines = good_csv.split("\n")
     text = "\n".join((lines[:1 + keep] if header else []) + [""] * blank_lines)
-    code, out, err, path = fit_csv(text)
+    code, out, err, path = fit_csv(new_folder(), text)
     assert_one_line(code, out, err, 2, str(path))
     assert re.search(r"empty|no data rows|only one data row", err)
 
@@ -192,12 +199,12 @@ LIMITS = {"u": 100.0, "v": 100.0, "r": 0.5, "delta": 1.0, "delta_c": 1.0}
 @PROPERTY
 @given(data=st.data(), column=st.sampled_from(sorted(LIMITS)),
        magnitude=st.floats(1.01, 1e300), negative=st.booleans())
-def test_csv_huge_values(good_csv, data, column, magnitude, negative):
+def test_csv_huge_values(new_folder, good_csv, data, column, magnitude, negative):
     header, body = rows(good_csv)
     row = data.draw(st.integers(0, len(body) - 1), label="row")
     value = LIMITS[column] * magnitude * (-1 if negative else 1)
     body[row][header.index(column)] = repr(value)
-    code, out, err, path = fit_csv(join(header, body))
+    code, out, err, path = fit_csv(new_folder(), join(header, body))
     assert_one_line(code, out, err, 2, str(path), f"'{column}'", f"row {row + 2}", "beyond")
 
 
@@ -209,30 +216,30 @@ WRONG_QUANTITY = {"psi": "m/s", "u": "deg", "r": "m", "x": "rad/s", "t": "kn", "
 @PROPERTY
 @given(column=st.sampled_from(sorted(WRONG_QUANTITY)), unit=st.one_of(UNKNOWN_UNITS,
                                                                        st.just(None)))
-def test_csv_wrong_units(good_csv, column, unit):
+def test_csv_wrong_units(new_folder, good_csv, column, unit):
     header, body = rows(good_csv)
     index = header.index(column)
     header[index] = f"{column} [{unit if unit is not None else WRONG_QUANTITY[column]}]"
-    code, out, err, path = fit_csv(join(header, body))
+    code, out, err, path = fit_csv(new_folder(), join(header, body))
     assert_one_line(code, out, err, 2, str(path), f"'{header[index]}'")
     assert ("unknown unit" in err) if unit is not None else ("gives a unit of" in err)
 
 
-def test_csv_degrees_in_a_radian_column(good_csv):
+def test_csv_degrees_in_a_radian_column(new_folder, good_csv):
     header, body = rows(good_csv)
     for column in ("delta", "delta_c"):
         k = header.index(column)
         for r in body:
             r[k] = repr(math.degrees(float(r[k])))
-    code, out, err, path = fit_csv(join(header, body))
+    code, out, err, path = fit_csv(new_folder(), join(header, body))
     assert_one_line(code, out, err, 2, str(path), "'delta", "look like degrees", "[deg]")
 
 
 @PROPERTY
 @given(junk=st.binary(min_size=1, max_size=200))
-def test_csv_arbitrary_bytes(junk):
+def test_csv_arbitrary_bytes(new_folder, junk):
     """Any bytes at all: status 0 is impossible, status 2 with one line is the answer."""
-    folder = Path(tempfile.mkdtemp(prefix="sindyship-bad-"))
+    folder = new_folder()
     path = folder / "junk.csv"
     path.write_bytes(junk)
     code, out, err = run_cli(["fit", path, "--out", folder / "m.json", "--json"])
@@ -243,8 +250,8 @@ def test_csv_arbitrary_bytes(junk):
 # ---------------------------------------------------------------------------------------------
 # term libraries
 # ---------------------------------------------------------------------------------------------
-def fit_library(good_csv: str, library_text: str) -> tuple[int, str, str, Path, Path]:
-    folder = Path(tempfile.mkdtemp(prefix="sindyship-bad-"))
+def fit_library(folder: Path, good_csv: str, library_text: str
+                ) -> tuple[int, str, str, Path, Path]:
     (folder / "data.csv").write_text(good_csv)
     library = folder / "lib.toml"
     library.write_text(library_text)
@@ -272,12 +279,12 @@ MALFORMED_TERMS = st.one_of(
 
 @PROPERTY
 @given(term=MALFORMED_TERMS, position=st.integers(1, 15))
-def test_library_malformed_term_names_file_line_and_term(good_csv, term, position):
+def test_library_malformed_term_names_file_line_and_term(new_folder, good_csv, term, position):
     """Whatever replaces a term, the answer is a fit or one line (never status 1); a term
     the grammar refuses is named with its file and line."""
     old = f'"{LIBRARY.split("X = [")[1].split(chr(34))[2 * position - 1]}"'
     text = LIBRARY.replace("X = [", "X = [\n", 1).replace(old, toml_string(term), 1)
-    code, out, err, library, _ = fit_library(good_csv, text)
+    code, out, err, library, _ = fit_library(new_folder(), good_csv, text)
     try:
         parse_term(term)
         valid = True
@@ -294,9 +301,9 @@ def test_library_malformed_term_names_file_line_and_term(good_csv, term, positio
 
 @PROPERTY
 @given(cut=st.integers(0, len(LIBRARY) - 1))
-def test_library_truncated(good_csv, cut):
+def test_library_truncated(new_folder, good_csv, cut):
     text = LIBRARY[:cut]
-    code, out, err, library, _ = fit_library(good_csv, text)
+    code, out, err, library, _ = fit_library(new_folder(), good_csv, text)
     if code == 0:  # only a cut in the trailing comments or blank lines leaves the library whole
         assert tomllib.loads(text) == tomllib.loads(LIBRARY)
         return
@@ -305,8 +312,8 @@ def test_library_truncated(good_csv, cut):
 
 @PROPERTY
 @given(position=st.integers(0, len(LIBRARY)), junk=st.text(min_size=1, max_size=3))
-def test_library_with_a_stray_character(good_csv, position, junk):
-    code, out, err, library, _ = fit_library(good_csv, LIBRARY[:position] + junk
+def test_library_with_a_stray_character(new_folder, good_csv, position, junk):
+    code, out, err, library, _ = fit_library(new_folder(), good_csv, LIBRARY[:position] + junk
                                              + LIBRARY[position:])
     assert code in (0, 2), err
     if code == 2:
@@ -324,14 +331,14 @@ def test_library_with_a_stray_character(good_csv, position, junk):
     (lambda t: t.split("[terms]")[0], "[terms]"),
     (lambda t: t.replace('"du^2", "v^2"', '"du^2", "du^2"', 1), "repeats a term"),
 ])
-def test_library_format_errors(good_csv, edit, fragment):
-    code, out, err, library, _ = fit_library(good_csv, edit(LIBRARY))
+def test_library_format_errors(new_folder, good_csv, edit, fragment):
+    code, out, err, library, _ = fit_library(new_folder(), good_csv, edit(LIBRARY))
     assert_one_line(code, out, err, 2, str(library), fragment)
 
 
-def test_library_unknown_variable_names_file_and_term(good_csv):
+def test_library_unknown_variable_names_file_and_term(new_folder, good_csv):
     text = LIBRARY.replace('"v^2"', '"w^2"', 1)
-    code, out, err, library, _ = fit_library(good_csv, text)
+    code, out, err, library, _ = fit_library(new_folder(), good_csv, text)
     assert_one_line(code, out, err, 2, str(library), '"w^2"', '"w"')
 
 
@@ -353,7 +360,7 @@ PAYLOADS = [
 
 @pytest.mark.parametrize("where", ["term", "name", "description", "system", "key", "dof"])
 @pytest.mark.parametrize("payload", PAYLOADS)
-def test_library_never_executes_code(good_csv, tmp_path, payload, where):
+def test_library_never_executes_code(new_folder, good_csv, tmp_path, payload, where):
     sentinel = tmp_path / "SENTINEL"
     code_text = payload.format(s=sentinel)
     quoted = toml_string(code_text)
@@ -366,7 +373,7 @@ def test_library_never_executes_code(good_csv, tmp_path, payload, where):
         "key": lambda: LIBRARY.replace("[terms]", f"{quoted} = 1\n[terms]", 1),
         "dof": lambda: LIBRARY.replace("[terms]", f'[terms]\n{quoted} = ["v"]', 1),
     }[where]()
-    code, out, err, library, _ = fit_library(good_csv, text)
+    code, out, err, library, _ = fit_library(new_folder(), good_csv, text)
     assert not sentinel.exists()
     assert code in (0, 2), err
     if code == 2:
@@ -378,13 +385,11 @@ def test_library_never_executes_code(good_csv, tmp_path, payload, where):
     ["__import__", "('os')", ".system", "('touch SENTINEL')", "eval", "exec", "(", ")", ";",
      "lambda", ":", "open", "[", "]", "'", '"', "\\", "v", " ", "^2", "`", "$", "{", "}",
      "os", ".", "import", "\n"]), min_size=1, max_size=12))
-def test_library_random_code_fragments_never_run(good_csv, fragments):
-    text = "".join(fragments).replace("SENTINEL", str(Path(tempfile.gettempdir())
-                                                        / "sindyship-SENTINEL"))
-    sentinel = Path(tempfile.gettempdir()) / "sindyship-SENTINEL"
-    sentinel.unlink(missing_ok=True)
-    code, out, err, library, _ = fit_library(good_csv, LIBRARY.replace('"v^2"', toml_string(text),
-                                                                       1))
+def test_library_random_code_fragments_never_run(new_folder, good_csv, fragments):
+    sentinel = new_folder() / "sindyship-SENTINEL"
+    text = "".join(fragments).replace("SENTINEL", str(sentinel))
+    library_text = LIBRARY.replace('"v^2"', toml_string(text), 1)
+    code, out, err, library, _ = fit_library(new_folder(), good_csv, library_text)
     assert not sentinel.exists()
     assert code in (0, 2), err
     if code == 2:
@@ -394,8 +399,8 @@ def test_library_random_code_fragments_never_run(good_csv, fragments):
 # ---------------------------------------------------------------------------------------------
 # saved models
 # ---------------------------------------------------------------------------------------------
-def evaluate_model(good_csv: str, model_text: str | bytes) -> tuple[int, str, str, Path]:
-    folder = Path(tempfile.mkdtemp(prefix="sindyship-bad-"))
+def evaluate_model(folder: Path, good_csv: str, model_text: str | bytes
+                   ) -> tuple[int, str, str, Path]:
     (folder / "data.csv").write_text(good_csv)
     model = folder / "model.json"
     if isinstance(model_text, bytes):
@@ -408,18 +413,18 @@ def evaluate_model(good_csv: str, model_text: str | bytes) -> tuple[int, str, st
 
 @PROPERTY
 @given(fraction=st.floats(0.0, 0.999))
-def test_model_truncated(good_csv, saved_model, fraction):
-    code, out, err, model = evaluate_model(good_csv, saved_model[: int(fraction
+def test_model_truncated(new_folder, good_csv, saved_model, fraction):
+    code, out, err, model = evaluate_model(new_folder(), good_csv, saved_model[: int(fraction
                                                                        * len(saved_model))])
     assert_one_line(code, out, err, 2, str(model))
 
 
 @PROPERTY
 @given(version=st.integers(2, 10**9))
-def test_model_from_a_newer_version(good_csv, saved_model, version):
+def test_model_from_a_newer_version(new_folder, good_csv, saved_model, version):
     data = json.loads(saved_model)
     data["format_version"] = version
-    code, out, err, model = evaluate_model(good_csv, json.dumps(data))
+    code, out, err, model = evaluate_model(new_folder(), good_csv, json.dumps(data))
     assert_one_line(code, out, err, 2, str(model), "newer", str(version))
 
 
@@ -445,7 +450,7 @@ def json_paths(node, prefix=()):
 
 @PROPERTY
 @given(data=st.data(), value=JSON_VALUES)
-def test_model_edited_by_hand(good_csv, saved_model, data, value):
+def test_model_edited_by_hand(new_folder, good_csv, saved_model, data, value):
     """Any value anywhere replaced: the model loads and flies, or one line names the file."""
     document = json.loads(saved_model)
     paths = [p for p in json_paths(document) if p]
@@ -454,7 +459,7 @@ def test_model_edited_by_hand(good_csv, saved_model, data, value):
     for key in path[:-1]:
         node = node[key]
     node[path[-1]] = value
-    code, out, err, model = evaluate_model(good_csv, json.dumps(document))
+    code, out, err, model = evaluate_model(new_folder(), good_csv, json.dumps(document))
     assert code in (0, 2), err
     if code == 2:
         assert_one_line(code, out, err, 2, str(model))
@@ -471,18 +476,17 @@ def test_model_edited_by_hand(good_csv, saved_model, data, value):
     lambda d: d.update(ship="titanic"),
     lambda d: d.update(format_version=True),
 ])
-def test_model_edits_name_the_file(good_csv, saved_model, edit):
+def test_model_edits_name_the_file(new_folder, good_csv, saved_model, edit):
     document = json.loads(saved_model)
     edit(document)
-    code, out, err, model = evaluate_model(good_csv, json.dumps(document))
+    code, out, err, model = evaluate_model(new_folder(), good_csv, json.dumps(document))
     assert_one_line(code, out, err, 2, str(model))
 
 
 # ---------------------------------------------------------------------------------------------
 # ship files
 # ---------------------------------------------------------------------------------------------
-def fit_ship(good_csv: str, ship_text: str) -> tuple[int, str, str, Path]:
-    folder = Path(tempfile.mkdtemp(prefix="sindyship-bad-"))
+def fit_ship(folder: Path, good_csv: str, ship_text: str) -> tuple[int, str, str, Path]:
     (folder / "data.csv").write_text(good_csv)
     ship = folder / "ship.toml"
     ship.write_text(ship_text)
@@ -496,8 +500,8 @@ def fit_ship(good_csv: str, ship_text: str) -> tuple[int, str, str, Path]:
 
 @PROPERTY
 @given(cut=st.integers(0, len(SHIP) - 1))
-def test_ship_truncated(good_csv, cut):
-    code, out, err, ship = fit_ship(good_csv, SHIP[:cut])
+def test_ship_truncated(new_folder, good_csv, cut):
+    code, out, err, ship = fit_ship(new_folder(), good_csv, SHIP[:cut])
     assert code in (0, 2), err
     if code == 2:
         assert_one_line(code, out, err, 2, str(ship))
@@ -511,13 +515,13 @@ TOML_VALUES = st.sampled_from(['"abc"', "-1.0", "0.0", "[1, 2]", "true", "{a = 1
 
 @PROPERTY
 @given(key=st.sampled_from(SHIP_KEYS), value=TOML_VALUES)
-def test_ship_value_edited(good_csv, key, value):
+def test_ship_value_edited(new_folder, good_csv, key, value):
     """A value of any type anywhere: a fit or one line naming the file, never status 1."""
     lines = SHIP.splitlines()
     index = next(i for i, line in enumerate(lines) if line.split("=")[0].strip() == key
                  and "=" in line)
     lines[index] = f"{key} = {value}"
-    code, out, err, ship = fit_ship(good_csv, "\n".join(lines) + "\n")
+    code, out, err, ship = fit_ship(new_folder(), good_csv, "\n".join(lines) + "\n")
     assert code in (0, 2), err
     if code == 2:
         assert_one_line(code, out, err, 2, str(ship))
@@ -525,11 +529,11 @@ def test_ship_value_edited(good_csv, key, value):
 
 @pytest.mark.parametrize("key, value", [("L", "-230.0"), ("X_0", '"abc"'), ("X_udot", "inf"),
                                         ("Y_vdot", "nan"), ("D_P", "0.0"), ("m", "-1.0")])
-def test_ship_impossible_values_are_refused(good_csv, key, value):
+def test_ship_impossible_values_are_refused(new_folder, good_csv, key, value):
     lines = SHIP.splitlines()
     index = next(i for i, line in enumerate(lines) if line.split("=")[0].strip() == key)
     lines[index] = f"{key} = {value}"
-    code, out, err, ship = fit_ship(good_csv, "\n".join(lines) + "\n")
+    code, out, err, ship = fit_ship(new_folder(), good_csv, "\n".join(lines) + "\n")
     assert_one_line(code, out, err, 2, str(ship), key)
 
 
@@ -613,9 +617,9 @@ def test_no_blanket_except_hides_real_failures():
     assert offenders == {}
 
 
-def test_generated_output_is_strict_json(good_csv, saved_model):
+def test_generated_output_is_strict_json(new_folder, good_csv, saved_model):
     """--json output is strict JSON (no NaN): parse it with a parser that refuses NaN."""
-    code, out, err, _ = evaluate_model(good_csv, saved_model)
+    code, out, err, _ = evaluate_model(new_folder(), good_csv, saved_model)
     assert code == 0, err
 
     def refuse(name):

@@ -365,6 +365,7 @@ def test_binned_residuals_cover_every_sample(kcs_rounds):
 
 
 # ------------------------------------------------------------------------ (4) real data
+@pytest.mark.marin
 def test_kvlcc2_marin_zigzags_diagnosed_and_turning_circles_flown(kvlcc2_marin):
     result, top = kvlcc2_marin
     assert {n.effect.name for n in result.not_testable} == {"wind", "shallow_water"}

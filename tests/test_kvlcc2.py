@@ -30,6 +30,7 @@ def test_kvlcc2_turns_from_the_yasukawa_yoshimura_condition():
     assert figures["tc35_stbd"]["tactical_diameter_L"] == pytest.approx(2.76, abs=0.02)
 
 
+@pytest.mark.marin
 @pytest.mark.skipif(default_marin_dir() is None, reason="the MARIN measurements are not here")
 def test_kvlcc2_turns_beside_marin_measurements():
     folder = default_marin_dir()

@@ -168,7 +168,14 @@ def test_model_scale_is_froude_scaled(tmp_path):
 # --- the real files ----------------------------------------------------------------------------
 
 MARIN_DIR = default_marin_dir()
-needs_data = pytest.mark.skipif(MARIN_DIR is None, reason="MARIN KVLCC2 data folder absent")
+
+
+def needs_data(test):
+    """Mark a test that reads the MARIN files: it skips without them (see conftest.py)."""
+    skip = pytest.mark.skipif(MARIN_DIR is None, reason="MARIN KVLCC2 data folder absent")
+    return pytest.mark.marin(skip(test))
+
+
 SAMPLES = {"tc_35": 15288, "tc_-35": 15753, "zz_10": 3844, "zz_-10": 4177, "zz_20": 4481,
            "zz_-20": 5057}  # fmt: skip
 EXECUTE = {"tc_35": 31, "tc_-35": 50, "zz_10": 56, "zz_-10": 31, "zz_20": 52, "zz_-20": 55}

@@ -189,7 +189,7 @@ class Diagnosis:
         return save_diagnosis_figures(self, out_dir, progress=progress)
 
     def to_json(self) -> dict:
-        """The JSON document of ``sindyship diagnose --json`` (DESIGN.md)."""
+        """The JSON document of ``sindyship diagnose --json`` (docs/command-line.md)."""
         return clean_json(
             {
                 "ship": self.ship.name,
