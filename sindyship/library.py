@@ -868,9 +868,31 @@ class AbkowitzFeatureLibrary(BaseFeatureLibrary):
         return out
 
     def get_feature_names(self, input_features: Sequence[str] | None = None) -> list[str]:
-        """The term texts (the coefficient keys); ``input_features`` is not used.
+        """The term texts (the coefficient keys), checked against pysindy's input names.
 
-        pysindy passes its own input names here; the terms already name their variables,
-        and their text is the key of their coefficient, so it is kept as written.
+        The library binds its input columns by ``input_names``; pysindy passes the names it
+        gives the same columns (``SINDy.fit(..., feature_names=...)``) as ``input_features``.
+        When they disagree the library would label its terms with the wrong variables, so it
+        refuses (pysindy's default names ``x0, x1, ..., u0, ...`` name no variable and pass).
+
+        Raises
+        ------
+        sklearn.exceptions.NotFittedError
+            Before :meth:`fit`.
+        ValueError
+            When ``input_features`` are not ``input_names`` in the same order.
         """
-        return [str(t) for t in self.terms]
+        check_is_fitted(self)
+        if input_features is not None:
+            given, expected = [str(n) for n in input_features], [str(n) for n in self.input_names]
+            if given != expected and not all(re.fullmatch(r"[xu]\d+", n) for n in given):
+                missing = sorted(set(expected) - set(given))
+                extra = sorted(set(given) - set(expected))
+                what = (f"missing {missing}" if missing else "") + (
+                    f"{'; ' if missing else ''}unknown {extra}" if extra else "")
+                raise ValueError(
+                    f"the input columns are named {given} but the library binds them as "
+                    f"{expected} ({what or 'another order'}); pass input_names in the order of "
+                    "the columns (state, then control) or the same feature_names to SINDy."
+                )
+        return [str(t) for t in self.terms_]

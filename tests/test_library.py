@@ -554,3 +554,39 @@ def test_feature_library_checks_its_inputs(rng):
     lib = AbkowitzFeatureLibrary(terms=("v",)).fit(np.ones((4, 4)))
     with pytest.raises(ValueError, match="input columns"):
         lib.transform(np.ones((4, 3)))
+
+
+# ------------------------------------------------------- pysindy: names bound, never mislabelled
+def test_feature_names_before_fit_raise_not_fitted():
+    from sklearn.exceptions import NotFittedError
+
+    with pytest.raises(NotFittedError):
+        AbkowitzFeatureLibrary(terms=("v",), input_names=("v",)).get_feature_names()
+
+
+def _permuted_fit(input_names):
+    import pysindy as ps
+
+    rng = np.random.default_rng(3)
+    t = np.arange(400.0) * 0.1
+    du, v, r = rng.normal(size=(3, 400)) * 0.1
+    x = np.column_stack([v, r, du])  # columns ordered [v, r, du]
+    x_dot = np.column_stack([2.0 * v, 0.0 * v, 0.0 * v])  # d/dt of the first column is 2 v
+    model = ps.SINDy(optimizer=ps.STLSQ(threshold=0.01),
+                     feature_library=AbkowitzFeatureLibrary(terms=("du", "v", "r"),
+                                                            input_names=input_names))
+    model.fit(x, t=t, x_dot=x_dot, feature_names=["v", "r", "du"])
+    return model
+
+
+def test_a_permuted_column_order_prints_the_right_names():
+    model = _permuted_fit(("v", "r", "du"))
+    equations = model.equations()
+    assert equations[0].strip() == "2.000 v"
+    assert model.get_feature_names() == ["du", "v", "r"]
+
+
+def test_a_library_bound_in_another_order_refuses_to_print_wrong_names():
+    model = _permuted_fit(("du", "v", "r"))
+    with pytest.raises(ValueError, match=r"the input columns are named \['v', 'r', 'du'\]"):
+        model.equations()
