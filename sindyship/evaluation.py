@@ -3,8 +3,11 @@
 A record is recognised as a zig-zag when its commanded rudder (else its rudder) takes values
 +-A (|A| >= 1 deg, spread <= 0.5 deg) with at least two reversals, each at a sample where
 |psi - psi(0)| is within 1 deg of a common check angle C; it is then flown closed loop with A
-and C rounded to 0.1 deg and the recorded first rudder sign (replaying a zig-zag's rudder
-open loop is not a zig-zag test: small heading errors grow without bound).  Any other record
+and C rounded to 0.1 deg and the recorded first rudder sign.  A logged zig-zag (a manual
+lead-in, plateaus a degree or two off nominal: :func:`sindyship.trials.recognise_zigzag`) is
+flown from its execute, as a zig-zag test is defined (:func:`from_execute`; replaying a
+zig-zag's rudder open loop is not a zig-zag test: small heading errors grow without bound).
+Any other record
 replays its commanded rudder through the servo, or its actual rudder directly if that is all
 it has.  Every flight starts from the record's first row.
 """
@@ -13,11 +16,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .manoeuvres import result_to_trajectory
-from .simulation import PrescribedRudder, StepCommand, ZigZagCommand, simulate_batch
+from .simulation import (
+    PrescribedRudder,
+    StepCommand,
+    ZigZagCommand,
+    simulate_batch,
+)
 from .trajectory import Trajectory
 
 
@@ -71,12 +80,59 @@ def _check_angle(low: float, high: float) -> float:
     return round(0.5 * (low + high), 1)
 
 
+@dataclass
+class RecordedZigZag(ZigZagCommand):
+    """A closed-loop zig-zag whose legs hold the rudder angles a logged trial held.
+
+    The reversals come from the flight's own heading at the check angle, as in any zig-zag;
+    leg k holds ``levels[k]`` (the last one thereafter), so plateaus a degree off the nominal
+    angle are flown as they were steered.
+    """
+
+    levels: tuple[float, ...] = ()
+    _leg: int = field(default=0, init=False, repr=False)
+
+    def reset(self, state0):
+        super().reset(state0)
+        self._leg = 0
+
+    def value(self, t, state):
+        if not self.levels:
+            return super().value(t, state)
+        return self._sign * self.levels[min(self._leg, len(self.levels) - 1)]
+
+    def on_event(self):
+        super().on_event()
+        self._leg += 1
+
+
+def recognised_zigzag(record: Trajectory) -> tuple[float, float, int, float] | None:
+    """``(rudder_deg, check_deg, first_sign, execute_time)`` of a zig-zag record, else None.
+
+    The strict recognition (:func:`detect_zigzag`, a zig-zag from the first row) first, then
+    the tolerant one of logged trials (:func:`sindyship.trials.recognise_zigzag`: a manual
+    lead-in, plateaus a degree or two off the nominal angle).
+    """
+    strict = detect_zigzag(record)
+    if strict is not None:
+        return (*strict, float(record.t[0]))
+    from .trials import recognise_zigzag
+
+    found = recognise_zigzag(record)
+    return None if found is None else tuple(found)
+
+
 def command_for(record: Trajectory):
     """The rudder command that re-flies a record (see the module docstring)."""
-    zigzag = detect_zigzag(record)
+    zigzag = recognised_zigzag(record)
     if zigzag is not None:
-        rudder, check, first = zigzag
-        return ZigZagCommand(math.radians(rudder), math.radians(check), first)
+        rudder, check, first, _ = zigzag
+        if detect_zigzag(record) is not None:
+            return ZigZagCommand(math.radians(rudder), math.radians(check), first)
+        from .trials import zigzag_levels
+
+        levels = tuple(math.radians(abs(level)) for level in zigzag_levels(record))
+        return RecordedZigZag(math.radians(rudder), math.radians(check), first, levels=levels)
     if record.has("delta_c"):
         return StepCommand(record.t, record["delta_c"])
     return PrescribedRudder(record.t, record["delta"])
@@ -222,17 +278,34 @@ def flown_as(record: Trajectory) -> dict:
         zig-zag (closed loop), else ``{"flown_as": "replay-commanded"}`` (the commanded rudder
         through the servo) or ``{"flown_as": "replay-actual"}`` (the recorded actual rudder).
     """
-    zigzag = detect_zigzag(record)
+    zigzag = recognised_zigzag(record)
     if zigzag is not None:
-        return {"flown_as": "zigzag", "amplitude_deg": zigzag[0], "check_deg": zigzag[1]}
+        out = {"flown_as": "zigzag", "amplitude_deg": zigzag[0], "check_deg": zigzag[1]}
+        if zigzag[3] > record.t[0] + 1e-9:
+            out["execute_s"] = zigzag[3]
+        return out
     return {"flown_as": "replay-commanded" if record.has("delta_c") else "replay-actual"}
+
+
+def from_execute(record: Trajectory) -> Trajectory:
+    """A zig-zag record from its execute on (a manual lead-in cut off); any other record as is."""
+    zigzag = recognised_zigzag(record)
+    if zigzag is None or zigzag[3] <= record.t[0] + 1e-9:
+        return record
+    from .trials import trim
+
+    return trim(record, (zigzag[3], float(record.t[-1])))
 
 
 def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None) -> dict:
     """Fly a model like each record and report the Table-10 distances per record name.
 
-    Each entry is :func:`distance_errors` plus :func:`flown_as`.
+    Zig-zags are flown from their execute (:func:`from_execute`).  Each entry is
+    :func:`distance_errors` plus :func:`flown_as` (with ``execute_s`` where a lead-in was cut).
     """
-    flown = fly_like_batch(model.dynamics(), records, step=step)
-    return {rec.name: {**distance_errors(f, rec, model.ship.L), **flown_as(rec)}
-            for f, rec in zip(flown, records, strict=True)}
+    cut = [from_execute(record) for record in records]
+    flown = fly_like_batch(model.dynamics(), cut, step=step)
+    out = {}
+    for rec, short, f in zip(records, cut, flown, strict=True):
+        out[rec.name] = {**distance_errors(f, short, model.ship.L), **flown_as(rec)}
+    return out

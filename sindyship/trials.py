@@ -46,6 +46,7 @@ __all__ = [
     "ZigZag",
     "explain_zigzag",
     "recognise_zigzag",
+    "zigzag_levels",
     "trim",
     "underway_window",
 ]
@@ -222,12 +223,24 @@ def recognise_zigzag(record: Trajectory) -> ZigZag | None:
     return explain_zigzag(record)[0]
 
 
+def zigzag_levels(record: Trajectory) -> tuple[float, ...]:
+    """The rudder angles [deg] the recognised zig-zag held, plateau by plateau (signed), or ()
+    when the record is no zig-zag: a logged zig-zag is flown with the angles it held."""
+    return _recognise(record)[1]
+
+
 def explain_zigzag(record: Trajectory) -> tuple[ZigZag | None, str]:
     """The recognised zig-zag (or None) and a sentence saying what was found or missing."""
+    zigzag, _, reason = _recognise(record)
+    return zigzag, reason
+
+
+def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], str]:
+    """The zig-zag, the levels of its plateaus and the sentence of :func:`explain_zigzag`."""
     command = np.degrees(record["delta_c"] if record.has("delta_c") else record.rudder)
     holds = _holds(command)
     if not holds:
-        return None, (f"the rudder never holds an angle of at least 1 deg for "
+        return None, (), (f"the rudder never holds an angle of at least 1 deg for "
                       f"{HOLD_SAMPLES} samples")
     largest = max(abs(level) for _, _, level in holds)
     amplitude = float(np.median([abs(level) for _, _, level in holds
@@ -235,7 +248,7 @@ def explain_zigzag(record: Trajectory) -> tuple[ZigZag | None, str]:
     plateaus = [h for h in holds if abs(abs(h[2]) - amplitude) <= PLATEAU_SPREAD]
     chain = _longest_alternation(plateaus)
     if len(chain) < 3:
-        return None, (f"the rudder holds no run of three or more alternating angles near "
+        return None, (), (f"the rudder holds no run of three or more alternating angles near "
                       f"+-{amplitude:.1f} deg (longest: {len(chain)})")
     first_sign = int(np.sign(chain[0][2]))
     start = _ramp_start(command, chain[0][0], first_sign)
@@ -244,15 +257,16 @@ def explain_zigzag(record: Trajectory) -> tuple[ZigZag | None, str]:
     at = np.abs(psi[reversals])
     before = np.abs(psi[np.maximum(np.array(reversals) - 1, 0)])
     if np.ptp(at) > CHECK_SPREAD:
-        return None, (f"the heading change at the {len(reversals)} rudder reversals spreads "
+        return None, (), (f"the heading change at the {len(reversals)} rudder reversals spreads "
                       f"over {np.ptp(at):.1f} deg (more than {CHECK_SPREAD:g}): no common "
                       "check angle")
     levels = [abs(h[2]) for h in chain]
     check = _roundest(float(np.median(before)), float(np.median(at)))
     rudder = _roundest(float(np.mean(levels)), float(np.mean(levels)))
     zigzag = ZigZag(rudder, check, first_sign, float(record.t[start]))
-    return zigzag, (f"a {rudder:g}/{check:g} zig-zag from t = {zigzag.start_time:.6g} s: "
-                    f"{len(chain)} plateaus at {', '.join(f'{v:.1f}' for v in levels)} deg")
+    return zigzag, tuple(h[2] for h in chain), (
+        f"a {rudder:g}/{check:g} zig-zag from t = {zigzag.start_time:.6g} s: {len(chain)} "
+        f"plateaus at {', '.join(f'{v:.1f}' for v in levels)} deg")
 
 
 def _holds(command: np.ndarray) -> list[tuple[int, int, float]]:

@@ -216,6 +216,10 @@ def test_marin_records_load():
 # --- trials as logged --------------------------------------------------------------------------
 
 
+#: The plateaus of the logged zig-zag: a degree or so off the nominal 20 deg.
+LOGGED_LEVELS = np.radians([19.0, 21.0, 20.8, 19.2, 21.0, 19.0, 20.9, 19.1])
+
+
 class LoggedZigZag(RudderCommand):
     """Manual steering until ``execute``, then a zig-zag whose plateaus sit at ``levels``."""
 
@@ -256,8 +260,7 @@ def logged_trial(kcs, tmp_path_factory):
     rng = np.random.default_rng(7)
     lead_times = np.arange(0.0, 150.0, 15.0)
     lead_angles = np.radians(rng.uniform(-3.0, 3.0, lead_times.size))
-    levels = np.radians([19.0, 21.0, 20.8, 19.2, 21.0, 19.0, 20.9, 19.1])
-    command = LoggedZigZag(lead_times, lead_angles, 150.0, levels, math.radians(20.0))
+    command = LoggedZigZag(lead_times, lead_angles, 150.0, LOGGED_LEVELS, math.radians(20.0))
     t = np.arange(0.0, 900.0, 1.0)
     state0 = np.array([kcs.U0, 0, 0, 0, 0, 0, 0.0])
     (result,) = simulate_batch(MMGModel(kcs), [command], t, state0)
@@ -318,3 +321,29 @@ def test_never_under_way_is_refused(zigzag, kcs):
     still = Trajectory(zigzag.data.assign(u=0.1), "still")
     with pytest.raises(SindyshipInputError, match="never under way"):
         underway_window(still, kcs)
+
+
+def test_a_logged_zigzag_is_flown_from_its_execute_and_scores_like_a_clean_one(
+        logged_trial, kcs, protocol_runs):
+    """Read through the command line's reader: the lead-in from rest and the manual steering are
+    cut, the zig-zag flown closed loop from its execute with the angles it held; the error stays
+    within 10 % of the same zig-zag recorded cleanly (steady at the execute, no lead-in)."""
+    from sindyship.cli._records import read_records
+    from sindyship.evaluation import evaluate
+    from sindyship.identify import fit
+
+    model = fit(protocol_runs["train"], kcs)
+    (logged,) = read_records([logged_trial], ship=kcs)
+    assert logged.t[0] >= 200.0  # never flown from rest
+    errors = evaluate(model, [logged])["trial"]
+    assert errors["flown_as"] == "zigzag" and errors["execute_s"] == 350.0
+    assert errors["amplitude_deg"] == 20.0 and errors["check_deg"] == 20.0
+    assert errors["completed"] and errors["flown_s"] == 750.0
+    # the same zig-zag recorded cleanly: steady at the execute, no lead-in, no wrap, no blanks
+    command = LoggedZigZag([0.0], [0.0], 0.0, LOGGED_LEVELS, math.radians(20.0))
+    (result,) = simulate_batch(MMGModel(kcs), [command], np.arange(750.0),
+                               np.array([kcs.U0, 0, 0, 0, 0, 0, 0.0]))
+    clean = result_to_trajectory(result, "clean")
+    reference = evaluate(model, [clean])["clean"]
+    assert reference["flown_as"] == "zigzag" and "execute_s" not in reference
+    assert errors["mean_distance_L"] == pytest.approx(reference["mean_distance_L"], rel=0.10)
