@@ -1,0 +1,375 @@
+"""Virtual captive (towing-tank) tests from the MMG model, and the captive-test CSV.
+
+A captive test holds the ship on a prescribed steady motion (constant u, v, r and rudder angle
+delta, no accelerations) and measures the forces needed to hold it.  :func:`captive_tests`
+makes such tests with the MMG model of paper sections 2.1-2.1.4, evaluating the one force
+function :func:`sindyship.mmg.force_components` (no copy of its physics):
+
+``static-drift``
+    Drift angle beta = atan2(-v, u) from -beta_max to +beta_max (default 20 deg) at the
+    carriage speed U: u = U cos(beta), v = -U sin(beta), r = 0, delta = 0.
+``rudder``
+    Rudder angle from -35 to +35 deg in straight motion (u = U, v = r = 0).
+``pure-yaw``
+    Non-dimensional yaw rate r' = r L / U0 from -0.6 to 0.6 with v = 0 at midship (a rotating
+    arm, or the steady part of a pure-yaw test), u = U, delta = 0.
+``drift-yaw``
+    The grid of drift angles times yaw rates (rotating arm with drift), delta = 0.
+
+What the forces are (the convention of the captive CSV)
+-------------------------------------------------------
+In a steady test a dynamometer between carriage and model reads the force the model exerts on
+it.  Newton's law in the moving body axes at midship gives, with no accelerations,
+
+    reading = F_hydro + C_RB,
+
+where C_RB are the rigid-body Coriolis and centrifugal terms of the model's own mass (paper
+eq. 11: X_C = m v r + m x_G r^2, Y_C = -m u r, N_C = -m x_G u r).  In a static-drift or a
+rudder test r = 0 and C_RB vanishes; in a rotating-arm or pure-yaw test the model's
+centrifugal force is part of the reading, and towing tanks subtract it (the "inertia
+correction") to report hydrodynamic forces.  **The X, Y and N of a captive file are these
+hydrodynamic forces: the reading minus C_RB**, dimensional, in body axes at midship.  A raw
+rotating-arm reading is corrected with :func:`rigid_body_forces`.
+
+The hydrodynamic force contains everything the water exerts in the steady motion: hull,
+propeller and rudder forces and the added-mass Coriolis and Munk terms (the fluid's momentum
+carried round by the turning body axes).  For the MMG model that is the sum of all parts of
+:func:`~sindyship.mmg.force_components` minus the rigid-body part (the KCS keeps its
+added-mass terms inside the hull coefficients: ``X_br_minus_my``, ``Y_r_minus_mx``, paper
+eq. 3; a ship with ``coriolis = "with-added-mass"`` carries them in its Coriolis part, which
+counts here too).  For an identified Abkowitz model (paper eq. 14) the same quantity is the
+fitted force of eq. 15 plus the added-mass part of the protocol's Coriolis terms, Munk moment
+included, (X'_udot ... as in :func:`sindyship.targets.coriolis`); :mod:`sindyship.forces`
+evaluates it.  So the derivatives a captive test measures relate to the identified
+coefficients as, e.g., Y_r(captive) = Y'_r + X'_udot and N_v(captive) = N'_v + Y'_vdot -
+X'_udot (Prime I).
+
+The captive CSV
+---------------
+One row per measured condition, columns ``u``, ``v`` [m/s], ``r`` [rad/s], ``delta`` [rad],
+optional ``n`` [rps], and the measured ``X``, ``Y`` [N] and ``N`` [N m].  Headers may carry a
+unit as in the measurement CSV (``r [deg/s]``, ``delta [deg]``, ``X [kN]``, ``N [kNm]``);
+:func:`write_captive_csv` writes bare SI headers.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import secrets
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .errors import SindyshipInputError
+from .measurements import UNITS
+from .mmg import force_components
+from .ships import Ship
+
+__all__ = [
+    "CAPTIVE_COLUMNS",
+    "FORCE_COLUMNS",
+    "TESTS",
+    "captive_tests",
+    "classify_tests",
+    "force_scales",
+    "read_captive_csv",
+    "rigid_body_forces",
+    "write_captive_csv",
+]
+
+TESTS = ("static-drift", "rudder", "pure-yaw", "drift-yaw")
+CAPTIVE_COLUMNS = ("u", "v", "r", "delta")
+FORCE_COLUMNS = ("X", "Y", "N")
+_FORCE_QUANTITY = {"X": "force", "Y": "force", "N": "moment"}
+#: A non-dimensional v', r' or a rudder angle [rad] below this counts as zero when a captive
+#: row is assigned to a test type.
+ZERO_TOLERANCE = 1e-9
+
+
+def force_scales(ship: Ship, system: str) -> np.ndarray:
+    """Newtons (and N m) per unit of non-dimensional X, Y, N in a prime system.
+
+    Prime I: 0.5 rho L^2 U0^2 and 0.5 rho L^3 U0^2; Prime II: 0.5 rho L d U0^2 and
+    0.5 rho L^2 d U0^2 (ships module docstring).
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> kcs = load_ship("kcs")
+    >>> bool(np.allclose(force_scales(kcs, "prime-II") / force_scales(kcs, "prime-I"),
+    ...                  kcs.d_over_L))
+    True
+    """
+    p = ship.particulars
+    q = 0.5 * p.rho * p.U0**2
+    if system == "prime-I":
+        return q * np.array([p.L**2, p.L**2, p.L**3])
+    if system == "prime-II":
+        return q * p.d * np.array([p.L, p.L, p.L**2])
+    raise SindyshipInputError(f"unknown prime system {system!r}; use 'prime-I' or 'prime-II'.")
+
+
+def rigid_body_forces(ship: Ship, u, v, r) -> tuple:
+    """Rigid-body Coriolis and centrifugal terms of the ship's own mass, SI (paper eq. 11).
+
+    The part of a steady captive reading that is inertia, not water:
+    (m v r + m x_G r^2, -m u r, -m x_G u r) [N, N, N m] at u, v [m/s] and r [rad/s].
+    Evaluated by :func:`sindyship.mmg.force_components` of the ship with rigid-body Coriolis.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> kcs = load_ship("kcs")
+    >>> X, Y, N = rigid_body_forces(kcs, 12.0, 0.0, 0.01)
+    >>> mass = kcs.particulars.rho * kcs.particulars.displacement
+    >>> round(float(Y / (-mass * 12.0 * 0.01)), 2)  # -m u r with m = rho * volume
+    1.0
+    """
+    rigid = replace(ship, coriolis="rigid-body")
+    U0, L = ship.U0, ship.L
+    parts = force_components(rigid, np.asarray(u) / U0, np.asarray(v) / U0,
+                             np.asarray(r) * L / U0, 0.0 * np.asarray(u))
+    scale = force_scales(ship, "prime-II")
+    return tuple(scale[i] * np.asarray(parts["coriolis"][i], dtype=float) for i in range(3))
+
+
+def _mmg_hydrodynamic(ship: Ship, u, v, r, delta) -> tuple:
+    """MMG hydrodynamic forces, SI: all parts of force_components minus rigid-body inertia."""
+    U0, L = ship.U0, ship.L
+    parts = force_components(ship, u / U0, v / U0, r * L / U0, delta)
+    scale = force_scales(ship, "prime-II")
+    total = [scale[i] * sum(np.asarray(p[i], dtype=float) for p in parts.values())
+             for i in range(3)]
+    rigid = rigid_body_forces(ship, u, v, r)
+    return tuple(total[i] - rigid[i] for i in range(3))
+
+
+def _sweep(test: str, points: int, beta_max: float, delta_max: float, r_max: float
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(beta [rad], r' [-], delta [rad]) of one test type."""
+    beta = np.linspace(-beta_max, beta_max, points)
+    yaw = np.linspace(-r_max, r_max, points)
+    zero = np.zeros(points)
+    if test == "static-drift":
+        return np.radians(beta), zero, zero
+    if test == "rudder":
+        return zero, zero, np.radians(np.linspace(-delta_max, delta_max, points))
+    if test == "pure-yaw":
+        return zero, yaw, zero
+    grid_beta, grid_r = np.meshgrid(np.radians(beta), yaw, indexing="ij")
+    return grid_beta.ravel(), grid_r.ravel(), np.zeros(grid_beta.size)
+
+
+def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: float | None = None,
+                  beta_max: float = 20.0, delta_max: float = 35.0, r_max: float = 0.6
+                  ) -> pd.DataFrame:
+    """Virtual steady captive tests with the MMG model (paper sections 2.1-2.1.4).
+
+    Parameters
+    ----------
+    ship : Ship
+        The ship and its MMG model.
+    test : {"static-drift", "rudder", "pure-yaw", "drift-yaw", "all"}
+        Test type (module docstring); ``"all"`` stacks the four.
+    points : int
+        Conditions per sweep (odd numbers include the straight-ahead point); ``drift-yaw`` is
+        a grid of ``points`` x ``points``.
+    speed : float, optional
+        Carriage speed U [m/s] (default the design speed U0).
+    beta_max, delta_max : float
+        Largest drift and rudder angles [deg].
+    r_max : float
+        Largest non-dimensional yaw rate r' = r L / U0.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``u``, ``v`` [m/s], ``r`` [rad/s], ``delta`` [rad], ``n`` [rps] (the ship's
+        propeller revolutions) and the hydrodynamic ``X``, ``Y`` [N], ``N`` [N m] in body
+        axes at midship (the reading minus the rigid-body inertia; module docstring).
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> frame = captive_tests(load_ship("kcs"), "static-drift", points=5)
+    >>> [round(float(b), 1) for b in np.degrees(np.arctan2(-frame.v, frame.u))]
+    [-20.0, -10.0, 0.0, 10.0, 20.0]
+    >>> bool(frame.Y.iloc[0] < 0 < frame.Y.iloc[-1])  # Y has the sign of beta
+    True
+    """
+    if test == "all":
+        return pd.concat([captive_tests(ship, t, points=points, speed=speed, beta_max=beta_max,
+                                        delta_max=delta_max, r_max=r_max) for t in TESTS],
+                         ignore_index=True)
+    if test not in TESTS:
+        raise SindyshipInputError(
+            f"unknown captive test {test!r}; choose one of {', '.join(TESTS)} or all."
+        )
+    if not (isinstance(points, int | np.integer) and points >= 2):
+        raise SindyshipInputError(f"a captive sweep needs at least 2 points, not {points!r}.")
+    U = ship.U0 if speed is None else float(speed)
+    if not (np.isfinite(U) and U > 0):
+        raise SindyshipInputError(f"the carriage speed must be positive, not {speed!r} m/s.")
+    beta, r_nd, delta = _sweep(test, int(points), beta_max, delta_max, r_max)
+    u = U * np.cos(beta)
+    v = -U * np.sin(beta)
+    r = r_nd * ship.U0 / ship.L
+    X, Y, N = _mmg_hydrodynamic(ship, u, v, r, delta)
+    return pd.DataFrame({"u": u, "v": v, "r": r, "delta": delta,
+                         "n": np.full(u.size, ship.propeller.n_P), "X": X, "Y": Y, "N": N})
+
+
+def classify_tests(frame: pd.DataFrame, ship: Ship) -> np.ndarray:
+    """The test type of every captive row, from which of v', r' and delta are non-zero.
+
+    ``static-drift`` (v only), ``rudder`` (delta only), ``pure-yaw`` (r only), ``drift-yaw``
+    (v and r), ``combined`` (the rudder with v or r) and ``straight`` (none).
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> kcs = load_ship("kcs")
+    >>> sorted(set(classify_tests(captive_tests(kcs, "all", points=4), kcs)))
+    ['drift-yaw', 'pure-yaw', 'rudder', 'static-drift']
+    """
+    v = np.abs(frame["v"].to_numpy(float) / ship.U0) > ZERO_TOLERANCE
+    r = np.abs(frame["r"].to_numpy(float) * ship.L / ship.U0) > ZERO_TOLERANCE
+    d = np.abs(frame["delta"].to_numpy(float)) > ZERO_TOLERANCE
+    names = np.full(len(frame), "combined", dtype=object)
+    names[~v & ~r & ~d] = "straight"
+    names[v & ~r & ~d] = "static-drift"
+    names[~v & ~r & d] = "rudder"
+    names[~v & r & ~d] = "pure-yaw"
+    names[v & r & ~d] = "drift-yaw"
+    return names
+
+
+# ---------------------------------------------------------------------------------------------
+# The captive CSV
+# ---------------------------------------------------------------------------------------------
+def write_captive_csv(frame: pd.DataFrame, path: str | os.PathLike[str]) -> Path:
+    """Write captive tests as a CSV with bare SI headers, atomically.
+
+    Values are written with ``repr`` (they read back identical).  Columns: ``u, v, r, delta``,
+    ``n`` when present, then ``X, Y, N``.
+
+    Raises
+    ------
+    SindyshipInputError
+        When a column is missing or the file cannot be written.
+    """
+    target = Path(path)
+    missing = [c for c in (*CAPTIVE_COLUMNS, *FORCE_COLUMNS) if c not in frame.columns]
+    if missing:
+        raise SindyshipInputError(
+            f"{target}: the captive table lacks the column '{missing[0]}'; captive tests need "
+            "u, v, r, delta, X, Y and N."
+        )
+    columns = [*CAPTIVE_COLUMNS, *(["n"] if "n" in frame.columns else []), *FORCE_COLUMNS]
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(columns)
+    values = frame[columns].to_numpy(dtype=float).tolist()
+    writer.writerows([repr(x) for x in row] for row in values)
+    temporary = target.with_name(f".{target.name}.{secrets.token_hex(6)}.tmp")
+    try:
+        temporary.write_text(buffer.getvalue(), encoding="utf-8")
+        os.replace(temporary, target)
+    except OSError as error:
+        temporary.unlink(missing_ok=True)
+        raise SindyshipInputError(
+            f"{target}: cannot write the file ({error.strerror or error}); check that the "
+            "folder exists and is writable."
+        ) from error
+    return target
+
+
+def read_captive_csv(path: str | os.PathLike[str]) -> pd.DataFrame:
+    """Read a captive-test CSV into SI units.
+
+    Headers and units are parsed as for the measurement CSV
+    (:mod:`sindyship.measurements`): ``r [deg/s]``, ``delta [deg]``, ``u [kn]``,
+    ``n [rpm]``, ``X [kN]``, ``N [kNm]``.  Other columns are ignored.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``u, v, r, delta`` (``n`` when given) and ``X, Y, N``, SI.
+
+    Raises
+    ------
+    SindyshipInputError
+        One sentence naming the file and the column or row: missing or unreadable file, no
+        data rows, missing or duplicate column, unknown or wrong unit, text, NaN or inf in a
+        number, a rudder angle or yaw rate that looks like degrees in a radian column.
+    """
+    from . import measurements
+
+    source = str(path)
+    raw = measurements._parse_csv_text(measurements._read_text(Path(path), source), source)
+    columns = measurements._parse_headers([str(h) for h in raw.columns], source)
+    by_name = {c.name: (position, c) for position, c in enumerate(columns)}
+    wanted = [*CAPTIVE_COLUMNS, *FORCE_COLUMNS]
+    missing = [name for name in wanted if name not in by_name]
+    if missing:
+        raise SindyshipInputError(
+            f"{source}: missing column '{missing[0]}'; a captive-test CSV needs the columns "
+            "u, v [m/s], r [rad/s], delta [rad], X, Y [N] and N [N m] (n [rps] optional)."
+        )
+    if len(raw) == 0:
+        raise SindyshipInputError(
+            f"{source}: has no data rows; give one row per captive condition after the header."
+        )
+    out = {}
+    for name in [*CAPTIVE_COLUMNS, *(["n"] if "n" in by_name else []), *FORCE_COLUMNS]:
+        position, column = by_name[name]
+        if name in _FORCE_QUANTITY and column.unit is not None:
+            _check_force_unit(column, _FORCE_QUANTITY[name], source)
+        values = measurements._as_float(raw.iloc[:, position].to_numpy(), column, raw.index,
+                                        source)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise SindyshipInputError(
+                f"{source}: column '{column.header}' has no finite value in row "
+                f"{raw.index[bad[0]]} (counting the header as row 1); write a number there "
+                "or delete the row."
+            )
+        out[name] = values * column.factor
+    frame = pd.DataFrame(out)
+    _check_captive_plausible(frame, by_name, raw.index, source)
+    return frame
+
+
+def _check_force_unit(column, quantity: str, source: str) -> None:
+    key = column.unit.replace(" ", "")
+    found = UNITS.get(key) or next((q for s, q in UNITS.items() if s.lower() == key.lower()),
+                                   None)
+    if found is None or found[0] != quantity:
+        units = ", ".join(s for s, (q, _) in UNITS.items() if q == quantity)
+        raise SindyshipInputError(
+            f"{source}: column '{column.header}' needs a unit of {quantity}; use one of {units}."
+        )
+
+
+def _check_captive_plausible(frame: pd.DataFrame, by_name: dict, index, source: str) -> None:
+    from .measurements import MAX_RUDDER_ANGLE, MAX_SPEED, MAX_YAW_RATE
+
+    limits = (("u", MAX_SPEED, "any ship speed", "m/s"), ("v", MAX_SPEED, "any ship speed", "m/s"),
+              ("delta", MAX_RUDDER_ANGLE, "any rudder angle", "rad; write 'delta [deg]' if the "
+               "values are degrees"),
+              ("r", MAX_YAW_RATE, "any ship's yaw rate", "rad/s; write 'r [deg/s]' if the "
+               "values are deg/s"))
+    for name, limit, what, unit in limits:
+        values = np.abs(frame[name].to_numpy())
+        position = int(np.argmax(values))
+        if values[position] > limit:
+            header = by_name[name][1].header
+            raise SindyshipInputError(
+                f"{source}: column '{header}' reaches {frame[name].iloc[position]:.6g} in row "
+                f"{index[position]} (counting the header as row 1), beyond {what} "
+                f"({limit:g} {unit})."
+            )
