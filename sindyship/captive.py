@@ -57,17 +57,18 @@ from __future__ import annotations
 import csv
 import io
 import os
-import secrets
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from ._io import write_text_atomic
 from .errors import SindyshipInputError
 from .measurements import UNITS
 from .mmg import force_components
 from .ships import Ship
+from .units import parse_headers
 
 __all__ = [
     "CAPTIVE_COLUMNS",
@@ -275,15 +276,12 @@ def write_captive_csv(frame: pd.DataFrame, path: str | os.PathLike[str]) -> Path
     writer.writerow(columns)
     values = frame[columns].to_numpy(dtype=float).tolist()
     writer.writerows([repr(x) for x in row] for row in values)
-    temporary = target.with_name(f".{target.name}.{secrets.token_hex(6)}.tmp")
     try:
-        temporary.write_text(buffer.getvalue(), encoding="utf-8")
-        os.replace(temporary, target)
+        write_text_atomic(target, buffer.getvalue())
     except OSError as error:
-        temporary.unlink(missing_ok=True)
         raise SindyshipInputError(
-            f"{target}: cannot write the file ({error.strerror or error}); check that the "
-            "folder exists and is writable."
+            f"{target}: cannot write the file ({error.strerror or error}); check that its "
+            "folder can be written."
         ) from error
     return target
 
@@ -310,8 +308,8 @@ def read_captive_csv(path: str | os.PathLike[str]) -> pd.DataFrame:
     from . import measurements
 
     source = str(path)
-    raw = measurements._parse_csv_text(measurements._read_text(Path(path), source), source)
-    columns = measurements._parse_headers([str(h) for h in raw.columns], source)
+    raw = measurements.parse_csv_text(measurements.read_text(Path(path), source), source)
+    columns = parse_headers([str(h) for h in raw.columns], source)
     by_name = {c.name: (position, c) for position, c in enumerate(columns)}
     wanted = [*CAPTIVE_COLUMNS, *FORCE_COLUMNS]
     missing = [name for name in wanted if name not in by_name]
@@ -329,7 +327,7 @@ def read_captive_csv(path: str | os.PathLike[str]) -> pd.DataFrame:
         position, column = by_name[name]
         if name in _FORCE_QUANTITY and column.unit is not None:
             _check_force_unit(column, _FORCE_QUANTITY[name], source)
-        values = measurements._as_float(raw.iloc[:, position].to_numpy(), column, raw.index,
+        values = measurements.column_as_float(raw.iloc[:, position].to_numpy(), column, raw.index,
                                         source)
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:

@@ -45,6 +45,7 @@ import pandas as pd
 
 from .captive import CAPTIVE_COLUMNS, FORCE_COLUMNS, classify_tests, force_scales, rigid_body_forces
 from .errors import SindyshipInputError
+from .identify import ENVELOPE_VARIABLES, training_envelope
 from .model import AbkowitzModel
 from .ships import Ship
 from .targets import coriolis
@@ -60,7 +61,6 @@ __all__ = [
 ]
 
 #: Variables whose training ranges make the envelope (non-dimensional v', r'; delta [rad]).
-ENVELOPE_VARIABLES = ("v", "r", "delta")
 _AXIS = {"static-drift": ("beta", "drift angle beta [deg]"),
          "rudder": ("delta_deg", "rudder angle delta [deg]"),
          "pure-yaw": ("r_nd", "yaw rate r' [-]"),
@@ -122,24 +122,6 @@ def model_captive_forces(model: AbkowitzModel, captive: pd.DataFrame) -> pd.Data
     out = {dof: scales[i] * (fitted[dof] + full[i]) - rigid[i]
            for i, dof in enumerate(FORCE_COLUMNS)}
     return pd.DataFrame(out, index=captive.index)
-
-
-def training_envelope(records: Sequence[Trajectory], ship: Ship) -> dict[str, list[float]]:
-    """Ranges of v', r' (over U0) and the actual rudder angle [rad] in training records.
-
-    Returns
-    -------
-    dict
-        ``{"v": [min, max], "r": [min, max], "delta": [min, max]}``: a JSON-ready form that a
-        fitted model can keep in its ``info["envelope"]``.
-    """
-    if not records:
-        raise SindyshipInputError("no training records to take the envelope from.")
-    v = np.concatenate([rec["v"] for rec in records]) / ship.U0
-    r = np.concatenate([rec["r"] for rec in records]) * ship.L / ship.U0
-    delta = np.concatenate([rec.rudder for rec in records])
-    return {name: [float(np.min(x)), float(np.max(x))]
-            for name, x in zip(ENVELOPE_VARIABLES, (v, r, delta), strict=True)}
 
 
 def _agreement(measured: np.ndarray, predicted: np.ndarray) -> dict[str, float | int | None]:

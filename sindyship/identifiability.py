@@ -181,7 +181,11 @@ class Identifiability:
 
     def text(self) -> str:
         """Plain words: one line per collinear group, one per equation with sign flips."""
-        lines = [group.text() for group in self.groups]
+        merged: dict[str, list[str]] = {}  # sway and yaw share their terms, hence their groups
+        for group in self.groups:
+            body = group.text().split(": ", 1)[1]
+            merged.setdefault(body, []).append(group.dof)
+        lines = [f"{' and '.join(dofs)}: {body}" for body, dofs in merged.items()]
         for dof in DOFS:
             if self.sign_flips[dof]:
                 lines.append(f"{dof}: {', '.join(self.sign_flips[dof])} change sign between "

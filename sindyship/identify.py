@@ -179,12 +179,36 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
         "derivative": derivative,
         "window_s": window if derivative != "five-point" else None,
         "selected": {dof: _selected(est) for dof, est in fitted.items()},
+        "envelope": training_envelope(records, ship),
     }
     model = AbkowitzModel(ship=ship, library=lib, coefficients=coefficients,
                           optimizer={"name": optimizer, "params": fitted["X"].get_params()},
                           rudder_signal=rudder_signal, info=info)
     model.estimators_ = fitted
     return model
+
+
+#: The variables whose training ranges make a model's envelope (:func:`training_envelope`).
+ENVELOPE_VARIABLES = ("v", "r", "delta")
+
+
+def training_envelope(records: Sequence[Trajectory], ship: Ship) -> dict[str, list[float]]:
+    """Ranges of v', r' (over U0) and the actual rudder angle [rad] in training records.
+
+    Returns
+    -------
+    dict
+        ``{"v": [min, max], "r": [min, max], "delta": [min, max]}``: a JSON-ready form that a
+        fitted model can keep in its ``info["envelope"]``.
+    """
+    if not records:
+        raise SindyshipInputError("no training records to take the envelope from.")
+    v = np.concatenate([rec["v"] for rec in records]) / ship.U0
+    r = np.concatenate([rec["r"] for rec in records]) * ship.L / ship.U0
+    delta = np.concatenate([rec.rudder for rec in records])
+    return {name: [float(np.min(x)), float(np.max(x))]
+            for name, x in zip(ENVELOPE_VARIABLES, (v, r, delta), strict=True)}
+
 
 
 def _selected(estimator) -> dict:

@@ -150,7 +150,7 @@ def read_csv(
     (7.7167, 1.5708)
     """
     source = str(path)
-    frame = _parse_csv_text(_read_text(Path(path), source), source)
+    frame = parse_csv_text(read_text(Path(path), source), source)
     return trajectory_from_frame(
         frame, Path(path).stem, source=source, resample=resample, rudder_check=rudder_check,
         ship=ship, skip_checks=skip_checks,
@@ -236,7 +236,7 @@ def trajectory_from_frame(
     index = frame.index
     raw: dict[str, np.ndarray] = {}
     for position, column in enumerate(columns):
-        values = _as_float(frame.iloc[:, position].to_numpy(), column, index, source)
+        values = column_as_float(frame.iloc[:, position].to_numpy(), column, index, source)
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
             value = values[bad[0]]
@@ -333,7 +333,7 @@ def write_csv(trajectory: Trajectory, path: str | os.PathLike[str]) -> Path:
 # Reading the file
 
 
-def _read_text(path: Path, source: str) -> str:
+def read_text(path: Path, source: str) -> str:
     try:
         return path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
@@ -349,7 +349,7 @@ def _read_text(path: Path, source: str) -> str:
     raise SindyshipInputError(f"{source}: {problem}.")
 
 
-def _parse_csv_text(text: str, source: str) -> pd.DataFrame:
+def parse_csv_text(text: str, source: str) -> pd.DataFrame:
     """Split CSV text into a frame of strings indexed by spreadsheet row number."""
     reader = csv.reader(io.StringIO(text))
     header: list[str] | None = None
@@ -453,7 +453,7 @@ def _row(index: pd.Index, position: int) -> str:
     return f"the row with index label {label}"
 
 
-def _as_float(values: np.ndarray, column: Column, index: pd.Index, source: str) -> np.ndarray:
+def column_as_float(values: np.ndarray, column: Column, index: pd.Index, source: str) -> np.ndarray:
     try:
         return np.asarray(values, dtype=float)
     except (TypeError, ValueError):

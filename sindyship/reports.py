@@ -19,6 +19,7 @@ __all__ = [
     "diagnosis_report",
     "error_cell",
     "evaluation_report",
+    "forces_report",
     "iteration_report",
     "reproduce_report",
 ]
@@ -387,4 +388,23 @@ def reproduce_report(output: dict) -> str:
                                    for m, w in zip(methods, widths, strict=True)))
         lines.append("(all coefficients: coefficients.csv in the output folder)")
     lines.append(f"Finished in {output['seconds']:.1f} s.")
+    return "\n".join(lines)
+
+
+def forces_report(result) -> str:
+    """Correlation and relative RMS error of X, Y, N per captive test type and envelope."""
+    def cell(stats):
+        corr, rel = stats["correlation"], stats["relative_rms"]
+        c = "   n/a" if corr is None else f"{corr:6.3f}"
+        r = "    n/a" if rel is None else f"{rel:7.3f}"
+        return f"{c} {r}"
+
+    rows = [("all", result.overall)]
+    rows += [(test, stats) for test, stats in result.by_test.items()]
+    if result.inside is not None:
+        rows += [("inside envelope", result.inside), ("outside envelope", result.outside)]
+    lines = [f"{'conditions':<18}" + "".join(f"{dof + ' corr  relRMS':>16}"
+                                             for dof in ("X", "Y", "N"))]
+    for name, stats in rows:
+        lines.append(f"{name:<18}" + "".join(f"  {cell(stats[dof])}" for dof in ("X", "Y", "N")))
     return "\n".join(lines)

@@ -10,12 +10,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sindyship._captive_command import (
-    add_captive_parser,
-    add_forces_parser,
-    cmd_captive,
-    cmd_forces,
-)
 from sindyship.captive import (
     captive_tests,
     classify_tests,
@@ -24,6 +18,8 @@ from sindyship.captive import (
     rigid_body_forces,
     write_captive_csv,
 )
+from sindyship.cli import captive as captive_verb
+from sindyship.cli import forces as forces_verb
 from sindyship.errors import SindyshipInputError
 from sindyship.model import paper_model
 from sindyship.taylor import TaylorSeries, taylor_reference
@@ -138,8 +134,8 @@ def test_bad_captive_csv_gives_one_line(tmp_path, text, message):
 def _parser():
     parser = argparse.ArgumentParser(prog="sindyship")
     sub = parser.add_subparsers(dest="verb")
-    add_captive_parser(sub)
-    add_forces_parser(sub)
+    captive_verb.add_parser(sub)
+    forces_verb.add_parser(sub)
     return parser
 
 
@@ -148,21 +144,21 @@ def test_captive_and_forces_commands(kcs, tmp_path, capsys):
     out = tmp_path / "captive.csv"
     args = parser.parse_args(["captive", "--ship", "kcs", "--test", "rudder", "--points", "7",
                               "--out", str(out)])
-    assert cmd_captive(args) == 0
+    assert captive_verb.run(args) == 0
     assert len(read_captive_csv(out)) == 7
     model_path = tmp_path / "paper.json"
     paper_model(kcs, "LS").save(model_path)
     capsys.readouterr()
     args = parser.parse_args(["forces", str(model_path), str(out), "--json", "--out",
                               str(tmp_path / "report")])
-    assert cmd_forces(args) == 0
+    assert forces_verb.run(args) == 0
     document = json.loads(capsys.readouterr().out)
     assert document["n_conditions"] == 7 and document["envelope"] is None
     assert document["by_test"]["rudder"]["Y"]["correlation"] > 0.99
     assert (tmp_path / "report" / "captive-forces.png").stat().st_size > 0
     assert json.loads((tmp_path / "report" / "forces.json").read_text()) == document
     args = parser.parse_args(["forces", str(model_path), str(out)])
-    assert cmd_forces(args) == 0
+    assert forces_verb.run(args) == 0
     assert capsys.readouterr().out.splitlines()[0].startswith("conditions")
     help_text = parser._subparsers._group_actions[0].choices["captive"].format_help()
     assert "default: 21" in help_text and "[m/s]" in help_text

@@ -52,8 +52,8 @@ def in_backticks(name: str, text: str) -> bool:
 def test_the_index_links_every_page():
     index = (DOCS / "README.md").read_text()
     pages = sorted(p.name for p in DOCS.glob("*.md") if p.name != "README.md")
-    assert pages == ["command-line.md", "effects.md", "measurement-csv.md", "saved-models.md",
-                     "ship-toml.md", "term-grammar.md"]
+    assert {"command-line.md", "effects.md", "measurement-csv.md", "saved-models.md",
+            "ship-toml.md", "term-grammar.md", "captive-csv.md"} <= set(pages)
     assert [p for p in pages if f"]({p})" not in index] == []
 
 

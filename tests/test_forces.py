@@ -103,7 +103,9 @@ def test_envelope_from_records_or_model_info(kcs, protocol_runs):
     assert envelope["v"] == pytest.approx([-0.112, 0.132], abs=0.002)
     assert envelope["r"] == pytest.approx([-0.427, 0.404], abs=0.002)
     model = fit(zigzags, kcs)
+    assert model.info["envelope"] == envelope  # the fit keeps its training envelope
     captive = captive_tests(kcs, "all", points=7)
+    del model.info["envelope"]
     assert compare_forces(model, captive).inside is None
     model.info["envelope"] = envelope
     result = compare_forces(model, captive)

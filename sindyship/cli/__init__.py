@@ -13,7 +13,7 @@ import sys
 
 from .. import __version__
 from ..errors import SindyshipInputError
-from . import diagnose, effects, evaluate, export, fit, reproduce, simulate
+from . import captive, diagnose, effects, evaluate, export, fit, forces, reproduce, simulate
 
 #: The verbs in the order ``sindyship --help`` lists them, each a module with
 #: ``add_parser(subparsers)`` and ``run(args) -> int``.
@@ -25,6 +25,8 @@ VERBS = {
     "diagnose": diagnose,
     "export": export,
     "effects": effects,
+    "captive": captive,
+    "forces": forces,
 }
 
 __all__ = ["VERBS", "build_parser", "main"]

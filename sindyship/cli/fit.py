@@ -14,6 +14,10 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0,
                    help="seed of randomised optimizers (default 0)")
     p.add_argument("--out", required=True, metavar="FILE", help="output model JSON")
+    p.add_argument("--no-identifiability", action="store_true",
+                   help="skip the report of terms the records cannot separate (VIF above "
+                   "1e5 or a sign that flips between leave-one-manoeuvre-out fits) and of the "
+                   "tests that would separate them (default: report it on stderr and in JSON)")
 
 
 def _smoothing(args, records, ship, effects, params):
@@ -53,7 +57,27 @@ def run(args) -> int:
         model.info["smoothing"] = smoothing.as_dict()
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
+    report = None if args.no_identifiability else _identifiability(args, records, ship, effects)
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
-              "library": model.library.name, "optimizer": model.optimizer["name"]})
+              "library": model.library.name, "optimizer": model.optimizer["name"],
+              "identifiability": None if report is None else report.to_dict()})
     return 0
+
+
+def _identifiability(args, records, ship, effects):
+    """Terms the records cannot separate, on stderr (the remedies need the ship's MMG)."""
+    if len(records) < 2:
+        return None
+    from ..identifiability import identifiability
+
+    report = identifiability(records, ship, library=args.library, effects=effects,
+                             optimizer=args.optimizer, rudder_signal=args.rudder_signal,
+                             remedies=ship.has_mmg)
+    text = report.text()
+    if text:
+        progress("Identifiability (terms these records cannot separate; their coefficients "
+                 "are not trustworthy as derivatives):")
+        for line in text.splitlines():
+            progress(f"  {line}")
+    return report

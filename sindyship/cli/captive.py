@@ -1,0 +1,39 @@
+"""``sindyship captive``: virtual captive (towing-tank) tests of the MMG model, as a CSV."""
+
+from __future__ import annotations
+
+from ._common import add_ship, progress
+
+
+def add_parser(sub) -> None:
+    """Add ``captive``: virtual steady captive tests of the MMG model, written as a CSV."""
+    p = sub.add_parser(
+        "captive", help="virtual captive (towing-tank) tests of the MMG model, as a CSV",
+        description="Hold the MMG model of a ship on steady motions (static drift, rudder "
+        "angle, pure yaw, drift with yaw) and write the hydrodynamic forces a dynamometer "
+        "measures (rigid-body inertia removed), dimensional, body axes at midship.")
+    add_ship(p)
+    p.add_argument("--test", default="all",
+                   choices=["static-drift", "rudder", "pure-yaw", "drift-yaw", "all"],
+                   help="test type: drift angle to +-20 deg, rudder angle to +-35 deg, yaw "
+                   "rate r' = r L / U0 to +-0.6, their drift-yaw grid, or all four "
+                   "(default: all)")
+    p.add_argument("--points", type=int, default=21,
+                   help="conditions per sweep, >= 2; drift-yaw uses points x points "
+                   "(default: 21)")
+    p.add_argument("--speed", type=float, default=None,
+                   help="carriage speed [m/s] (default: the ship's design speed U0)")
+    p.add_argument("--out", required=True,
+                   help="output captive CSV: u, v [m/s], r [rad/s], delta [rad], n [rps], "
+                   "X, Y [N], N [N m]")
+
+
+def run(args) -> int:
+    from ..captive import captive_tests, write_captive_csv
+    from ..ships import load_ship
+
+    ship = load_ship(args.ship)
+    frame = captive_tests(ship, args.test, points=args.points, speed=args.speed)
+    write_captive_csv(frame, args.out)
+    progress(f"wrote {args.out}: {len(frame)} captive conditions ({args.test}) of {ship.name}")
+    return 0

@@ -1,0 +1,58 @@
+"""``sindyship forces``: a saved model's forces against captive (towing-tank) measurements."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import SindyshipInputError
+from ._common import add_json, add_ship, emit
+
+
+def add_parser(sub) -> None:
+    """Add ``forces``: a saved model's forces against a captive CSV."""
+    p = sub.add_parser(
+        "forces", help="compare a model's forces with captive (towing-tank) tests",
+        description="Predict what a captive dynamometer measures from a saved model "
+        "(fitted force plus added-mass Coriolis and Munk terms) and compare with a captive "
+        "CSV: correlation and relative RMS error of X, Y, N per test type and inside/outside "
+        "the training envelope.")
+    p.add_argument("model", help="saved model JSON")
+    p.add_argument("captive", help="captive CSV: u, v, r, delta, X, Y, N (unit headers allowed)")
+    add_ship(p, default=None)
+    p.add_argument("--training", nargs="*", default=None, metavar="CSV",
+                   help="the model's training records, for the envelope (default: the "
+                   "envelope the model keeps, if any)")
+    add_json(p)
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="folder for forces.json and captive-forces.png (default: none)")
+
+
+def run(args) -> int:
+    from .._io import save_figure, write_text_atomic
+    from ..captive import read_captive_csv
+    from ..forces import compare_forces, plot_captive_forces
+    from ..measurements import read_csv
+    from ..model import AbkowitzModel
+    from ..reports import forces_report
+    from ..ships import load_ship
+
+    for path in (args.model, args.captive, *(args.training or [])):
+        if args.out is not None and Path(path).resolve() == Path(args.out).resolve():
+            raise SindyshipInputError(f"{args.out}: the output folder is one of the inputs.")
+    if args.out is not None and Path(args.out).exists() and not Path(args.out).is_dir():
+        raise SindyshipInputError(f"{args.out}: exists and is not a folder; give a folder.")
+    ship = load_ship(args.ship) if args.ship else None
+    model = AbkowitzModel.load(args.model, ship=ship)
+    captive = read_captive_csv(args.captive)
+    training = [read_csv(p) for p in args.training] if args.training else None
+    result = compare_forces(model, captive, training_records=training)
+    if args.out is not None:
+        folder = Path(args.out)
+        folder.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(folder / "forces.json", result.to_json() + "\n")
+        save_figure(plot_captive_forces(result), folder / "captive-forces.png", dpi=120)
+    if args.json:
+        emit(result.to_dict())
+    else:
+        print(forces_report(result))
+    return 0
