@@ -67,17 +67,20 @@ def force_components(ship: Ship, u, v, r, delta, starboard=None) -> dict[str, tu
     >>> round(float(parts["propeller"][0] + parts["hull"][0]), 5)  # thrust balances resistance
     0.0
     """
-    hull = ship.hull
-    prop = ship.propeller
-    rud = ship.rudder
-    mass = ship.mass
-    L = ship.particulars.L
-    U0 = ship.particulars.U0
-    D_nd = prop.D_P / L
-    n_nd = prop.n_P * L / U0
-    zero = 0.0 * u
     beta = np.arctan2(-v, u)
+    zero = 0.0 * u
+    X_P, one_minus_w, J, K_T = _propeller(ship, u, v, r, beta)
+    return {
+        "hull": _hull(ship, u, v, r, beta),
+        "propeller": (X_P, zero, zero),
+        "rudder": _rudder(ship, u, v, r, delta, beta, one_minus_w, J, K_T, starboard),
+        "coriolis": _coriolis(ship, u, v, r),
+    }
 
+
+def _hull(ship: Ship, u, v, r, beta) -> tuple:
+    """Hull forces (paper eq. 3, or the standard v', r' form of Yasukawa & Yoshimura)."""
+    hull = ship.hull
     if ship.hull_form == "beta":
         b2 = beta * beta
         r2 = r * r
@@ -87,20 +90,27 @@ def force_components(ship: Ship, u, v, r, delta, starboard=None) -> dict[str, tu
                + r * (hull["Y_r_minus_mx"] + hull["Y_bbr"] * b2 + hull["Y_rrr"] * r2))
         N_H = (beta * (hull["N_b"] + hull["N_bb"] * b2 + hull["N_brr"] * r2)
                + r * (hull["N_r"] + hull["N_bbr"] * b2 + hull["N_rrr"] * r2))
-    else:
-        U2 = u * u + v * v
-        U = np.sqrt(U2)
-        vU = v / U
-        rU = r / U
-        v2, r2 = vU * vU, rU * rU
-        X_H = U2 * (-hull["R_0"] + hull["X_vv"] * v2 + hull["X_vr"] * vU * rU
-                    + hull["X_rr"] * r2 + hull["X_vvvv"] * v2 * v2)
-        Y_H = U2 * (vU * (hull["Y_v"] + hull["Y_vvv"] * v2 + hull["Y_vrr"] * r2)
-                    + rU * (hull["Y_r"] + hull["Y_vvr"] * v2 + hull["Y_rrr"] * r2))
-        N_H = U2 * (vU * (hull["N_v"] + hull["N_vvv"] * v2 + hull["N_vrr"] * r2)
-                    + rU * (hull["N_r"] + hull["N_vvr"] * v2 + hull["N_rrr"] * r2))
+        return X_H, Y_H, N_H
+    U2 = u * u + v * v
+    U = np.sqrt(U2)
+    vU = v / U
+    rU = r / U
+    v2, r2 = vU * vU, rU * rU
+    X_H = U2 * (-hull["R_0"] + hull["X_vv"] * v2 + hull["X_vr"] * vU * rU
+                + hull["X_rr"] * r2 + hull["X_vvvv"] * v2 * v2)
+    Y_H = U2 * (vU * (hull["Y_v"] + hull["Y_vvv"] * v2 + hull["Y_vrr"] * r2)
+                + rU * (hull["Y_r"] + hull["Y_vvr"] * v2 + hull["Y_rrr"] * r2))
+    N_H = U2 * (vU * (hull["N_v"] + hull["N_vvv"] * v2 + hull["N_vrr"] * r2)
+                + rU * (hull["N_r"] + hull["N_vvr"] * v2 + hull["N_rrr"] * r2))
+    return X_H, Y_H, N_H
 
-    # Propeller (eq. 4-6).
+
+def _propeller(ship: Ship, u, v, r, beta) -> tuple:
+    """Propeller thrust (paper eq. 4-6) and the wake, advance ratio and K_T the rudder needs."""
+    prop = ship.propeller
+    L, U0 = ship.particulars.L, ship.particulars.U0
+    D_nd = prop.D_P / L
+    n_nd = prop.n_P * L / U0
     if prop.wake_model == "drift":
         beta_P = beta - prop.x_P * r / np.sqrt(u * u + v * v)
         one_minus_w = 1.0 - prop.w_P0 * np.exp(-4.0 * beta_P * beta_P)
@@ -109,9 +119,16 @@ def force_components(ship: Ship, u, v, r, delta, starboard=None) -> dict[str, tu
     J = u * one_minus_w / (n_nd * D_nd)
     K_T = thrust_coefficient(ship, J)
     X_P = (1.0 - prop.t_P) * K_T * (D_nd**4 * n_nd**2 / (0.5 * ship.d_over_L))
+    return X_P, one_minus_w, J, K_T
 
-    # Rudder (eq. 7-10).  ``lateral`` is -v'_R of eq. 10b, so that alpha_R = delta -
-    # atan2(lateral, u'_R) (eq. 8); with the instantaneous speed it is U gamma_R beta_R.
+
+def _rudder(ship: Ship, u, v, r, delta, beta, one_minus_w, J, K_T, starboard) -> tuple:
+    """Rudder forces (paper eq. 7-10).
+
+    ``lateral`` is -v'_R of eq. 10b, so that alpha_R = delta - atan2(lateral, u'_R) (eq. 8);
+    with the instantaneous speed it is U gamma_R beta_R.
+    """
+    rud = ship.rudder
     eta = rud.eta
     race = 1.0 + rud.kappa * (np.sqrt(1.0 + 8.0 * K_T / (np.pi * J * J)) - 1.0)
     u_R = (rud.epsilon * u) * one_minus_w * np.sqrt(eta * race * race + (1.0 - eta))
@@ -127,14 +144,18 @@ def force_components(ship: Ship, u, v, r, delta, starboard=None) -> dict[str, tu
         gamma = np.where(stbd, rud.gamma_R_stbd, rud.gamma_R_port)
         lateral = -gamma * (v + rud.l_R * r)
     alpha_R = delta - np.arctan2(lateral, u_R)
-    F_N = (rud.A_R / (L * ship.particulars.d) * rud.f_alpha) * (u_R * u_R + lateral * lateral) \
-        * np.sin(alpha_R)
+    F_N = (rud.A_R / (ship.particulars.L * ship.particulars.d) * rud.f_alpha) \
+        * (u_R * u_R + lateral * lateral) * np.sin(alpha_R)
     F_cos = F_N * np.cos(delta)
     X_R = -(1.0 - rud.t_R) * F_N * np.sin(delta)
     Y_R = -(1.0 + rud.a_H) * F_cos
     N_R = -(rud.x_R + rud.a_H * rud.x_H) * F_cos
+    return X_R, Y_R, N_R
 
-    # Coriolis (eq. 11), moved to the right-hand side.
+
+def _coriolis(ship: Ship, u, v, r) -> tuple:
+    """Coriolis and centripetal terms (paper eq. 11), moved to the right-hand side."""
+    mass = ship.mass
     m = mass.m
     mxg = mass.m * ship.x_G_nd
     if ship.coriolis == "rigid-body":
@@ -144,13 +165,7 @@ def force_components(ship: Ship, u, v, r, delta, starboard=None) -> dict[str, tu
         X_C = (m + mass.m_y) * v * r + mxg * r * r
         Y_C = -(m + mass.m_x) * u * r
     N_C = -mxg * u * r
-
-    return {
-        "hull": (X_H, Y_H, N_H),
-        "propeller": (X_P, zero, zero),
-        "rudder": (X_R, Y_R, N_R),
-        "coriolis": (X_C, Y_C, N_C),
-    }
+    return X_C, Y_C, N_C
 
 
 def mass_matrix(ship: Ship) -> np.ndarray:

@@ -16,9 +16,11 @@ Non-dimensional conventions
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import tomllib
-from dataclasses import MISSING, dataclass, fields, replace
+from dataclasses import MISSING, asdict, dataclass, fields, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -574,6 +576,35 @@ HULL_COEFFICIENTS = {
         "N_v", "N_r", "N_vvv", "N_vvr", "N_vrr", "N_rrr",
     ),
 }
+
+
+def ship_to_dict(ship: Ship) -> dict:
+    """The ship in the TOML layout of :func:`ship_from_dict` (JSON-ready): a saved model keeps
+    it, so that the ship it was fitted for travels with it.
+
+    Examples
+    --------
+    >>> kcs = load_ship("kcs")
+    >>> ship_from_dict(ship_to_dict(kcs)) == kcs
+    True
+    """
+    out: dict[str, Any] = {"name": ship.name, "title": ship.title,
+                           "particulars": asdict(ship.particulars), "mass": asdict(ship.mass),
+                           "servo": asdict(ship.servo), "abkowitz": dict(ship.abkowitz)}
+    if ship.has_mmg:
+        propeller = asdict(ship.propeller)
+        propeller["K_T"] = list(propeller["K_T"])
+        out.update(hull_form=ship.hull_form, speed_reference=ship.speed_reference,
+                   coriolis=ship.coriolis, hull=dict(ship.hull), propeller=propeller,
+                   rudder=asdict(ship.rudder))
+    return out
+
+
+def ship_digest(ship: Ship) -> str:
+    """SHA-256 of the ship's definition (:func:`ship_to_dict`, keys sorted): two ships with one
+    name but other particulars have different digests."""
+    text = json.dumps(ship_to_dict(ship), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
 def load_ship(name_or_path: str | Path) -> Ship:

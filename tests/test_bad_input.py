@@ -29,6 +29,7 @@ import sindyship
 from sindyship.cli import main
 from sindyship.errors import SindyshipInputError
 from sindyship.measurements import UNITS
+from sindyship.model import FORMAT_VERSION
 from sindyship.terms import parse_term
 
 LIBRARY = (Path(__file__).resolve().parents[1] / "libraries" / "abkowitz.toml").read_text()
@@ -420,7 +421,7 @@ def test_model_truncated(new_folder, good_csv, saved_model, fraction):
 
 
 @PROPERTY
-@given(version=st.integers(2, 10**9))
+@given(version=st.integers(FORMAT_VERSION + 1, 10**9))
 def test_model_from_a_newer_version(new_folder, good_csv, saved_model, version):
     data = json.loads(saved_model)
     data["format_version"] = version
@@ -628,3 +629,50 @@ def test_generated_output_is_strict_json(new_folder, good_csv, saved_model):
     document = json.loads(out, parse_constant=refuse)
     errors = document["errors"]["data"]
     assert np.isfinite(errors["mean_distance_L"])
+
+
+# ----------------------------------------------------------------- saved models validated on load
+def _edited(saved_model: str, edit) -> str:
+    data = json.loads(saved_model)
+    edit(data)
+    return json.dumps(data)
+
+
+@pytest.mark.parametrize(("edit", "words"), [
+    (lambda d: d["coefficients"]["Y"].update({"v": 1e30}), "magnitude"),
+    (lambda d: d["coefficients"]["N"].update({"v^9": 0.1}), "not a term"),
+    (lambda d: d.update(format_version=0), "does not exist"),
+    (lambda d: d.update(format_version=-1), "does not exist"),
+    (lambda d: d["ship_definition"]["particulars"].update(L=231.0), "digest"),
+], ids=["huge-coefficient", "unknown-term", "version-0", "version-minus-1", "edited-ship"])
+def test_an_edited_model_is_refused(new_folder, good_csv, saved_model, edit, words):
+    code, out, err, model = evaluate_model(new_folder(), good_csv, _edited(saved_model, edit))
+    assert_one_line(code, out, err, 2, str(model), words)
+
+
+def test_a_model_with_a_duplicated_key_is_refused(new_folder, good_csv, saved_model):
+    text = saved_model.replace('"rudder_signal": "actual"',
+                               '"rudder_signal": "actual", "rudder_signal": "commanded"', 1)
+    code, out, err, model = evaluate_model(new_folder(), good_csv, text)
+    assert_one_line(code, out, err, 2, str(model), "appears twice")
+
+
+def test_a_deeply_nested_model_is_refused(new_folder, good_csv):
+    code, out, err, model = evaluate_model(new_folder(), good_csv, "[" * 100000 + "]" * 100000)
+    assert_one_line(code, out, err, 2, str(model), "nested")
+
+
+def test_a_model_flies_its_own_ship_not_a_file_of_the_same_name(tmp_path, protocol_runs, kcs):
+    """A ship TOML named kcs with other particulars is never swapped for the built-in one."""
+    from dataclasses import replace
+
+    from sindyship.identify import fit
+    from sindyship.model import AbkowitzModel
+
+    other = replace(kcs, particulars=replace(kcs.particulars, x_G=0.0))
+    model = fit(protocol_runs["train"][:3], other)
+    model.save(tmp_path / "m.json")
+    again = AbkowitzModel.load(tmp_path / "m.json")
+    assert again.ship == other and again.ship != kcs
+    with pytest.raises(SindyshipInputError, match="particulars differ"):
+        AbkowitzModel.load(tmp_path / "m.json", ship=kcs)

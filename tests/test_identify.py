@@ -150,7 +150,9 @@ def test_saved_model_round_trip(tmp_path, protocol_runs, kcs):
     again = AbkowitzModel.load(path)
     assert again.coefficients == model.coefficients
     assert again.optimizer["name"] == "lasso"
-    assert json.loads(path.read_text())["format_version"] == 1
+    saved = json.loads(path.read_text())
+    assert saved["format_version"] == 2
+    assert saved["ship_definition"]["particulars"]["L"] == kcs.L and len(saved["ship_digest"]) == 64
 
 
 def test_a_saved_format_1_model_still_loads_and_flies(kcs):
