@@ -1,10 +1,126 @@
-"""Reading the measurement CSVs a verb is given."""
+"""Reading the measurement CSVs a verb is given, each under a name of its own.
+
+Results are keyed by record name.  A record is named after its file stem
+(:func:`sindyship.measurements.read_csv`); where two inputs share a stem they are told apart
+by the shortest trailing part of their paths that does (``a/run``, ``b/run``), so results never
+merge.  The same file given twice is refused.
+"""
 
 from __future__ import annotations
 
+import csv
+import os
+from dataclasses import replace
+from pathlib import Path
 
-def read_records(paths, resample=None):
-    """The records of ``paths``, in order (:func:`sindyship.measurements.read_csv`)."""
+from ..errors import SindyshipInputError
+from ._common import check_memory
+
+__all__ = ["read_records", "record_keys"]
+
+
+def _refuse_repeats(paths: list[Path]) -> None:
+    for i, a in enumerate(paths):
+        for b in paths[:i]:
+            try:
+                same = os.path.samefile(a, b)
+            except OSError:
+                same = a.absolute() == b.absolute()
+            if same:
+                raise SindyshipInputError(
+                    f"{a}: is given twice (also as {b}); give each record once."
+                )
+
+
+def record_keys(paths) -> list[str]:
+    """One name per path: the file stem, lengthened where stems collide.
+
+    Examples
+    --------
+    >>> record_keys(["a/run.csv", "b/run.csv", "zz.csv"])
+    ['a/run', 'b/run', 'zz']
+    >>> record_keys(["x/a/run.csv", "y/a/run.csv"])
+    ['x/a/run', 'y/a/run']
+    >>> record_keys(["run.csv", "run.CSV"])
+    ['run.csv', 'run.CSV']
+    """
+    paths = [Path(os.path.abspath(p)) for p in paths]
+    keys = [p.stem for p in paths]
+    groups: dict[str, list[int]] = {}
+    for i, key in enumerate(keys):
+        groups.setdefault(key, []).append(i)
+    for members in groups.values():
+        if len(members) < 2:
+            continue
+        depth = max(len(paths[i].parents) for i in members)
+        for k in range(1, depth + 1):
+            trial = ["/".join([*paths[i].parent.parts[-k:], paths[i].stem]).lstrip("/")
+                     for i in members]
+            if len(set(trial)) == len(trial):
+                break
+        else:  # same folder and stem, different suffix
+            trial = [paths[i].name for i in members]
+        for i, key in zip(members, trial, strict=True):
+            keys[i] = key
+    return keys
+
+
+def _check_resample_memory(path: Path, resample: float) -> None:
+    """Refuse resampling that would need more memory than the machine has, before reading:
+    the time span comes from the first and last rows' ``t`` (in seconds when unmarked)."""
+    try:
+        with open(path, encoding="utf-8-sig", newline="") as handle:
+            reader = csv.reader(handle)
+            header = next(reader)
+            names = [h.split("[")[0].strip() for h in header]
+            if "t" not in names or header[names.index("t")].strip() not in ("t", "t [s]"):
+                return
+            column = names.index("t")
+            first = last = None
+            for row in reader:
+                if len(row) > column and row[column].strip():
+                    last = row[column]
+                    first = first if first is not None else row[column]
+            span = float(last) - float(first)
+    except (OSError, UnicodeDecodeError, StopIteration, ValueError, TypeError, csv.Error):
+        return  # the reader reports what is wrong with the file
+    if span > 0:
+        check_memory(span / resample, f"{path}: resampling {span:g} s at {resample:g} s")
+
+
+def read_records(paths, resample=None, *, keys=None):
+    """The records of ``paths``, in order, named by :func:`record_keys`.
+
+    Parameters
+    ----------
+    paths : sequence of str or Path
+    resample : float, optional
+        Step [s] to resample onto (:func:`sindyship.measurements.read_csv`).
+    keys : sequence of str, optional
+        The names to give (default: :func:`record_keys` of ``paths``).
+    """
     from ..measurements import read_csv
 
-    return [read_csv(p, resample=resample) for p in paths]
+    paths = [Path(p) for p in paths]
+    _refuse_repeats(paths)
+    keys = record_keys(paths) if keys is None else list(keys)
+    records = []
+    for path, key in zip(paths, keys, strict=True):
+        if resample is not None:
+            _check_resample_memory(path, resample)
+        record = read_csv(path, resample=resample)
+        records.append(record if record.name == key else replace(record, name=key))
+    return records
+
+
+def read_record_sets(*path_sets, resample=None):
+    """Several lists of records (training and held-out) named together, so that no two
+    records anywhere share a name and no file is in two lists."""
+    flat = [Path(p) for paths in path_sets for p in paths]
+    _refuse_repeats(flat)
+    keys = record_keys(flat)
+    out, start = [], 0
+    for paths in path_sets:
+        out.append(read_records(paths, resample, keys=keys[start:start + len(paths)]))
+        start += len(paths)
+    return out

@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 from ._common import (
+    OUT_NOTE,
+    SEED,
     add_identification,
     add_json,
     add_n_jobs,
     add_resample,
     add_ship,
+    check_inputs,
     emit,
     progress,
+    ship_file,
     split_names,
 )
 from ._records import read_records
@@ -28,9 +32,10 @@ def add_parser(sub) -> None:
                    "Kalman (RTS) smoother over W seconds, or 'auto' to choose the setting by "
                    "leave-one-manoeuvre-out flights on the training records (default: none)")
     add_n_jobs(p, default=None)
-    p.add_argument("--seed", type=int, default=0,
-                   help="seed of randomised optimizers (default 0)")
-    p.add_argument("--out", required=True, metavar="FILE", help="output model JSON")
+    p.add_argument("--seed", type=SEED, default=0,
+                   help="seed of randomised optimizers, a whole number >= 0 (default 0)")
+    p.add_argument("--out", required=True, metavar="FILE",
+                   help=f"output model JSON ({OUT_NOTE})")
     add_json(p)
 
 
@@ -49,10 +54,19 @@ def _smoothing(args, records, ship, effects, params):
     return setting
 
 
+def fit_inputs(args) -> list[str]:
+    """Every file ``fit`` or ``diagnose`` reads: records, ship, library and effect files."""
+    return [*args.data, *getattr(args, "test", []), *ship_file(args.ship), args.library,
+            *split_names(args.effects)]
+
+
 def run(args) -> int:
+    from .._io import check_output
     from ..identify import fit
     from ..ships import load_ship
 
+    check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}")
+    check_inputs(fit_inputs(args))
     ship = load_ship(args.ship)
     records = read_records(args.data, args.resample)
     effects = split_names(args.effects)

@@ -3,31 +3,56 @@
 from __future__ import annotations
 
 from ..errors import SindyshipInputError
-from ._common import add_ship, progress
+from ._common import (
+    MAX_DURATION,
+    MAX_RUDDER,
+    MAX_SAMPLES,
+    MAX_STEP,
+    MIN_STEP,
+    OUT_NOTE,
+    SEED,
+    add_ship,
+    bounded_float,
+    check_inputs,
+    check_rudder,
+    check_simulation_cost,
+    progress,
+    ship_file,
+)
 
 MANOEUVRES = ["turning-circle", "zigzag", "spiral", "pull-out", "straight", "random"]
 
 
 def add_parser(sub) -> None:
+    from ..effects import EFFECT_RANGES
+
     p = sub.add_parser("simulate", help="fly a manoeuvre with the MMG simulator, write a CSV",
                        description="Fly a standard manoeuvre with the MMG model of a ship and "
                        "write the measurement CSV (bare SI headers).")
     add_ship(p)
     p.add_argument("--manoeuvre", required=True, choices=MANOEUVRES,
                    help="the manoeuvre to fly")
-    p.add_argument("--rudder", type=float, default=35.0, metavar="DEG",
+    angle = bounded_float(0, MAX_RUDDER, "degrees", symmetric=True)
+    p.add_argument("--rudder", type=angle, default=35.0, metavar="DEG",
                    help="rudder angle [deg]: of the turn, the zig-zag, the largest spiral step, "
-                   "the pull-out, or the random rudder's amplitude (default 35)")
-    p.add_argument("--check", type=float, default=None, metavar="DEG",
-                   help="zig-zag heading check angle [deg] (default: the rudder angle)")
+                   "the pull-out, or the random rudder's amplitude; magnitude in "
+                   f"(0, {MAX_RUDDER:g}] and at most the ship's rudder limit, the sign gives "
+                   "the side (default 35)")
+    p.add_argument("--check", type=angle, default=None, metavar="DEG",
+                   help=f"zig-zag heading check angle [deg], in (0, {MAX_RUDDER:g}] "
+                   "(default: the rudder angle)")
     p.add_argument("--first", choices=["starboard", "port"], default="starboard",
                    help="side of the first rudder (zig-zag) or of the spiral (default starboard)")
-    p.add_argument("--duration", type=float, default=3200.0, metavar="SECONDS",
-                   help="record length [s] (default 3200)")
-    p.add_argument("--dt", type=float, default=1.0, metavar="SECONDS",
-                   help="sample interval [s] (default 1)")
-    p.add_argument("--seed", type=int, default=0,
-                   help="seed of the random rudder and of noise effects (default 0)")
+    p.add_argument("--duration", type=bounded_float(0, MAX_DURATION, "seconds"),
+                   default=3200.0, metavar="SECONDS",
+                   help=f"record length [s], in (0, {MAX_DURATION:g}] and at most "
+                   f"{MAX_SAMPLES:.0e} samples of --dt (default 3200)")
+    p.add_argument("--dt", type=bounded_float(MIN_STEP, MAX_STEP, "seconds", low_open=False),
+                   default=1.0, metavar="SECONDS",
+                   help=f"sample interval [s], {MIN_STEP:g} to {MAX_STEP:g} (default 1)")
+    p.add_argument("--seed", type=SEED, default=0,
+                   help="seed of the random rudder and of noise effects, a whole number >= 0 "
+                   "(default 0)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME=VALUE",
                    help="hidden physical effect, repeatable: load [Prime II force], load_dir "
                    "[deg, the direction the load comes FROM, clockwise from north], load_arm "
@@ -35,17 +60,26 @@ def add_parser(sub) -> None:
                    "direction the current flows TOWARD], crossflow [drag coefficient], "
                    "prop_side_force [Y' at the propeller], rudder_offset [deg: recorded = true "
                    "+ offset], noise [fraction of each channel's RMS], quantise [significant "
-                   "figures]")
-    p.add_argument("--out", required=True, metavar="FILE", help="output measurement CSV")
+                   "figures]; ranges: " + ", ".join(
+                       f"{name} {low:g} to {high:g}" for name, (low, high, _)
+                       in EFFECT_RANGES.items() if name != "seed"))
+    p.add_argument("--out", required=True, metavar="FILE",
+                   help=f"output measurement CSV ({OUT_NOTE})")
 
 
 def run(args) -> int:
+    from .._io import check_output
     from ..effects import parse_effects, simulate_with_effects
     from ..manoeuvres import Manoeuvre
     from ..measurements import write_csv
     from ..ships import load_ship
 
+    check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}")
+    check_inputs(ship_file(args.ship))
     ship = load_ship(args.ship)
+    check_rudder(args.rudder, ship, "--rudder")
+    check_rudder(args.check, ship, "--check")
+    check_simulation_cost(ship, args.duration, args.dt)
     effects = parse_effects(args.effect + ([f"seed={args.seed}"] if args.seed else []))
     sign = 1 if args.first == "starboard" else -1
     check = args.check if args.check is not None else (args.rudder if args.manoeuvre == "zigzag"
