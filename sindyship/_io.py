@@ -1,8 +1,12 @@
-"""The one place that writes files: atomic text and figure writes, and JSON-ready values.
+"""The one place that writes files: the output policy, atomic writes, and JSON-ready values.
 
 Every output goes through a temporary file in the target's folder and a rename, so a failure
-or an interrupted run never leaves a half-written file (the command-line contract in
-``docs/command-line.md``).
+or an interrupted run never leaves a half-written file.  Folder outputs are written into a
+temporary sibling folder that replaces the target only at the end (:func:`output_folder`).
+Before any work starts, every verb of the command line checks its outputs with
+:func:`check_output`: symbolic links, devices, FIFOs, sockets, a folder where a file is
+expected (and a file where a folder is), an output that is one of the inputs, and a folder
+that cannot be written are refused.  Missing folders on the way to an output are created.
 
 Examples
 --------
@@ -20,15 +24,32 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import shutil
+import stat
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["clean_json", "save_figure", "write_text_atomic"]
+from .errors import SindyshipInputError
+
+__all__ = ["check_output", "clean_json", "output_folder", "physical_memory", "save_figure",
+           "write_text_atomic"]
+
+#: What ``stat`` says a path is, for the messages that refuse it.
+_FILE_KINDS = (
+    (stat.S_ISLNK, "a symbolic link"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISSOCK, "a socket"),
+    (stat.S_ISDIR, "a folder"),
+    (stat.S_ISREG, "a regular file"),
+)
 
 
 def clean_json(value):
@@ -122,3 +143,197 @@ def save_figure(fig, path: str | Path, *, dpi: int = 110) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def physical_memory() -> int:
+    """Bytes of physical memory of this machine (0 when the system does not say)."""
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 0
+
+
+def _kind_of(mode: int) -> str:
+    return next((name for test, name in _FILE_KINDS if test(mode)), "not a regular file")
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return a.resolve() == b.resolve()
+
+
+def _is_inside(inner: Path, outer: Path) -> bool:
+    """Whether ``inner`` is ``outer`` or lies somewhere inside it (after resolving links)."""
+    inner, outer = inner.resolve(), outer.resolve()
+    return inner == outer or outer in inner.parents
+
+
+def _check_writable_folder(path: Path, label: str) -> None:
+    """The nearest existing folder above ``path`` is a folder this process can write in."""
+    ancestor = path.parent
+    while not os.path.lexists(ancestor) and ancestor != ancestor.parent:
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise SindyshipInputError(
+            f"{label}: {ancestor} is not a folder, so nothing can be written below it; give a "
+            "path whose folders are folders."
+        )
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".sindyship-probe.", dir=ancestor)
+    except OSError as exc:
+        raise SindyshipInputError(
+            f"{label}: cannot write in the folder {ancestor} ({exc.strerror or exc}); choose "
+            "a folder you can write to."
+        ) from None
+    os.close(fd)
+    os.unlink(probe)
+
+
+def check_output(path: str | os.PathLike, *, inputs: Iterable = (), kind: str = "file",
+                 label: str | None = None, replaceable: str | None = None) -> Path:
+    """Refuse an output before any work starts; return it as a :class:`Path`.
+
+    Refused (:class:`SindyshipInputError`, one sentence): an empty name; a symbolic link, a
+    device, a FIFO or a socket; a folder where a file is expected, or anything but a folder
+    where a folder is expected; an output that is one of ``inputs`` (the same file after
+    resolving links, hard links included), or a folder output that holds an input or the
+    current folder; a place whose nearest existing folder cannot be written.  Missing
+    folders are not refused: the writers create them.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output.
+    inputs : iterable of str or os.PathLike
+        The files the command reads (missing ones are skipped: their reader reports them).
+    kind : {"file", "folder"}
+        What the output is.
+    label : str, optional
+        How the message names the output (default: the path).
+    replaceable : str, optional
+        For a folder: an existing non-empty folder is replaced at the end only when it holds
+        this file (the verb's own result file, so it is a previous output); otherwise refused.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     check_output(Path(folder) / "new" / "run.csv").name
+    'run.csv'
+    """
+    if kind not in ("file", "folder"):
+        raise ValueError(f"kind must be 'file' or 'folder', not {kind!r}")
+    text = os.fspath(path)
+    label = label or text
+    if not text.strip():
+        raise SindyshipInputError(f"the output name {text!r} is empty; give a file or folder name.")
+    target = Path(text)
+    if kind == "file" and text.endswith(("/", os.sep)):
+        raise SindyshipInputError(
+            f"{label}: ends with '/', which names a folder; give the name of a file to write."
+        )
+    if os.path.lexists(target):
+        mode = os.lstat(target).st_mode
+        if stat.S_ISDIR(mode) and kind == "file":
+            raise SindyshipInputError(
+                f"{label}: is a folder; give the name of a file to write (e.g. {text}/out.csv)."
+            )
+        if stat.S_ISREG(mode) and kind == "folder":
+            raise SindyshipInputError(
+                f"{label}: is a file, and this output is a folder; give a folder name."
+            )
+        if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+            raise SindyshipInputError(
+                f"{label}: is {_kind_of(mode)}, which sindyship never writes through; give "
+                f"the name of a regular {'file' if kind == 'file' else 'folder'}."
+            )
+    _check_inputs(target, [Path(os.fspath(p)) for p in inputs if p], kind, label)
+    if kind == "folder" and target.is_dir():
+        _check_replaceable(target, label, replaceable)
+    _check_writable_folder(target.absolute(), label)
+    return target
+
+
+def _check_inputs(target: Path, inputs: list[Path], kind: str, label: str) -> None:
+    for source in inputs:
+        if not source.exists():
+            continue
+        if kind == "file" and target.exists() and _same_file(target, source):
+            raise SindyshipInputError(
+                f"{label}: is also an input ({source}); write the output to another file."
+            )
+        if kind == "folder" and _is_inside(source, target):
+            raise SindyshipInputError(
+                f"{label}: the output folder holds the input {source}, which replacing the "
+                "folder would delete; choose another folder."
+            )
+    if kind == "folder" and _is_inside(Path.cwd(), target):
+        raise SindyshipInputError(
+            f"{label}: the output folder holds the current folder, which replacing it would "
+            "delete; choose a new folder."
+        )
+
+
+def _check_replaceable(target: Path, label: str, marker: str | None) -> None:
+    try:
+        entries = [entry.name for entry in os.scandir(target)]
+    except OSError as exc:
+        raise SindyshipInputError(
+            f"{label}: cannot read the folder ({exc.strerror or exc}); choose another folder."
+        ) from None
+    if entries and (marker is None or marker not in entries):
+        hint = f" (it has no {marker})" if marker else ""
+        raise SindyshipInputError(
+            f"{label}: is a folder that holds other files{hint} and would be replaced; give a "
+            "new or empty folder, or a previous output folder of the same command."
+        )
+
+
+@contextlib.contextmanager
+def output_folder(path: str | os.PathLike) -> Iterator[Path]:
+    """Write a folder output into a temporary sibling folder; put it in place at the end.
+
+    Inside the ``with`` block everything is written to the temporary folder (yielded).  When
+    the block ends normally the temporary folder takes the name ``path``, replacing a
+    previous folder of that name only then; when it raises (or the run is killed) the
+    previous folder stays whole and the temporary one is removed (a killed run may leave a
+    hidden ``.NAME.*.tmp`` folder beside it).  The folder gets the permissions ``umask``
+    allows.  Check ``path`` with :func:`check_output` first.
+
+    Examples
+    --------
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     with output_folder(Path(folder) / "out") as tmp:
+    ...         _ = (tmp / "a.txt").write_text("a")
+    ...     sorted(p.name for p in Path(folder).iterdir()), (Path(folder) / "out").is_dir()
+    (['out'], True)
+    """
+    target = Path(path).absolute()
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+    try:
+        yield tmp
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o777 & ~umask)
+        _swap_in(tmp, target)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _swap_in(tmp: Path, target: Path) -> None:
+    """Rename ``tmp`` to ``target``; a previous ``target`` is moved aside first, then removed."""
+    if not os.path.lexists(target):
+        os.replace(tmp, target)
+        return
+    old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=target.parent))
+    os.rmdir(old)
+    os.replace(target, old)
+    try:
+        os.replace(tmp, target)
+    except BaseException:
+        os.replace(old, target)
+        raise
+    shutil.rmtree(old, ignore_errors=True)

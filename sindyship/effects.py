@@ -121,13 +121,31 @@ class Effects:
                 if getattr(self, f.name) != f.default}
 
 
+#: Physical range of each effect's value: (lowest, highest, unit and meaning).  Beyond them
+#: the effect is not a correction a calm-water model misses but a different ship or sea.
+EFFECT_RANGES = {
+    "load": (-0.1, 0.1, "Prime II force, the ship's own hull forces are about 0.01-0.2"),
+    "load_dir": (-360.0, 360.0, "deg"),
+    "load_arm": (-1.0, 1.0, "x/L from midship"),
+    "current": (-10.0, 10.0, "m/s, the strongest tidal races run at 5"),
+    "current_dir": (-360.0, 360.0, "deg"),
+    "crossflow": (0.0, 10.0, "drag coefficient, about 0.5-1.5 for a hull"),
+    "prop_side_force": (-0.05, 0.05, "Prime II force"),
+    "rudder_offset": (-10.0, 10.0, "deg"),
+    "noise": (0.0, 1.0, "fraction of each channel's RMS"),
+    "quantise": (0, 17, "significant figures, 0 for none"),
+    "seed": (0, 2**63 - 1, "a whole number"),
+}
+
+
 def parse_effects(items: Iterable[str] | Mapping[str, float]) -> Effects:
     """Effects from ``NAME=VALUE`` strings (the command line) or a mapping.
 
     Raises
     ------
     SindyshipInputError
-        For an unknown name or a value that is not a finite number.
+        For an unknown name, a value that is not a finite number, or one outside its physical
+        range (:data:`EFFECT_RANGES`, the message gives it).
     """
     valid = {f.name: f.type for f in fields(Effects)}
     pairs = items.items() if isinstance(items, Mapping) else (
@@ -145,16 +163,30 @@ def parse_effects(items: Iterable[str] | Mapping[str, float]) -> Effects:
             raise SindyshipInputError(
                 f"effect {name} needs a number, not {raw!r} (e.g. --effect {name}=0.5)."
             ) from None
-        if not math.isfinite(value):
-            raise SindyshipInputError(f"effect {name} must be finite, not {raw!r}.")
-        if name in ("quantise", "seed"):
-            if value != int(value) or value < 0:
-                raise SindyshipInputError(f"effect {name} must be a whole number >= 0.")
-            value = int(value)
-        if name in ("noise", "crossflow") and value < 0:
-            raise SindyshipInputError(f"effect {name} must not be negative.")
-        values[name] = value
+        values[name] = _bounded(name, value, raw)
     return Effects(**values)
+
+
+def _bounded(name: str, value: float, raw) -> float:
+    """``value`` when it is finite and inside the effect's physical range."""
+    low, high, unit = EFFECT_RANGES[name]
+    if not math.isfinite(value):
+        raise SindyshipInputError(
+            f"effect {name} must be finite, not {raw!r}; give a value from {low:g} to {high:g} "
+            f"({unit})."
+        )
+    if name in ("quantise", "seed"):
+        if value != int(value) or not low <= value <= high:
+            raise SindyshipInputError(
+                f"effect {name} must be a whole number from {low} to {high} ({unit}), not "
+                f"{raw!r}."
+            )
+        return int(value)
+    if not low <= value <= high:
+        raise SindyshipInputError(
+            f"effect {name} = {raw} is outside its physical range {low:g} to {high:g} ({unit})."
+        )
+    return value
 
 
 def _split(item: str) -> tuple[str, str]:

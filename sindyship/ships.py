@@ -327,6 +327,46 @@ _POSITIVE = {
 }
 
 
+#: Physical ranges of ship-file values: (section, key) -> (low, high, open ends, unit and why).
+#: Beyond them the simulator's step (at most T_R/4 and 0.1 L/U0) or its state leaves what a
+#: displacement ship can be: a servo time constant of 1e-7 L/U0 would take billions of steps.
+_RANGES = {
+    ("particulars", "L"): (0.1, 1000.0, "[]", "m"),
+    ("particulars", "U0"): (0.0, 50.0, "(]", "m/s"),
+    ("particulars", "rho"): (900.0, 1100.0, "[]", "kg/m^3: fresh water is 1000, sea water 1025"),
+    ("servo", "T_R"): (0.01, 10.0, "[]", "units of L/U0: the KCS has 1, a model's fast servo 0.1"),
+    ("servo", "rate_max"): (0.1, 100.0, "[]", "deg/s: steering gear turns 2.3-20 deg/s"),
+    ("servo", "delta_max"): (0.0, 90.0, "()", "deg"),
+}
+#: Largest Froude number U0 / sqrt(g L) of a displacement ship's approach speed.
+MAX_FROUDE = 1.0
+
+
+def _check_range(section: str, key: str, value: float, source: str) -> None:
+    low, high, ends, unit = _RANGES[(section, key)]
+    ok = (value > low if ends[0] == "(" else value >= low) and (
+        value < high if ends[1] == ")" else value <= high)
+    if not ok:
+        raise SindyshipInputError(
+            f"{source}: [{section}] {key} = {value!r} is outside its physical range "
+            f"{ends[0]}{low:g}, {high:g}{ends[1]} ({unit})."
+        )
+
+
+def _check_physics(particulars: Particulars, servo: Servo, source: str) -> None:
+    """Refuse ship values outside their physical ranges (:data:`_RANGES`), each named."""
+    for (section, key) in _RANGES:
+        group = particulars if section == "particulars" else servo
+        _check_range(section, key, getattr(group, key), source)
+    froude = particulars.U0 / math.sqrt(9.81 * particulars.L)
+    if froude > MAX_FROUDE:
+        raise SindyshipInputError(
+            f"{source}: [particulars] U0 = {particulars.U0:g} m/s on L = {particulars.L:g} m is a "
+            f"Froude number of {froude:.3g}, above the {MAX_FROUDE:g} of any displacement ship; "
+            "check U0 and L."
+        )
+
+
 def _group(cls: type, table: Any, section: str, source: str) -> Any:
     if not isinstance(table, dict):
         raise SindyshipInputError(
@@ -548,6 +588,8 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
         raise SindyshipInputError(
             f"{source}: [propeller] wake_model must be 'constant' or 'drift'."
         )
+    servo = _group(Servo, data.get("servo"), "servo", source)
+    _check_physics(particulars, servo, source)
     return Ship(
         name=data["name"],
         title=str(data.get("title", data["name"])),
@@ -559,7 +601,7 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
         hull=_hull_coefficients(data, source),
         propeller=propeller,
         rudder=_rudder_group(data, propeller, source),
-        servo=_group(Servo, data.get("servo"), "servo", source),
+        servo=servo,
         abkowitz=_abkowitz_added_masses(data, source),
     )
 

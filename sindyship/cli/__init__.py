@@ -9,7 +9,9 @@ stderr.  Outputs are written to a temporary file and renamed (:mod:`sindyship._i
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 
 from .. import __version__
 from ..errors import SindyshipInputError
@@ -32,9 +34,23 @@ VERBS = {
 __all__ = ["VERBS", "build_parser", "main"]
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line on stderr (exit status 2), like every
+    other bad input; ``--help`` shows the usage."""
+
+    def error(self, message: str):
+        message = " ".join(message.split())
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _terminate(signum, frame):
+    """SIGTERM ends the run like Ctrl-C, so temporary files and folders are removed."""
+    raise KeyboardInterrupt
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every verb."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="sindyship",
         description="Discover a ship's manoeuvring equations (Abkowitz model) from trajectories.",
     )
@@ -49,6 +65,18 @@ def main(argv: list[str] | None = None) -> int:
     """Run one verb; return its exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        return _run(args)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _run(args) -> int:
+    """Run the verb ``args`` name; turn bad input into status 2 and anything else into 1."""
     try:
         return VERBS[args.verb].run(args)
     except SindyshipInputError as exc:

@@ -1,14 +1,136 @@
-"""What every verb of the command line shares: options, progress, JSON output."""
+"""What every verb of the command line shares: options, their bounds, progress, JSON output.
+
+Every number a user gives is checked when the command line is parsed, by the ``type=``
+functions below: each refuses what is not finite or lies outside a physical range, and its
+message gives the range and the unit (argparse adds the option's name).
+"""
 
 from __future__ import annotations
 
+import argparse
 import json
+import math
+import os
 import sys
 
-from .._io import clean_json
+from .._io import clean_json, physical_memory
+from ..errors import SindyshipInputError
 
 #: Default term library of every verb that fits.
 DEFAULT_LIBRARY = "abkowitz"
+
+#: Longest record [s] a verb simulates (11.6 days), and the most samples it holds.
+MAX_DURATION = 1e6
+MAX_SAMPLES = 10_000_000
+#: Shortest sample or resampling interval [s] and longest one.
+MIN_STEP, MAX_STEP = 1e-3, 3600.0
+#: Largest rudder or check angle [deg] any command asks for (beyond it a rudder stalls).
+MAX_RUDDER = 45.0
+#: Most Runge-Kutta steps of one simulated record (about 4 minutes of work).
+MAX_RK_STEPS = 1_000_000
+#: Memory [bytes] one simulated or resampled sample takes, all copies included (measured:
+#: 2e6 samples of ``simulate`` peak at 1.6 GB).
+BYTES_PER_SAMPLE = 1000
+
+
+def _number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def bounded_float(low: float, high: float, unit: str, *, low_open: bool = True,
+                  high_open: bool = False, symmetric: bool = False):
+    """An argparse ``type=``: a finite float in the range, else a message with the range.
+
+    With ``symmetric`` the range bounds the magnitude and the sign is free (rudder angles).
+
+    Examples
+    --------
+    >>> bounded_float(0, 10, "s")("2.5")
+    2.5
+    >>> bounded_float(0, 10, "s")("0")
+    Traceback (most recent call last):
+    argparse.ArgumentTypeError: must be a number of s in (0, 10], not '0'
+    """
+    span = f"{'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
+    if symmetric:
+        span = f"magnitude {span}"
+    what = f"a number of {unit}" if unit else "a number"
+
+    def parse(text: str) -> float:
+        value = _number(text)
+        size = abs(value) if symmetric else value
+        ok = math.isfinite(value) and (size > low if low_open else size >= low) and (
+            size < high if high_open else size <= high)
+        if not ok:
+            raise argparse.ArgumentTypeError(
+                f"must be {what} {'of' if symmetric else 'in'} {span}, not {text!r}")
+        return value
+
+    parse.__name__ = "number"
+    return parse
+
+
+def bounded_int(low: int, high: int, what: str = "a whole number"):
+    """An argparse ``type=``: a whole number in [low, high], else a message with the range."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {what} from {low} to {high}, not "
+                                             f"{text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be {what} from {low} to {high}, not "
+                                             f"{text!r}")
+        return value
+
+    parse.__name__ = "whole number"
+    return parse
+
+
+def available_cores() -> int:
+    """Cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:
+        return os.cpu_count() or 1
+
+
+def n_jobs(text: str) -> int:
+    """An argparse ``type=`` for ``--n-jobs``: a positive count (capped at the cores, with a
+    notice on stderr) or -1 for every core."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value == -1:
+        return -1
+    if value < 1:
+        raise argparse.ArgumentTypeError(
+            f"must be a positive number of workers (1 to the {available_cores()} cores) or -1 "
+            f"for every core, not {text!r}")
+    cores = available_cores()
+    if value > cores:
+        progress(f"sindyship: --n-jobs {value} is more than the {cores} cores; using {cores}.")
+        return cores
+    return value
+
+
+SEED = bounded_int(0, 2**63 - 1, "a whole number")
+
+
+def check_memory(samples: float, what: str) -> None:
+    """Refuse work that would hold more samples than half the machine's memory allows."""
+    need = samples * BYTES_PER_SAMPLE
+    have = physical_memory()
+    if have and need > 0.5 * have:
+        raise SindyshipInputError(
+            f"{what} would make {samples:.3g} samples, about {need / 1e9:.3g} GB, more than half "
+            f"of this machine's {have / 1e9:.3g} GB; use a longer interval or a shorter record."
+        )
 
 
 def progress(message: str) -> None:
@@ -44,9 +166,12 @@ def add_json(p) -> None:
 
 
 def add_resample(p) -> None:
-    p.add_argument("--resample", type=float, default=None, metavar="SECONDS",
-                   help="resample irregularly sampled records onto this interval [s] "
-                   "(default: refuse irregular records)")
+    p.add_argument("--resample", type=bounded_float(MIN_STEP, MAX_STEP, "seconds",
+                                                    low_open=False),
+                   default=None, metavar="SECONDS",
+                   help=f"resample irregularly sampled records onto this interval [s], "
+                   f"{MIN_STEP:g} to {MAX_STEP:g}; work that would need more than half the "
+                   "machine's memory is refused (default: refuse irregular records)")
 
 
 def add_identification(p) -> None:
@@ -67,13 +192,84 @@ def add_identification(p) -> None:
     p.add_argument("--derivative", default="five-point", choices=["five-point", "savgol"],
                    help="acceleration estimate: 5-point finite differences or a "
                    "Savitzky-Golay derivative over --window (default: five-point)")
-    p.add_argument("--window", type=float, default=21.0, metavar="SECONDS",
-                   help="Savitzky-Golay window [s] (with --derivative savgol; default 21)")
+    p.add_argument("--window", type=bounded_float(0, MAX_STEP, "seconds"), default=21.0,
+                   metavar="SECONDS",
+                   help=f"Savitzky-Golay window [s], in (0, {MAX_STEP:g}] (with --derivative "
+                   "savgol; default 21)")
 
 
 def add_n_jobs(p, *, default: int | None = 1) -> None:
-    p.add_argument("--n-jobs", type=int, default=default, metavar="N",
-                   help=f"parallel workers (joblib; -1: every core; default {default})")
+    p.add_argument("--n-jobs", type=n_jobs, default=default, metavar="N",
+                   help="parallel workers (joblib): 1 to the number of cores (more is capped "
+                   f"at the cores, with a notice), or -1 for every core (default {default})")
+
+
+#: What every output option's help says of the output policy (:func:`sindyship._io.check_output`).
+OUT_NOTE = ("missing folders are created; a link, device, pipe, socket or one of the inputs is "
+            "refused")
+
+
+def check_inputs(paths) -> None:
+    """Refuse an input that is a FIFO, a device or a socket before anything reads it: reading
+    a pipe with no writer waits for ever, and ``/dev/zero`` never ends."""
+    import stat
+
+    for path in paths:
+        if not path:
+            continue
+        try:
+            mode = os.stat(path).st_mode
+        except (OSError, ValueError):
+            continue  # missing: the reader names it
+        if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+            kind = ("a FIFO (named pipe)" if stat.S_ISFIFO(mode) else "a socket"
+                    if stat.S_ISSOCK(mode) else "a device")
+            raise SindyshipInputError(
+                f"{path}: is {kind}, not a file; save the data to a regular file and give "
+                "its path."
+            )
+
+
+def ship_file(name: str | None) -> list[str]:
+    """The ship file among a verb's inputs (none for a built-in ship)."""
+    from ..ships import BUILTIN_SHIPS
+
+    return [] if name is None or name in BUILTIN_SHIPS else [name]
+
+
+def check_rudder(angle: float | None, ship, option: str) -> None:
+    """Refuse a rudder or check angle beyond the ship's rudder limit (``[servo] delta_max``)."""
+    limit = ship.servo.delta_max
+    if angle is not None and abs(angle) > limit:
+        raise SindyshipInputError(
+            f"{option} {angle:g} deg is beyond the rudder limit of {ship.name} ({limit:g} deg); "
+            f"give an angle of magnitude up to {limit:g} deg."
+        )
+
+
+def check_simulation_cost(ship, duration: float, dt: float | None = None) -> None:
+    """Refuse a simulation that would take too many samples, too much memory or too many
+    Runge-Kutta steps, before any of it is allocated."""
+    from ..simulation import default_step
+
+    if dt is not None:
+        samples = duration / dt
+        if samples > MAX_SAMPLES:
+            raise SindyshipInputError(
+                f"--duration {duration:g} s at --dt {dt:g} s makes {samples:.3g} samples, more "
+                f"than the {MAX_SAMPLES:.0e} a record may hold; use a longer --dt or a shorter "
+                "--duration."
+            )
+        check_memory(samples, f"--duration {duration:g} s at --dt {dt:g} s")
+    step = default_step(ship)
+    steps = duration / step
+    if steps > MAX_RK_STEPS:
+        raise SindyshipInputError(
+            f"{ship.name}'s integration step is {step:.3g} s (0.1 L/U0, at most T_R/4), so "
+            f"{duration:g} s of flight needs {steps:.3g} steps, more than {MAX_RK_STEPS:.0e}; "
+            f"shorten the record to at most {MAX_RK_STEPS * step:.3g} s or check the ship's "
+            "L, U0 and [servo] T_R."
+        )
 
 
 def add_training_options(p, *, n_jobs_default: int | None) -> None:

@@ -7,9 +7,23 @@ import sys
 import time
 from pathlib import Path
 
-from ..errors import SindyshipInputError
-from ._common import add_training_options, emit, progress, split_names
-from ._records import read_records
+from ._common import (
+    OUT_NOTE,
+    add_training_options,
+    bounded_float,
+    bounded_int,
+    check_inputs,
+    check_simulation_cost,
+    emit,
+    progress,
+    split_names,
+)
+from ._records import read_record_sets
+from .fit import fit_inputs
+
+#: Most diagnosis rounds, and most candidates confirmed per round (each a refit and a flight).
+MAX_ROUNDS = 20
+MAX_CONFIRM = 20
 
 
 def add_parser(sub) -> None:
@@ -30,15 +44,19 @@ def add_parser(sub) -> None:
                    help="held-out records: flown before and after, never fitted on "
                    "(default: none)")
     p.add_argument("--out", default=None, metavar="DIR",
-                   help="folder for figures, report.txt and diagnose.json (default: none)")
-    p.add_argument("--rounds", type=int, default=1,
+                   help="folder for figures, report.txt and diagnose.json, written aside and "
+                   "put in place at the end; an existing folder is replaced only when it is "
+                   f"empty or a previous diagnose output ({OUT_NOTE}; default: none)")
+    p.add_argument("--rounds", type=bounded_int(1, MAX_ROUNDS), default=1,
                    help="add the best confirmed effect and diagnose again, up to this many "
-                   "times (default 1: diagnose once)")
-    p.add_argument("--threshold", type=float, default=MEANINGFUL_SHARE,
-                   help="share of the force error that is meaningful "
+                   f"times, 1 to {MAX_ROUNDS} (default 1: diagnose once)")
+    p.add_argument("--threshold", type=bounded_float(0, 1, "", high_open=True),
+                   default=MEANINGFUL_SHARE,
+                   help="share of the force error that is meaningful, in (0, 1) "
                    f"(default {MEANINGFUL_SHARE})")
-    p.add_argument("--confirm", type=int, default=2,
-                   help="best candidates to confirm by refitting and re-flying (default 2)")
+    p.add_argument("--confirm", type=bounded_int(0, MAX_CONFIRM), default=2,
+                   help="best candidates to confirm by refitting and re-flying, 0 to "
+                   f"{MAX_CONFIRM} (default 2)")
 
 
 def _write_folder(out: Path, result, iterative, text: str, document: dict, progress_bar: bool
@@ -60,18 +78,22 @@ def _write_folder(out: Path, result, iterative, text: str, document: dict, progr
 
 def run(args) -> int:
     """Run ``sindyship diagnose``; text report on stdout, or one JSON document with --json."""
+    from .._io import check_output, output_folder
     from ..diagnose import diagnose, diagnose_iteratively
     from ..identify import resolve_library
     from ..ships import load_ship
 
     start = time.perf_counter()
+    if args.out is not None:
+        check_output(args.out, inputs=fit_inputs(args), kind="folder",
+                     label=f"--out {args.out}", replaceable="diagnose.json")
+    check_inputs(fit_inputs(args))
     ship = load_ship(args.ship)
-    reading = {"ship": ship, "skip_checks": args.skip_check, "time_range": args.time_range}
-    records = read_records(args.data, args.resample, **reading)
-    test = read_records(args.test, args.resample, **reading)
+    records, test = read_record_sets(args.data, args.test, resample=args.resample,
+                                     ship=ship, skip_checks=args.skip_check,
+                                     time_range=args.time_range)
+    check_simulation_cost(ship, max(record.duration for record in records + test))
     library = resolve_library(args.library, split_names(args.effects))
-    if args.rounds < 1:
-        raise SindyshipInputError(f"--rounds must be 1 or more, not {args.rounds}.")
     options = {
         "effects": split_names(args.candidates) or None,
         "threshold": args.threshold,
@@ -99,9 +121,10 @@ def run(args) -> int:
         document.update(iterative.to_json())
         text += "\n\n" + iterative.report()
     document["seconds"] = time.perf_counter() - start
-    if args.out:
+    if args.out is not None:
         out = Path(args.out)
-        _write_folder(out, result, iterative, text, document, bar)
+        with output_folder(out) as tmp:
+            _write_folder(tmp, result, iterative, text, document, bar)
         progress(f"sindyship diagnose: figures, report.txt and diagnose.json are in {out}/")
     if args.json:
         emit(document)

@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
-from ._common import add_json, add_resample, add_ship, emit
+from ._common import (
+    add_json,
+    add_resample,
+    add_ship,
+    check_inputs,
+    check_simulation_cost,
+    emit,
+    ship_file,
+)
 from ._records import add_record_options, read_records
 
 
@@ -11,7 +19,10 @@ def add_parser(sub) -> None:
                        description="Fly a saved model the way each record was flown (zig-zags "
                        "closed loop) and report the Table-10 distance per file.")
     p.add_argument("model", help="saved model JSON")
-    p.add_argument("data", nargs="+", help="measurement CSV files")
+    p.add_argument("data", nargs="+",
+                   help="measurement CSV files, each reported under its file stem (or, where "
+                   "two share a stem, the shortest end of their paths that tells them apart); "
+                   "a file given twice is refused")
     add_ship(p, default=None)
     add_resample(p)
     add_record_options(p)
@@ -24,10 +35,12 @@ def run(args) -> int:
     from ..reports import evaluation_report
     from ..ships import load_ship
 
+    check_inputs([args.model, *args.data, *ship_file(args.ship)])
     ship = load_ship(args.ship) if args.ship else None
     model = AbkowitzModel.load(args.model, ship=ship)
     records = read_records(args.data, args.resample, ship=model.ship,
                            skip_checks=args.skip_check, time_range=args.time_range)
+    check_simulation_cost(model.ship, max(record.duration for record in records))
     errors = evaluate(model, records)
     if args.json:
         emit({"errors": errors})

@@ -2,7 +2,16 @@
 
 from __future__ import annotations
 
-from ._common import add_training_options, emit, progress, split_names
+from ._common import (
+    OUT_NOTE,
+    SEED,
+    add_training_options,
+    check_inputs,
+    emit,
+    progress,
+    ship_file,
+    split_names,
+)
 from ._records import read_records
 
 
@@ -11,9 +20,10 @@ def add_parser(sub) -> None:
                        description="Identify an Abkowitz model (paper eq. 14-17) from "
                        "measurement CSVs and save it as JSON.")
     add_training_options(p, n_jobs_default=None)
-    p.add_argument("--seed", type=int, default=0,
-                   help="seed of randomised optimizers (default 0)")
-    p.add_argument("--out", required=True, metavar="FILE", help="output model JSON")
+    p.add_argument("--seed", type=SEED, default=0,
+                   help="seed of randomised optimizers, a whole number >= 0 (default 0)")
+    p.add_argument("--out", required=True, metavar="FILE",
+                   help=f"output model JSON ({OUT_NOTE})")
     p.add_argument("--no-identifiability", action="store_true",
                    help="skip the report of terms the records cannot separate (VIF above "
                    "1e5 or a sign that flips between leave-one-manoeuvre-out fits) and of the "
@@ -35,10 +45,19 @@ def _smoothing(args, records, ship, effects, params):
     return setting
 
 
+def fit_inputs(args) -> list[str]:
+    """Every file ``fit`` or ``diagnose`` reads: records, ship, library and effect files."""
+    return [*args.data, *getattr(args, "test", []), *ship_file(args.ship), args.library,
+            *split_names(args.effects)]
+
+
 def run(args) -> int:
+    from .._io import check_output
     from ..identify import fit
     from ..ships import load_ship
 
+    check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}")
+    check_inputs(fit_inputs(args))
     ship = load_ship(args.ship)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._common import add_json, emit, progress
+from ._common import OUT_NOTE, add_json, emit, progress
 
 
 def add_parser(sub) -> None:
@@ -10,16 +10,21 @@ def add_parser(sub) -> None:
                        description="Train on the paper's manoeuvres, fit every optimizer, fly "
                        "the held-out manoeuvres and compare with the paper's Table 10.")
     p.add_argument("--out", default="reproduce-output", metavar="DIR",
-                   help="output folder for figures, tables, models and results.json "
-                   "(default: reproduce-output)")
+                   help="output folder for figures, tables, models and results.json, written "
+                   "aside and put in place at the end; an existing folder is replaced only "
+                   f"when it is empty or a previous reproduce output ({OUT_NOTE}; default: "
+                   "reproduce-output)")
     add_json(p)
 
 
 def run(args) -> int:
+    from .._io import check_output, output_folder
     from ..reports import reproduce_report
     from ..reproduce import run as run_experiment
 
-    output = run_experiment(args.out, progress=progress)
+    check_output(args.out, kind="folder", label=f"--out {args.out}", replaceable="results.json")
+    with output_folder(args.out) as tmp:
+        output = run_experiment(tmp, progress=progress)
     if args.json:
         emit(output)
     else:

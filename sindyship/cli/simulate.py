@@ -3,12 +3,29 @@
 from __future__ import annotations
 
 from ..errors import SindyshipInputError
-from ._common import add_ship, progress
+from ._common import (
+    MAX_DURATION,
+    MAX_RUDDER,
+    MAX_SAMPLES,
+    MAX_STEP,
+    MIN_STEP,
+    OUT_NOTE,
+    SEED,
+    add_ship,
+    bounded_float,
+    check_inputs,
+    check_rudder,
+    check_simulation_cost,
+    progress,
+    ship_file,
+)
 
 MANOEUVRES = ["turning-circle", "zigzag", "spiral", "pull-out", "straight", "random"]
 
 
 def add_parser(sub) -> None:
+    from ..effects import EFFECT_RANGES
+
     p = sub.add_parser("simulate", help="fly a manoeuvre with the MMG simulator, write a CSV",
                        description="Fly a standard manoeuvre with the MMG model of a ship and "
                        "write the measurement CSV (bare SI headers).")
@@ -18,19 +35,27 @@ def add_parser(sub) -> None:
     what.add_argument("--protocol", action="store_true",
                       help="fly the paper's 8 training and 3 held-out manoeuvres (3200 s at "
                       "1 Hz) and write them to OUT/train/ and OUT/test/ (--out is then a folder)")
-    p.add_argument("--rudder", type=float, default=35.0, metavar="DEG",
+    angle = bounded_float(0, MAX_RUDDER, "degrees", symmetric=True)
+    p.add_argument("--rudder", type=angle, default=35.0, metavar="DEG",
                    help="rudder angle [deg]: of the turn, the zig-zag, the largest spiral step, "
-                   "the pull-out, or the random rudder's amplitude (default 35)")
-    p.add_argument("--check", type=float, default=None, metavar="DEG",
-                   help="zig-zag heading check angle [deg] (default: the rudder angle)")
+                   "the pull-out, or the random rudder's amplitude; magnitude in "
+                   f"(0, {MAX_RUDDER:g}] and at most the ship's rudder limit, the sign gives "
+                   "the side (default 35)")
+    p.add_argument("--check", type=angle, default=None, metavar="DEG",
+                   help=f"zig-zag heading check angle [deg], in (0, {MAX_RUDDER:g}] "
+                   "(default: the rudder angle)")
     p.add_argument("--first", choices=["starboard", "port"], default="starboard",
                    help="side of the first rudder (zig-zag) or of the spiral (default starboard)")
-    p.add_argument("--duration", type=float, default=3200.0, metavar="SECONDS",
-                   help="record length [s] (default 3200)")
-    p.add_argument("--dt", type=float, default=1.0, metavar="SECONDS",
-                   help="sample interval [s] (default 1)")
-    p.add_argument("--seed", type=int, default=0,
-                   help="seed of the random rudder and of noise effects (default 0)")
+    p.add_argument("--duration", type=bounded_float(0, MAX_DURATION, "seconds"),
+                   default=3200.0, metavar="SECONDS",
+                   help=f"record length [s], in (0, {MAX_DURATION:g}] and at most "
+                   f"{MAX_SAMPLES:.0e} samples of --dt (default 3200)")
+    p.add_argument("--dt", type=bounded_float(MIN_STEP, MAX_STEP, "seconds", low_open=False),
+                   default=1.0, metavar="SECONDS",
+                   help=f"sample interval [s], {MIN_STEP:g} to {MAX_STEP:g} (default 1)")
+    p.add_argument("--seed", type=SEED, default=0,
+                   help="seed of the random rudder and of noise effects, a whole number >= 0 "
+                   "(default 0)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME=VALUE",
                    help="hidden physical effect, repeatable: load [Prime II force], load_dir "
                    "[deg, the direction the load comes FROM, clockwise from north], load_arm "
@@ -38,9 +63,11 @@ def add_parser(sub) -> None:
                    "direction the current flows TOWARD], crossflow [drag coefficient], "
                    "prop_side_force [Y' at the propeller], rudder_offset [deg: recorded = true "
                    "+ offset], noise [fraction of each channel's RMS], quantise [significant "
-                   "figures]")
+                   "figures]; ranges: " + ", ".join(
+                       f"{name} {low:g} to {high:g}" for name, (low, high, _)
+                       in EFFECT_RANGES.items() if name != "seed"))
     p.add_argument("--out", required=True, metavar="FILE|DIR",
-                   help="output measurement CSV (a folder with --protocol)")
+                   help=f"output measurement CSV, a folder with --protocol ({OUT_NOTE})")
 
 
 def _check_flown(record) -> None:
@@ -71,12 +98,19 @@ def _protocol(args, ship, effects) -> int:
 
 
 def run(args) -> int:
+    from .._io import check_output
     from ..effects import parse_effects, simulate_with_effects
     from ..manoeuvres import Manoeuvre
     from ..measurements import write_csv
     from ..ships import load_ship
 
+    check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}",
+                 kind="folder" if args.protocol else "file")
+    check_inputs(ship_file(args.ship))
     ship = load_ship(args.ship)
+    check_rudder(args.rudder, ship, "--rudder")
+    check_rudder(args.check, ship, "--check")
+    check_simulation_cost(ship, args.duration, args.dt)
     effects = parse_effects(args.effect + ([f"seed={args.seed}"] if args.seed else []))
     if args.protocol:
         return _protocol(args, ship, effects)
