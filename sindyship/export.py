@@ -15,7 +15,7 @@ printed equations, the LaTeX and the generated code say exactly what the model c
   right-hand side of eq. 14 with the rudder servo of eq. 12-13 and the kinematics, and the
   same fixed-step RK4 integrator as :mod:`sindyship.simulation` (steps split at command
   changes and zig-zag check angles), so that it flies a model as sindyship does.
-* :func:`add_export_parser` and :func:`cmd_export` implement ``sindyship export``.
+* ``sindyship export`` is :mod:`sindyship.cli.export`.
 
 Examples
 --------
@@ -31,13 +31,11 @@ X: 0.00885 u_dot' = -0.00227 du - 0.000508 du^2
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import re
 import textwrap
 from collections.abc import Mapping
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -55,8 +53,6 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ACCELERATIONS",
-    "add_export_parser",
-    "cmd_export",
     "coefficient_symbol",
     "coefficient_table_latex",
     "coriolis_expressions",
@@ -1066,60 +1062,6 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     return "\n".join(lines) + "\n" + _RUNTIME.rstrip() + "\n"
 
 
-# ---------------------------------------------------------------------------------------------
-# Command line
-# ---------------------------------------------------------------------------------------------
-def add_export_parser(subparsers) -> argparse.ArgumentParser:
-    """Add the ``export`` verb to the ``sindyship`` command line.
-
-    ``sindyship export model.json [--latex eqs.tex] [--python sim.py] [--precision N]``
-    """
-    p = subparsers.add_parser(
-        "export", help="write a model's equations (LaTeX) or a standalone simulator (Python)",
-        description="Print a saved model's equations, write them with its coefficient table "
-        "as LaTeX, or write a standalone Python simulator that needs only numpy.")
-    p.add_argument("model", help="saved model JSON")
-    p.add_argument("--latex", default=None, metavar="FILE",
-                   help="write the equations (align) and the coefficient table (booktabs)")
-    p.add_argument("--python", default=None, metavar="FILE",
-                   help="write a standalone simulator module (numpy only)")
-    p.add_argument("--precision", type=int, default=4,
-                   help="significant digits of printed numbers (default 4)")
-    p.add_argument("--ship", default=None, help="ship (default: the one the model names)")
-    p.add_argument("--channel", action="append", default=[], metavar="NAME=VALUE",
-                   help="constant value of an extra channel the library uses (repeatable)")
-    p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
-    return p
-
-
-def _parse_channels(items: list[str]) -> dict[str, float]:
-    out = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        try:
-            number = float(value)
-        except ValueError:
-            number = math.nan
-        if not sep or not name or not math.isfinite(number):
-            raise SindyshipInputError(
-                f"--channel {item!r} is not NAME=VALUE with a finite number (e.g. n=35.86)."
-            )
-        out[name.strip()] = number
-    return out
-
-
-def _write(path: str, text: str) -> None:
-    from .model import write_text_atomic
-
-    target = Path(path)
-    if target.is_dir():
-        raise SindyshipInputError(f"{path}: is a folder; give a file name to write.")
-    try:
-        write_text_atomic(target, text)
-    except OSError as exc:
-        raise SindyshipInputError(f"{path}: cannot write the file ({exc.strerror}).") from None
-
-
 def latex_document_part(model: AbkowitzModel, precision: int = 4) -> str:
     """The LaTeX that ``sindyship export --latex`` writes: equations and coefficient table.
 
@@ -1139,42 +1081,3 @@ def latex_document_part(model: AbkowitzModel, precision: int = 4) -> str:
         coefficient_table_latex(model, precision),
         "",
     ])
-
-
-def cmd_export(args) -> int:
-    """Run ``sindyship export`` (see :func:`add_export_parser`); returns the exit status."""
-    import json
-    import sys
-
-    from .model import AbkowitzModel
-    from .ships import load_ship
-
-    precision = _check_precision(args.precision)
-    if args.latex and args.python and Path(args.latex).resolve() == Path(args.python).resolve():
-        raise SindyshipInputError(
-            f"--latex and --python both name {args.latex}; give two different files."
-        )
-    ship = load_ship(args.ship) if args.ship else None
-    model = AbkowitzModel.load(args.model, ship=ship)
-    channels = _parse_channels(args.channel)
-    missing = sorted(set(model.library.channels) - {"psi"} - set(channels))
-    if args.python and missing:
-        raise SindyshipInputError(
-            f"{args.model}: the model's library uses the channel {missing[0]!r}, which the "
-            f"simulator holds constant; give its value with --channel {missing[0]}=VALUE."
-        )
-    if args.python:
-        code = generate_python(model, source_note=f"Exported from {Path(args.model).name}.",
-                               channels=channels)
-        _write(args.python, code)
-        print(f"wrote {args.python}: simulator of {model!r}", file=sys.stderr)
-    if args.latex:
-        _write(args.latex, latex_document_part(model, precision))
-        print(f"wrote {args.latex}: equations and coefficient table", file=sys.stderr)
-    if args.json:
-        sys.stdout.write(json.dumps({"model": str(args.model), "latex": args.latex,
-                                     "python": args.python,
-                                     "active_terms": model.n_active()}, indent=2) + "\n")
-    elif not (args.latex or args.python):
-        print(equations_text(model, precision))
-    return 0

@@ -23,11 +23,10 @@ import numpy as np
 import pytest
 import sympy
 
+from sindyship.cli import export as export_verb
 from sindyship.errors import SindyshipInputError
 from sindyship.export import (
     ACCELERATIONS,
-    add_export_parser,
-    cmd_export,
     coefficient_symbol,
     coefficient_table_latex,
     coriolis_expressions,
@@ -437,7 +436,7 @@ def test_equations_text_lists_every_active_term(model):
 # ---------------------------------------------------------------------------------------------
 def _args(*argv: str) -> argparse.Namespace:
     parser = argparse.ArgumentParser(prog="sindyship")
-    add_export_parser(parser.add_subparsers(dest="verb"))
+    export_verb.add_parser(parser.add_subparsers(dest="verb"))
     return parser.parse_args(["export", *argv])
 
 
@@ -445,7 +444,7 @@ def test_cmd_export_writes_latex_and_python(model, tmp_path, capsys):
     saved = tmp_path / "model.json"
     model.save(saved)
     tex, py = tmp_path / "out" / "eqs.tex", tmp_path / "out" / "sim.py"
-    assert cmd_export(_args(str(saved), "--latex", str(tex), "--python", str(py),
+    assert export_verb.run(_args(str(saved), "--latex", str(tex), "--python", str(py),
                             "--precision", "6", "--json")) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["active_terms"] == {"X": 15, "Y": 22, "N": 22}
@@ -454,15 +453,24 @@ def test_cmd_export_writes_latex_and_python(model, tmp_path, capsys):
     sim = load_module(py.read_text(), py)
     assert sim.COEFFICIENTS["N_uv"] == model.coefficients["N"]["du v"]
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["eqs.tex", "sim.py"]
-    assert cmd_export(_args(str(saved))) == 0
+    assert export_verb.run(_args(str(saved))) == 0
     printed = capsys.readouterr().out.splitlines()
     assert [line for line in printed if line.startswith("X: ")][0].startswith(
         "X: 0.008853 u_dot' = -0.002265 du - 0.0005081 du^2 + 0.002459 v^2")
 
 
+def test_export_refuses_a_precision_out_of_range_when_parsing(model, tmp_path, capsys):
+    from sindyship.cli import main
+
+    model.save(tmp_path / "m.json")
+    with pytest.raises(SystemExit) as stop:
+        main(["export", str(tmp_path / "m.json"), "--precision", "0"])
+    assert stop.value.code == 2
+    assert "--precision" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(("argv", "message"), [
     (["missing.json"], "no such model file"),
-    (["{model}", "--precision", "0"], "precision"),
     (["{model}", "--latex", "same.txt", "--python", "same.txt"], "two different files"),
     (["{model}", "--python", "{folder}"], "is a folder"),
     (["{model}", "--channel", "n"], "NAME=VALUE"),
@@ -479,4 +487,4 @@ def test_cmd_export_rejects_bad_input(model, tmp_path, monkeypatch, argv, messag
     (tmp_path / "folder").mkdir()
     argv = [a.format(model="m.json", model_n="n.json", folder="folder") for a in argv]
     with pytest.raises(SindyshipInputError, match=message):
-        cmd_export(_args(*argv))
+        export_verb.run(_args(*argv))

@@ -2,28 +2,72 @@
 
 from __future__ import annotations
 
-from ._common import OUT_NOTE, bounded_int, check_inputs, ship_file
+import math
+from pathlib import Path
+
+from ..errors import SindyshipInputError
+from ._common import (
+    OUT_NOTE,
+    add_json,
+    add_ship,
+    bounded_int,
+    check_inputs,
+    emit,
+    progress,
+    ship_file,
+)
 
 #: Significant digits a double carries.
 MAX_PRECISION = 17
 
 
 def add_parser(sub) -> None:
-    from ..export import add_export_parser
+    p = sub.add_parser(
+        "export", help="write a model's equations (LaTeX) or a standalone simulator (Python)",
+        description="Print a saved model's equations, write them with its coefficient table "
+        "as LaTeX, or write a standalone Python simulator that needs only numpy.")
+    p.add_argument("model", help="saved model JSON")
+    p.add_argument("--latex", default=None, metavar="FILE",
+                   help="write the equations (align) and the coefficient table (booktabs) "
+                   f"({OUT_NOTE})")
+    p.add_argument("--python", default=None, metavar="FILE",
+                   help=f"write a standalone simulator module (numpy only) ({OUT_NOTE})")
+    p.add_argument("--precision", type=bounded_int(1, MAX_PRECISION), default=4,
+                   help=f"significant digits of printed numbers, 1 to {MAX_PRECISION} "
+                   "(default 4)")
+    add_ship(p, default=None)
+    p.add_argument("--channel", action="append", default=[], metavar="NAME=VALUE",
+                   help="constant value of an extra channel the library uses (repeatable)")
+    add_json(p)
 
-    p = add_export_parser(sub)
-    for action in p._actions:  # bounds and output policy of the shared command line
-        if action.dest == "precision":
-            action.type = bounded_int(1, MAX_PRECISION)
-            action.help = (f"significant digits of printed numbers, 1 to {MAX_PRECISION} "
-                           f"(default {action.default})")
-        elif action.dest in ("latex", "python"):
-            action.help = f"{action.help} ({OUT_NOTE})"
+
+def _parse_channels(items: list[str]) -> dict[str, float]:
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not sep or not name or not math.isfinite(number):
+            raise SindyshipInputError(
+                f"--channel {item!r} is not NAME=VALUE with a finite number (e.g. n=35.86)."
+            )
+        out[name.strip()] = number
+    return out
 
 
-def run(args) -> int:
+def _write(path: str, text: str) -> None:
+    from .._io import write_text_atomic
+
+    try:
+        write_text_atomic(Path(path), text)
+    except OSError as exc:
+        raise SindyshipInputError(f"{path}: cannot write the file ({exc.strerror}).") from None
+
+
+def _check(args) -> None:
     from .._io import check_output
-    from ..export import cmd_export
 
     inputs = [args.model, *ship_file(args.ship)]
     for option in ("latex", "python"):
@@ -31,4 +75,39 @@ def run(args) -> int:
         if target is not None:
             check_output(target, inputs=inputs, label=f"--{option} {target}")
     check_inputs(inputs)
-    return cmd_export(args)
+    if args.latex and args.python and Path(args.latex).resolve() == Path(args.python).resolve():
+        raise SindyshipInputError(
+            f"--latex and --python both name {args.latex}; give two different files."
+        )
+
+
+def run(args) -> int:
+    """Run ``sindyship export``; returns the exit status."""
+    from ..export import equations_text, generate_python, latex_document_part
+    from ..model import AbkowitzModel
+    from ..ships import load_ship
+
+    _check(args)
+    ship = load_ship(args.ship) if args.ship else None
+    model = AbkowitzModel.load(args.model, ship=ship)
+    channels = _parse_channels(args.channel)
+    missing = sorted(set(model.library.channels) - {"psi"} - set(channels))
+    if args.python and missing:
+        raise SindyshipInputError(
+            f"{args.model}: the model's library uses the channel {missing[0]!r}, which the "
+            f"simulator holds constant; give its value with --channel {missing[0]}=VALUE."
+        )
+    if args.python:
+        code = generate_python(model, source_note=f"Exported from {Path(args.model).name}.",
+                               channels=channels)
+        _write(args.python, code)
+        progress(f"wrote {args.python}: simulator of {model!r}")
+    if args.latex:
+        _write(args.latex, latex_document_part(model, args.precision))
+        progress(f"wrote {args.latex}: equations and coefficient table")
+    if args.json:
+        emit({"model": str(args.model), "latex": args.latex, "python": args.python,
+              "active_terms": model.n_active()})
+    elif not (args.latex or args.python):
+        print(equations_text(model, args.precision))
+    return 0
