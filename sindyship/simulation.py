@@ -496,32 +496,16 @@ def _advance_one(integ, cmd, j, time, h, y0, t_out, samples, out, out_cmd, first
                                    f0=None if first is None else first[1])
         first = None
         f1 = integ.rhs(time + h_try, y_try, delta_c, col, branch)
-        theta, kind = 1.0, "change" if h_try < remaining else None
-        g_end = cmd.event(y_try[:, 0])
-        if g_end is not None and g_end >= 0.0:
-            theta = _crossing(cmd.event, y, f0, y_try, f1, h_try)
-            kind = "event"
-        if branch is not None:
-            sign = -1.0 if branch[0] else 1.0  # g < 0 on the present branch
-
-            def g_branch(state, sign=sign):
-                return sign * float(integ.switching(state.reshape(N_STATE, 1))[0])
-
-            if bool(integ.branch(y_try)[0]) != bool(branch[0]):
-                theta_b = _crossing(g_branch, y, f0, y_try, f1, h_try)
-                if theta_b < theta:
-                    theta, kind = theta_b, "branch"
+        theta, kind = _piece_end(integ, cmd, y, f0, y_try, f1, h_try, branch,
+                                 "change" if h_try < remaining else None)
         h_taken = theta * h_try
         if theta < 1.0:
             y_new, _ = integ.step(time, y, h_taken, delta_c, col, branch, f0=f0)
             f1 = integ.rhs(time + h_taken, y_new, delta_c, col, branch)
         else:
             y_new = y_try
-        for k in samples:
-            if time - tol <= t_out[k] <= time + h_taken + tol and h_taken > 0:
-                s = (t_out[k] - time) / h_taken
-                out[:, k, j] = _hermite(y[:, 0], f0[:, 0], y_new[:, 0], f1[:, 0], h_taken, s)
-                out_cmd[k, j] = delta_c[0]
+        _write_samples(out, out_cmd, j, t_out, samples, time, h_taken, tol, y, f0, y_new, f1,
+                       delta_c)
         time += h_taken
         y = y_new
         if kind == "event":
@@ -535,6 +519,39 @@ def _advance_one(integ, cmd, j, time, h, y0, t_out, samples, out, out_cmd, first
         if kind is None:
             break
     return y[:, 0], f1, delta_c, branch
+
+
+def _piece_end(integ, cmd, y, f0, y_try, f1, h_try, branch, kind):
+    """Where a piece of step ends: ``(theta, kind)`` with theta the fraction of ``h_try`` and
+    kind ``"event"`` (the command's heading event), ``"branch"`` (the dynamics' switching
+    function changes sign), ``"change"`` (a scheduled change) or None (the step's end)."""
+    theta = 1.0
+    g_end = cmd.event(y_try[:, 0])
+    if g_end is not None and g_end >= 0.0:
+        theta = _crossing(cmd.event, y, f0, y_try, f1, h_try)
+        kind = "event"
+    if branch is not None and bool(integ.branch(y_try)[0]) != bool(branch[0]):
+        sign = -1.0 if branch[0] else 1.0  # g < 0 on the present branch
+
+        def g_branch(state):
+            return sign * float(integ.switching(state.reshape(N_STATE, 1))[0])
+
+        theta_b = _crossing(g_branch, y, f0, y_try, f1, h_try)
+        if theta_b < theta:
+            theta, kind = theta_b, "branch"
+    return theta, kind
+
+
+def _write_samples(out, out_cmd, j, t_out, samples, time, h_taken, tol, y, f0, y_new, f1,
+                   delta_c) -> None:
+    """The member's states at the output times inside a piece, from its Hermite interpolant."""
+    if h_taken <= 0:
+        return
+    for k in samples:
+        if time - tol <= t_out[k] <= time + h_taken + tol:
+            s = (t_out[k] - time) / h_taken
+            out[:, k, j] = _hermite(y[:, 0], f0[:, 0], y_new[:, 0], f1[:, 0], h_taken, s)
+            out_cmd[k, j] = delta_c[0]
 
 
 def _crossing(g, y0, f0, y1, f1, h) -> float:
