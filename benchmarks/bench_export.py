@@ -33,7 +33,7 @@ import numpy as np
 from sindyship.export import generate_python
 from sindyship.model import paper_model
 from sindyship.ships import load_ship
-from sindyship.simulation import ConstantCommand, ZigZagCommand, _Integrator, simulate_batch
+from sindyship.simulation import ConstantCommand, ZigZagCommand, integrator_for, simulate_batch
 
 OUT = Path(__file__).parent / "results" / "export.json"
 
@@ -73,8 +73,8 @@ def main() -> None:
                        rng.uniform(-3, 3, n), rng.uniform(-0.5, 0.5, n)])
     commands = rng.uniform(-0.6, 0.6, n)
     one, one_cmd = batch[:, :1].copy(), commands[:1].copy()
-    single = _Integrator(model.dynamics(), [ConstantCommand(0.0)])
-    many = _Integrator(model.dynamics(), [ConstantCommand(0.0)] * n)
+    single = integrator_for(model.dynamics(), [ConstantCommand(0.0)])
+    many = integrator_for(model.dynamics(), [ConstantCommand(0.0)] * n)
     members1, members11 = np.arange(1), np.arange(n)
     state1, cmd1 = one[:, 0].copy(), float(one_cmd[0])
     rhs_times = best_per_call({

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -80,7 +79,6 @@ def _check_angle(low: float, high: float) -> float:
     return round(0.5 * (low + high), 1)
 
 
-@dataclass
 class RecordedZigZag(ZigZagCommand):
     """A closed-loop zig-zag whose legs hold the rudder angles a logged trial held.
 
@@ -89,8 +87,11 @@ class RecordedZigZag(ZigZagCommand):
     angle are flown as they were steered.
     """
 
-    levels: tuple[float, ...] = ()
-    _leg: int = field(default=0, init=False, repr=False)
+    def __init__(self, rudder: float, check: float, first_sign: int = 1, *,
+                 levels: tuple[float, ...] = ()):
+        super().__init__(rudder, check, first_sign)
+        self.levels = tuple(levels)
+        self._leg = 0
 
     def reset(self, state0):
         super().reset(state0)

@@ -534,8 +534,23 @@ def _coriolis_source(ship: Ship) -> tuple[list[str], list[str]]:
 
 _RUNTIME = '''
 
+# ---------------------------------------------------------------------------------------------
+# The model as the kernel flies it, and the public functions
+# ---------------------------------------------------------------------------------------------
+class _Model:
+    \"\"\"The generated dynamics in the form the kernel's integrator flies.\"\"\"
+
+    rudder_input = RUDDER_INPUT
+    current = (0.0, 0.0)
+    switching = None
+    accelerations = staticmethod(accelerations)
+
+
+_SERVO = (T_SERVO, RATE_MAX, DELTA_MAX)
+
+
 class Flight(NamedTuple):
-    """States of one simulated manoeuvre at the output times.
+    \"\"\"States of one simulated manoeuvre at the output times.
 
     Attributes
     ----------
@@ -547,7 +562,7 @@ class Flight(NamedTuple):
         Commanded rudder angle held at each output time [rad].
     diverged_at : float or None
         Time of the first output sample where the state left the plausible range.
-    """
+    \"\"\"
 
     t: np.ndarray
     states: np.ndarray
@@ -555,192 +570,29 @@ class Flight(NamedTuple):
     diverged_at: float | None
 
 
-def diverged(state):
-    """Whether a state (7,) or states (7, N) are implausible.
+def rhs(t, state, delta_c):
+    \"\"\"Time derivative of the state (paper eq. 12-14 and the kinematics).
 
-    A state has diverged when it is not finite, u' = u / U0 leaves (0, 2), |v'| > 1 or
-    |r'| = |r| L / U0 > 2.
-    """
-    u = state[0] / U0
-    v = state[1] / U0
-    r = state[2] * L / U0
-    finite = np.all(np.isfinite(state), axis=0)
-    with np.errstate(invalid="ignore"):
-        bad = (u <= 0.0) | (u >= 2.0) | (np.abs(v) > 1.0) | (np.abs(r) > 2.0)
-    return ~finite | bad
+    Parameters
+    ----------
+    t : float
+        Time [s] (the model is time invariant).
+    state : array_like, shape (7,) or (7, N)
+        ``[u, v, r, x, y, psi, delta]`` (SI).
+    delta_c : float or ndarray of shape (N,)
+        Commanded rudder angle [rad].
 
-
-# ---------------------------------------------------------------------------------------------
-# Rudder commands: piecewise constant, possibly closed loop
-# ---------------------------------------------------------------------------------------------
-class _HeldCommand:
-    """Commanded angles held from the times where they change (zero-order hold)."""
-
-    def __init__(self, t, delta_c):
-        angles = np.asarray(delta_c, dtype=float)
-        if angles.ndim == 0:
-            angles = np.full(t.shape, float(angles))
-        if angles.shape != t.shape:
-            raise ValueError(
-                f"delta_c has shape {angles.shape}; give one angle per output time {t.shape}"
-            )
-        if not np.all(np.isfinite(angles)):
-            raise ValueError("delta_c must be finite")
-        changes = np.concatenate([[True], angles[1:] != angles[:-1]])
-        self.times = t[changes]
-        self.angles = angles[changes]
-
-    def reset(self, state0):
-        pass
-
-    def value(self, t, state):
-        k = int(np.searchsorted(self.times, t + 1e-9, side="right")) - 1
-        return float(self.angles[max(k, 0)])
-
-    def next_change(self, t):
-        k = int(np.searchsorted(self.times, t + 1e-9, side="right"))
-        return float(self.times[k]) if k < len(self.times) else math.inf
-
-    def event(self, state):
-        return None
-
-    def on_event(self):
-        pass
-
-
-class _FeedbackCommand(_HeldCommand):
-    """A command from a function f(t, state) -> angle [rad], held over each step."""
-
-    def __init__(self, function):
-        self.function = function
-
-    def value(self, t, state):
-        return float(self.function(t, state))
-
-    def next_change(self, t):
-        return math.inf
-
-
-class _ZigZagCommand(_HeldCommand):
-    """Rudder +-A, reversed when the heading change reaches +-C (closed loop)."""
-
-    def __init__(self, rudder, check, first_sign):
-        self.rudder = rudder
-        self.check = check
-        self.first_sign = first_sign
-        self.sign = 1
-        self.psi0 = 0.0
-
-    def reset(self, state0):
-        self.sign = 1 if self.first_sign >= 0 else -1
-        self.psi0 = float(state0[5])
-
-    def value(self, t, state):
-        return self.sign * self.rudder
-
-    def next_change(self, t):
-        return math.inf
-
-    def event(self, state):
-        return self.sign * (state[5] - self.psi0) - self.check
-
-    def on_event(self):
-        self.sign = -self.sign
-
-
-# ---------------------------------------------------------------------------------------------
-# Integration: classical RK4 on a fixed step, split at every discontinuity of the command
-# ---------------------------------------------------------------------------------------------
-def _hermite(y0, f0, y1, f1, h, theta):
-    """Cubic Hermite interpolation on a step of length h at fraction theta."""
-    t2 = theta * theta
-    t3 = t2 * theta
-    return ((2 * t3 - 3 * t2 + 1) * y0 + (t3 - 2 * t2 + theta) * h * f0
-            + (-2 * t3 + 3 * t2) * y1 + (t3 - t2) * h * f1)
-
-
-def _rk4(t, y, h, delta_c, k1):
-    """One classical Runge-Kutta step; k1 is the derivative at (t, y)."""
-    k2 = rhs(t + 0.5 * h, y + 0.5 * h * k1, delta_c)
-    k3 = rhs(t + 0.5 * h, y + 0.5 * h * k2, delta_c)
-    k4 = rhs(t + h, y + h * k3, delta_c)
-    return y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-
-
-def _bisect(command, y0, f0, y1, f1, h):
-    """Smallest fraction of a step at which the command's event fires (Hermite states)."""
-    if command.event(y0) >= 0.0:
-        return 0.0
-    lo, hi = 0.0, 1.0
-    while hi - lo > 1e-12:
-        mid = 0.5 * (lo + hi)
-        if command.event(_hermite(y0, f0, y1, f1, h, mid)) >= 0.0:
-            hi = mid
-        else:
-            lo = mid
-    return hi
-
-
-def _advance_split(command, time, h, y, t_out, samples, out, out_cmd):
-    """Advance over [time, time + h], stopping at command changes and events."""
-    t_end = time + h
-    tol = 1e-9 * max(1.0, h)
-    for _ in range(64):  # a bounded number of switches per step
-        remaining = t_end - time
-        if remaining <= tol:
-            break
-        delta_c = command.value(time, y)
-        t_change = command.next_change(time)
-        h_try = min(remaining, t_change - time) if t_change < t_end - tol else remaining
-        f0 = rhs(time, y, delta_c)
-        y_try = _rk4(time, y, h_try, delta_c, f0)
-        f1 = rhs(time + h_try, y_try, delta_c)
-        theta, kind = 1.0, "change" if h_try < remaining else None
-        g_end = command.event(y_try)
-        if g_end is not None and g_end >= 0.0:
-            theta = _bisect(command, y, f0, y_try, f1, h_try)
-            kind = "event"
-        h_taken = theta * h_try
-        if theta < 1.0:
-            y_new = _rk4(time, y, h_taken, delta_c, f0)
-            f1 = rhs(time + h_taken, y_new, delta_c)
-        else:
-            y_new = y_try
-        for k in samples:
-            if time - tol <= t_out[k] <= time + h_taken + tol and h_taken > 0:
-                s = (t_out[k] - time) / h_taken
-                out[:, k] = _hermite(y, f0, y_new, f1, h_taken, s)
-                out_cmd[k] = delta_c
-        time += h_taken
-        y = y_new
-        if kind == "event":
-            command.on_event()
-        if kind is None:
-            break
-    return y
-
-
-def _advance(command, time, y, h, t_out, samples, out, out_cmd, cache):
-    """One step of length h; writes the states at the output times inside it."""
-    delta_c = command.value(time, y)
-    if cache is not None and cache[1] == delta_c:
-        f_start = cache[0]
-    else:
-        f_start = rhs(time, y, delta_c)
-    y_end = _rk4(time, y, h, delta_c, f_start)
-    tol = 1e-9 * max(1.0, h)
-    split = command.next_change(time) < time + h - tol
-    if not split:
-        g_end = command.event(y_end)
-        split = g_end is not None and g_end >= 0.0
-    if split:
-        return _advance_split(command, time, h, y, t_out, samples, out, out_cmd), None
-    f_end = rhs(time + h, y_end, delta_c)
-    for k in samples:
-        theta = (t_out[k] - time) / h
-        out[:, k] = _hermite(y, f_start, y_end, f_end, h, theta)
-        out_cmd[k] = delta_c
-    return y_end, (f_end, delta_c)
+    Returns
+    -------
+    ndarray
+        d(state)/dt, the shape of ``state``.
+    \"\"\"
+    state = np.asarray(state, dtype=float)
+    columns = state.reshape(N_STATE, -1)
+    commands = np.broadcast_to(np.asarray(delta_c, dtype=float), columns.shape[1]).copy()
+    members = np.arange(columns.shape[1])
+    out = _Integrator(_Model, [], _SERVO).rhs(t, columns, commands, members, None)
+    return out.reshape(state.shape)
 
 
 def _fly(command, t, state0, step, check_divergence):
@@ -751,42 +603,14 @@ def _fly(command, t, state0, step, check_divergence):
         raise ValueError("output times must increase")
     y = np.array([U0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0] if state0 is None else state0,
                  dtype=float).reshape(N_STATE)
-    command.reset(y)
-    n_out = t.size
-    out = np.full((N_STATE, n_out), np.nan)
-    out_cmd = np.full(n_out, np.nan)
-    out[:, 0] = y
-    out_cmd[0] = command.value(t[0], y)
-    if check_divergence and diverged(y):
-        return Flight(t.copy(), out, out_cmd, float(t[0]))
     h_max = DEFAULT_STEP if step is None else float(step)
-    time = float(t[0])
-    t_end = float(t[-1])
-    k_next = 1
-    cache = None
-    diverged_at = None
-    with np.errstate(all="ignore"):
-        while k_next < n_out:
-            h = min(h_max, t_end - time)
-            t_new = time + h
-            k_stop = int(np.searchsorted(t, t_new + 1e-9 * max(1.0, h), side="right"))
-            samples = range(k_next, k_stop)
-            y, cache = _advance(command, time, y, h, t, samples, out, out_cmd, cache)
-            time = t_new
-            k_next = k_stop
-            if check_divergence and len(samples):
-                bad = diverged(out[:, samples.start:samples.stop])
-                if bad.any():
-                    k_bad = samples.start + int(np.argmax(bad))
-                    diverged_at = float(t[k_bad])
-                    out[:, k_bad:] = np.nan
-                    out_cmd[k_bad:] = np.nan
-                    break
-    return Flight(t.copy(), out, out_cmd, diverged_at)
+    integ = _Integrator(_Model, [command], _SERVO)
+    (result,) = integrate(integ, [command], t, y, h_max, check_divergence, L, U0)
+    return Flight(result.t, result.states, result.delta_c, result.diverged_at)
 
 
 def simulate(t, delta_c, state0=None, *, step=None, check_divergence=True):
-    """Fly the model with a commanded rudder through the servo (paper eq. 12-14).
+    \"\"\"Fly the model with a commanded rudder through the servo (paper eq. 12-14).
 
     Parameters
     ----------
@@ -809,15 +633,25 @@ def simulate(t, delta_c, state0=None, *, step=None, check_divergence=True):
     Returns
     -------
     Flight
-    """
+    \"\"\"
     t = np.asarray(t, dtype=float)
-    command = _FeedbackCommand(delta_c) if callable(delta_c) else _HeldCommand(t, delta_c)
-    return _fly(command, t, state0, step, check_divergence)
+    if callable(delta_c):
+        return _fly(FeedbackCommand(delta_c), t, state0, step, check_divergence)
+    angles = np.asarray(delta_c, dtype=float)
+    if angles.ndim == 0:
+        angles = np.full(t.shape, float(angles))
+    if angles.shape != t.shape:
+        raise ValueError(
+            f"delta_c has shape {angles.shape}; give one angle per output time {t.shape}"
+        )
+    if not np.all(np.isfinite(angles)):
+        raise ValueError("delta_c must be finite")
+    return _fly(StepCommand(t, angles), t, state0, step, check_divergence)
 
 
 def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, *, step=None,
            check_divergence=True):
-    """Fly a zig-zag closed loop: rudder +-rudder_deg, reversed at +-check_deg of heading.
+    \"\"\"Fly a zig-zag closed loop: rudder +-rudder_deg, reversed at +-check_deg of heading.
 
     The rudder is reversed exactly when the heading change from its initial value reaches
     the check angle (located by bisection on the step's Hermite interpolant).
@@ -838,10 +672,21 @@ def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, *, step=None,
     Returns
     -------
     Flight
-    """
-    command = _ZigZagCommand(math.radians(rudder_deg), math.radians(check_deg), first_sign)
+    \"\"\"
+    command = ZigZagCommand(math.radians(rudder_deg), math.radians(check_deg), first_sign)
     return _fly(command, t, state0, step, check_divergence)
 '''
+
+
+def _kernel_source() -> str:
+    """The numerical kernel's source (:mod:`sindyship.simulation.kernels`) below its imports:
+    the generated module flies with the very code the library runs."""
+    import inspect
+
+    from .simulation import kernels
+
+    text = inspect.getsource(kernels)
+    return "\n\n" + text[text.index(kernels.KERNEL_MARK):]
 
 
 def generate_python(model: AbkowitzModel, *, source_note: str = "",
@@ -884,14 +729,13 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     >>> flight.states.shape, flight.diverged_at
     ((7, 60), None)
     """
-    from .simulation import _Integrator, default_step
+    from .simulation import default_step, integrator_for
 
     dynamics = model.dynamics(channels)  # checks that every channel has a value
-    integrator = _Integrator(dynamics, [])
+    integrator = integrator_for(dynamics, [])
     ship = model.ship
     channel_names = {name: f"CHANNEL_{name.upper()}" for name in sorted(model.library.channels)
                      if name != "psi"}
-    rudder = "delta_c" if integrator.rudder_input == "commanded" else "delta"
     Minv = model.inverse_mass
     M = abkowitz_mass_matrix(ship)
     optimizer = model.optimizer.get("name", "given")
@@ -938,7 +782,9 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     ]
 
     lines = [*doc, "", "from __future__ import annotations", "", "import math",
-             "from typing import NamedTuple", "", "import numpy as np", ""]
+             "from collections.abc import Callable, Sequence", "from typing import NamedTuple",
+             "",
+             "import numpy as np", ""]
     lines += [
         "# ---------------------------------------------------------------------------------",
         "# Ship, rudder servo and integration",
@@ -951,7 +797,6 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         f"DELTA_MAX = {_constant(integrator.delta_max)}  # largest rudder angle [rad]",
         f"RUDDER_INPUT = {_literal(integrator.rudder_input)}  # rudder angle the forces see",
         f"DEFAULT_STEP = {_constant(default_step(ship))}  # Runge-Kutta step [s]",
-        "N_STATE = 7",
         "",
         "# Mass matrix of eq. 14 (Prime I) and its inverse",
         "MASS_MATRIX = (",
@@ -1008,58 +853,30 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         *_forces_source(model, channel_names),
         "",
         "",
-        "def rhs(t, state, delta_c):",
-        '    """Time derivative of the state (paper eq. 12-14 and the kinematics).',
+        "def accelerations(u, v, r, delta, psi, branch=None):",
+        '    """Accelerations (du/dt, dv/dt, dr/dt) [SI] of paper eq. 14 from SI state values.',
         "",
-        "    Parameters",
-        "    ----------",
-        "    t : float",
-        "        Time [s] (the model is time invariant).",
-        "    state : array_like, shape (7,) or (7, N)",
-        "        ``[u, v, r, x, y, psi, delta]`` (SI).",
-        "    delta_c : float or ndarray of shape (N,)",
-        "        Commanded rudder angle [rad].",
-        "",
-        "    Returns",
-        "    -------",
-        "    ndarray",
-        "        d(state)/dt, the shape of ``state``.",
+        "    The hydrodynamic forces of eq. 15 plus the Coriolis terms (rigid body plus added",
+        "    mass, with the Munk moment), times the inverse mass matrix; ``delta`` is the rudder",
+        "    angle the forces see.  Vectorised over numpy arrays.",
         '    """',
-        "    state = np.asarray(state, dtype=float)",
-        "    if state.ndim == 1:  # one state: plain floats are the fastest",
-        "        u, v, r, _x, _y, psi, delta = state.tolist()",
-        "        delta_c = float(delta_c)",
-        "        cos, sin, lower, upper = math.cos, math.sin, max, min",
-        "    else:",
-        "        u, v, r, _x, _y, psi, delta = state",
-        "        cos, sin, lower, upper = np.cos, np.sin, np.maximum, np.minimum",
         "    un = u / U0",
         "    vn = v / U0",
         "    rn = r * L / U0",
-        f"    X, Y, N = forces(un - 1.0, vn, rn, {rudder}, psi)",
+        "    X, Y, N = forces(un - 1.0, vn, rn, delta, psi)",
         "    # Coriolis terms, rigid body plus added mass (right-hand side of eq. 14)",
         *coriolis_lines,
-        "    # Eq. 14 solved for the accelerations",
         "    X = X + X_c",
         "    Y = Y + Y_c",
         "    N = N + N_c",
         "    a_u = INV_UU * X",
         "    a_v = INV_VV * Y + INV_VR * N",
         "    a_r = INV_RV * Y + INV_RR * N",
-        "    # Rudder servo (eq. 12-13): first order towards the limited command, rate limited",
-        "    target = upper(lower(delta_c, -DELTA_MAX), DELTA_MAX)",
-        "    rate = upper(lower((target - delta) / T_SERVO, -RATE_MAX), RATE_MAX)",
-        "    # Kinematics: x north, y east",
-        "    c, s = cos(psi), sin(psi)",
-        "    derivative = (a_u * ACC_SCALE, a_v * ACC_SCALE, a_r * ACC_SCALE / L,",
-        "                  u * c - v * s, u * s + v * c, r, rate)",
-        "    if state.ndim == 1:",
-        "        return np.array(derivative)",
-        "    return np.array(np.broadcast_arrays(*derivative))",
+        "    return a_u * ACC_SCALE, a_v * ACC_SCALE, a_r * ACC_SCALE / L",
     ]
     # Exotic libraries (long channel names, many factors) can make a line long.
     lines = [line if len(line) <= 99 else line + "  # noqa: E501" for line in lines]
-    return "\n".join(lines) + "\n" + _RUNTIME.rstrip() + "\n"
+    return "\n".join(lines) + "\n" + _kernel_source() + _RUNTIME.rstrip() + "\n"
 
 
 def latex_document_part(model: AbkowitzModel, precision: int = 4) -> str:

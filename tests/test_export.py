@@ -43,7 +43,7 @@ from sindyship.simulation import (
     FeedbackCommand,
     StepCommand,
     ZigZagCommand,
-    _Integrator,
+    integrator_for,
     simulate_batch,
 )
 from sindyship.targets import DOFS, abkowitz_mass_matrix, coriolis
@@ -233,7 +233,7 @@ def test_rhs_is_vectorised_and_equals_sindyship(model, tmp_path, seed):
     delta_c = rng.uniform(-0.7, 0.7, n)
     batch = sim.rhs(0.0, states, delta_c)
     columns = np.column_stack([sim.rhs(0.0, states[:, j], delta_c[j]) for j in range(n)])
-    reference = _Integrator(model.dynamics(), [StepCommand([0.0], [0.0])] * n).rhs(
+    reference = integrator_for(model.dynamics(), [StepCommand([0.0], [0.0])] * n).rhs(
         0.0, states, delta_c, np.arange(n), None)
     assert batch.shape == (7, n)
     assert relative_difference(batch, reference) <= 1e-13

@@ -1,31 +1,22 @@
-"""Time integration of a manoeuvring model with a rudder servo and rudder commands.
+"""The numerical kernel every flight runs: rudder commands, the servo, classical RK4 with exact
+splitting at discontinuities, cubic Hermite outputs and the divergence test (paper eq. 12-14).
 
-One integrator flies every model (the MMG simulator and every identified Abkowitz model) and
-every manoeuvre, so that a comparison between them differs only in the dynamics.  The state is
-``[u, v, r, x, y, psi, delta]`` in SI units (body-fixed u, v [m/s], yaw rate r [rad/s],
-earth-fixed x north and y east [m], heading psi [rad], actual rudder angle delta [rad]).
-
-Dynamics are any object with ``accelerations(u, v, r, delta, psi) -> (du/dt, dv/dt, dr/dt)``
-(vectorised over numpy arrays), a ``ship`` (for L, U0 and the servo) and optionally a
-``current`` (north, east) [m/s].  Several manoeuvres of one model are integrated together as
-a batch: the right-hand side is evaluated on arrays, one column per manoeuvre.
-
-The scheme is the classical fourth-order Runge-Kutta method on a fixed step that divides the
-sample interval.  Rudder commands are piecewise constant: a step is split exactly at a
-scheduled change (spiral steps, a random sequence, a pull-out) and at a heading event (the
-zig-zag check angle), located by cubic Hermite interpolation of the heading inside the step.
-A member whose state leaves the plausible range stops, and the time it diverged is reported
-(see :func:`diverged`).
+It imports only numpy and the standard library and knows nothing of sindyship: the library's
+integrator (:func:`sindyship.simulation.simulate_batch`) runs it, and the standalone simulator
+that :func:`sindyship.export.generate_python` writes carries its source text (everything below
+the line that marks the kernel's start), so both fly a model with the same code.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
+# ----------------------------------------------------------------------------- kernel begins
+#: The line above, where the source the generated simulators carry begins.
+KERNEL_MARK = "# " + "-" * 77 + " kernel begins"
 N_STATE = 7
 
 
@@ -62,26 +53,22 @@ class RudderCommand:
         """Switch after an event."""
 
 
-@dataclass
 class ConstantCommand(RudderCommand):
     """A constant commanded angle [rad] from t = 0 (a turning circle or a straight run)."""
 
-    angle: float
+    def __init__(self, angle: float):
+        self.angle = angle
 
     def value(self, t, state):
         return self.angle
 
 
-@dataclass
 class StepCommand(RudderCommand):
     """Commanded angles ``angles[k]`` [rad] held from ``times[k]`` [s] (times[0] is the start)."""
 
-    times: Sequence[float]
-    angles: Sequence[float]
-
-    def __post_init__(self):
-        times = np.asarray(self.times, dtype=float)
-        angles = np.asarray(self.angles, dtype=float)
+    def __init__(self, times: Sequence[float], angles: Sequence[float]):
+        times = np.asarray(times, dtype=float)
+        angles = np.asarray(angles, dtype=float)
         # keep only the samples where the command changes: they are the step's breakpoints
         keep = np.ones(len(angles), dtype=bool)
         keep[1:] = angles[1:] != angles[:-1]
@@ -97,7 +84,6 @@ class StepCommand(RudderCommand):
         return float(self.times[k]) if k < len(self.times) else math.inf
 
 
-@dataclass
 class ZigZagCommand(RudderCommand):
     """Closed-loop zig-zag: rudder +-A, reversed when the heading change reaches +-C.
 
@@ -111,11 +97,12 @@ class ZigZagCommand(RudderCommand):
         +1: first rudder to starboard (the heading then grows to +C); -1: to port.
     """
 
-    rudder: float
-    check: float
-    first_sign: int = 1
-    _sign: int = field(default=1, init=False, repr=False)
-    _psi0: float = field(default=0.0, init=False, repr=False)
+    def __init__(self, rudder: float, check: float, first_sign: int = 1):
+        self.rudder = rudder
+        self.check = check
+        self.first_sign = first_sign
+        self._sign = 1
+        self._psi0 = 0.0
 
     def reset(self, state0):
         self._sign = 1 if self.first_sign >= 0 else -1
@@ -131,27 +118,24 @@ class ZigZagCommand(RudderCommand):
         self._sign = -self._sign
 
 
-@dataclass
 class FeedbackCommand(RudderCommand):
     """A command from a function ``f(t, state) -> angle [rad]``, held over each integration step."""
 
-    function: Callable[[float, np.ndarray], float]
+    def __init__(self, function: Callable[[float, np.ndarray], float]):
+        self.function = function
 
     def value(self, t, state):
         return float(self.function(t, state))
 
 
-@dataclass
 class PrescribedRudder(RudderCommand):
     """The rudder angle itself follows a record (linear interpolation), bypassing the servo."""
 
-    times: np.ndarray
-    angles: np.ndarray
     prescribed = True
 
-    def __post_init__(self):
-        self.times = np.asarray(self.times, dtype=float)
-        self.angles = np.asarray(self.angles, dtype=float)
+    def __init__(self, times: np.ndarray, angles: np.ndarray):
+        self.times = np.asarray(times, dtype=float)
+        self.angles = np.asarray(angles, dtype=float)
         self._rate = np.diff(self.angles) / np.diff(self.times)
 
     def value(self, t, state):
@@ -170,7 +154,6 @@ class PrescribedRudder(RudderCommand):
 # ---------------------------------------------------------------------------------------------
 # Results
 # ---------------------------------------------------------------------------------------------
-@dataclass
 class SimulationResult:
     """States at the output times of one simulated manoeuvre.
 
@@ -186,10 +169,12 @@ class SimulationResult:
         Time of the first output sample where the state left the plausible range.
     """
 
-    t: np.ndarray
-    states: np.ndarray
-    delta_c: np.ndarray
-    diverged_at: float | None = None
+    def __init__(self, t: np.ndarray, states: np.ndarray, delta_c: np.ndarray,
+                 diverged_at: float | None = None):
+        self.t = t
+        self.states = states
+        self.delta_c = delta_c
+        self.diverged_at = diverged_at
 
     @property
     def valid(self) -> np.ndarray:
@@ -235,12 +220,12 @@ class _Integrator:
     keeps its fourth order.
     """
 
-    def __init__(self, dynamics, commands: Sequence[RudderCommand]):
+    def __init__(self, dynamics, commands: Sequence[RudderCommand], servo: tuple):
         self.dynamics = dynamics
-        ship = dynamics.ship
-        self.T = max(ship.servo.T_R * ship.time_scale, 1e-9)
-        self.rate_max = math.radians(ship.servo.rate_max)
-        self.delta_max = math.radians(ship.servo.delta_max)
+        time_constant, rate_max, delta_max = servo  # [s], [rad/s], [rad]
+        self.T = max(float(time_constant), 1e-9)
+        self.rate_max = float(rate_max)
+        self.delta_max = float(delta_max)
         cur = getattr(dynamics, "current", (0.0, 0.0))
         self.current = (float(cur[0]), float(cur[1]))
         self.switching = getattr(dynamics, "switching", None)
@@ -284,107 +269,6 @@ class _Integrator:
         k3 = self.rhs(t + 0.5 * h, y + 0.5 * h * k2, delta_c, members, branch)
         k4 = self.rhs(t + h, y + h * k3, delta_c, members, branch)
         return y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4), k1
-
-
-def default_step(ship) -> float:
-    """Default Runge-Kutta step [s]: 0.1 L / U0 (1.86 s for the KCS), and at most a quarter of
-    the rudder servo's time constant.
-
-    With it, halving the step moves no position of the protocol's manoeuvres by more than
-    1e-4 L (``benchmarks/bench_simulate.py`` measures it).
-    """
-    return min(0.1, 0.25 * ship.servo.T_R) * ship.time_scale
-
-
-def simulate_batch(
-    dynamics,
-    commands: Sequence[RudderCommand],
-    t: np.ndarray,
-    state0: np.ndarray,
-    *,
-    step: float | None = None,
-    check_divergence: bool = True,
-) -> list[SimulationResult]:
-    """Fly several manoeuvres of one model together.
-
-    Parameters
-    ----------
-    dynamics : object
-        Provides ``ship`` and ``accelerations(u, v, r, delta, psi, branch=None)``; optionally
-        ``switching(state)`` (a function whose sign selects a branch of a discontinuous
-        right-hand side) and ``current`` (north, east) [m/s].
-    commands : sequence of RudderCommand
-        One per manoeuvre.
-    t : ndarray
-        Increasing output times [s]; the first is the initial time.
-    state0 : ndarray, shape (7,) or (7, B)
-        Initial state(s), SI.
-    step : float, optional
-        Runge-Kutta step [s]; default :func:`default_step`.  States at output times inside a
-        step come from the step's cubic Hermite interpolant.
-    check_divergence : bool
-        Stop a member whose state leaves the plausible range (:func:`diverged`) at an output
-        time; its later samples are NaN and ``diverged_at`` holds that time.
-
-    Returns
-    -------
-    list of SimulationResult
-        One per command, in order.
-    """
-    t = np.asarray(t, dtype=float)
-    n_out = len(t)
-    n_members = len(commands)
-    y = np.array(state0, dtype=float).reshape(N_STATE, -1)
-    if y.shape[1] == 1 and n_members > 1:
-        y = np.repeat(y, n_members, axis=1)
-    if y.shape[1] != n_members:
-        raise ValueError("state0 must have one column per command")
-    if n_out > 1 and np.any(np.diff(t) <= 0):
-        raise ValueError("output times must increase")
-    integ = _Integrator(dynamics, commands)
-    ship = dynamics.ship
-    h_max = float(step) if step is not None else default_step(ship)
-    for j, cmd in enumerate(commands):
-        cmd.reset(y[:, j])
-        if cmd.prescribed:
-            y[6, j] = cmd.value(t[0], y[:, j])
-    out = np.full((N_STATE, n_out, n_members), np.nan)
-    out_cmd = np.full((n_out, n_members), np.nan)
-    diverged_at: list[float | None] = [None] * n_members
-    active = np.ones(n_members, dtype=bool)
-    out[:, 0, :] = y
-    out_cmd[0] = [c.value(t[0], y[:, j]) for j, c in enumerate(commands)]
-    if check_divergence:
-        for j in np.flatnonzero(diverged(y, ship.L, ship.U0)):
-            diverged_at[j] = float(t[0])
-            active[j] = False
-    time = float(t[0])
-    t_end = float(t[-1])
-    k_next = 1
-    fsal = _FirstSameAsLast(n_members)
-    with np.errstate(all="ignore"):
-        while k_next < n_out and active.any():
-            h = min(h_max, t_end - time)
-            members = np.flatnonzero(active)
-            t_new = time + h
-            k_stop = int(np.searchsorted(t, t_new + 1e-9 * max(1.0, h), side="right"))
-            samples = range(k_next, k_stop)
-            y = _advance(integ, commands, time, y, h, members, t, samples, out, out_cmd, fsal)
-            time = t_new
-            k_next = k_stop
-            if check_divergence and len(samples):
-                block = out[:, samples.start:samples.stop][:, :, members]
-                bad = diverged(block.reshape(N_STATE, -1), ship.L, ship.U0).reshape(
-                    len(samples), len(members))
-                for idx in np.flatnonzero(bad.any(axis=0)):
-                    j = members[idx]
-                    k_bad = samples.start + int(np.argmax(bad[:, idx]))
-                    diverged_at[j] = float(t[k_bad])
-                    out[:, k_bad:, j] = np.nan
-                    out_cmd[k_bad:, j] = np.nan
-                    active[j] = False
-    return [SimulationResult(t=t.copy(), states=out[:, :, j], delta_c=out_cmd[:, j],
-                             diverged_at=diverged_at[j]) for j in range(n_members)]
 
 
 class _FirstSameAsLast:
@@ -585,3 +469,82 @@ def _crossing(g, y0, f0, y1, f1, h) -> float:
         if b - a < 1e-12 or gc == 0.0:
             break
     return b
+
+
+def integrate(integ: _Integrator, commands: Sequence[RudderCommand], t: np.ndarray,
+              state0: np.ndarray, h_max: float, check_divergence: bool, L: float, U0: float
+              ) -> list[SimulationResult]:
+    """Fly the commands' manoeuvres together with one integrator (see the module docstring).
+
+    Parameters
+    ----------
+    integ : _Integrator
+        The dynamics, the servo and the commands.
+    commands : sequence of RudderCommand
+        One per manoeuvre (the integrator's).
+    t : ndarray
+        Increasing output times [s]; the first is the initial time.
+    state0 : ndarray, shape (7,) or (7, B)
+        Initial state(s), SI.
+    h_max : float
+        Runge-Kutta step [s].
+    check_divergence : bool
+        Stop a member whose state leaves the plausible range (:func:`diverged`).
+    L, U0 : float
+        Ship length [m] and design speed [m/s] of the divergence test.
+
+    Returns
+    -------
+    list of SimulationResult
+    """
+    t = np.asarray(t, dtype=float)
+    n_out = len(t)
+    n_members = len(commands)
+    y = np.array(state0, dtype=float).reshape(N_STATE, -1)
+    if y.shape[1] == 1 and n_members > 1:
+        y = np.repeat(y, n_members, axis=1)
+    if y.shape[1] != n_members:
+        raise ValueError("state0 must have one column per command")
+    if n_out > 1 and np.any(np.diff(t) <= 0):
+        raise ValueError("output times must increase")
+    for j, cmd in enumerate(commands):
+        cmd.reset(y[:, j])
+        if cmd.prescribed:
+            y[6, j] = cmd.value(t[0], y[:, j])
+    out = np.full((N_STATE, n_out, n_members), np.nan)
+    out_cmd = np.full((n_out, n_members), np.nan)
+    diverged_at: list[float | None] = [None] * n_members
+    active = np.ones(n_members, dtype=bool)
+    out[:, 0, :] = y
+    out_cmd[0] = [c.value(t[0], y[:, j]) for j, c in enumerate(commands)]
+    if check_divergence:
+        for j in np.flatnonzero(diverged(y, L, U0)):
+            diverged_at[j] = float(t[0])
+            active[j] = False
+    time = float(t[0])
+    t_end = float(t[-1])
+    k_next = 1
+    fsal = _FirstSameAsLast(n_members)
+    with np.errstate(all="ignore"):
+        while k_next < n_out and active.any():
+            h = min(h_max, t_end - time)
+            members = np.flatnonzero(active)
+            t_new = time + h
+            k_stop = int(np.searchsorted(t, t_new + 1e-9 * max(1.0, h), side="right"))
+            samples = range(k_next, k_stop)
+            y = _advance(integ, commands, time, y, h, members, t, samples, out, out_cmd, fsal)
+            time = t_new
+            k_next = k_stop
+            if check_divergence and len(samples):
+                block = out[:, samples.start:samples.stop][:, :, members]
+                bad = diverged(block.reshape(N_STATE, -1), L, U0).reshape(
+                    len(samples), len(members))
+                for idx in np.flatnonzero(bad.any(axis=0)):
+                    j = members[idx]
+                    k_bad = samples.start + int(np.argmax(bad[:, idx]))
+                    diverged_at[j] = float(t[k_bad])
+                    out[:, k_bad:, j] = np.nan
+                    out_cmd[k_bad:, j] = np.nan
+                    active[j] = False
+    return [SimulationResult(t=t.copy(), states=out[:, :, j], delta_c=out_cmd[:, j],
+                             diverged_at=diverged_at[j]) for j in range(n_members)]
