@@ -1,441 +1,23 @@
-"""Export an identified Abkowitz model: sympy equations, text, LaTeX and a standalone simulator.
-
-Everything here is made from one declaration per term (:class:`sindyship.terms.Term`) and
-from the same inertia and Coriolis functions the identification uses
-(:func:`sindyship.targets.abkowitz_mass_matrix`, :func:`sindyship.targets.coriolis`), so the
-printed equations, the LaTeX and the generated code say exactly what the model computes.
-
-* :func:`model_equations` gives paper eq. 14 per degree of freedom as :class:`sympy.Eq`:
-  the mass-matrix row times the accelerations equals the hydrodynamic force of eq. 15 plus the
-  Coriolis terms of the reproduction protocol (rigid body plus added mass, with the Munk
-  moment), all in Prime I with u' = 1 + du.
-* :func:`equations_text`, :func:`equations_latex` (an ``align`` environment) and
-  :func:`coefficient_table_latex` (booktabs, x 1e-5 as in paper Tables 7-9) display a model.
-* :func:`generate_python` writes a module that needs only numpy: named coefficients, the
-  right-hand side of eq. 14 with the rudder servo of eq. 12-13 and the kinematics, and the
-  same fixed-step RK4 integrator as :mod:`sindyship.simulation` (steps split at command
-  changes and zig-zag check angles), so that it flies a model as sindyship does.
-* ``sindyship export`` is :mod:`sindyship.cli.export`.
-
-Examples
---------
->>> from sindyship.model import paper_model
->>> from sindyship.ships import load_ship
->>> model = paper_model(load_ship("kcs"), "LS")
->>> eq = model_equations(model)["Y"]
->>> sorted(str(s) for s in eq.lhs.free_symbols)
-["r_dot'", "v_dot'"]
->>> print(equations_text(model, precision=3).splitlines()[1][:47])
-X: 0.00885 u_dot' = -0.00227 du - 0.000508 du^2
-"""
+"""A standalone simulator module for a model: its forces, accelerations and the kernel."""
 
 from __future__ import annotations
 
 import json
-import math
 import re
 import textwrap
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
-import numpy as np
 import sympy
 from sympy.printing.numpy import NumPyPrinter
 
-from . import __version__
-from .errors import SindyshipInputError
-from .targets import DOFS, abkowitz_mass_matrix, coriolis
-from .terms import Term
+from .. import __version__
+from ..targets import DOFS, abkowitz_mass_matrix
+from .symbolic import _active_terms, _coriolis_polynomials, coefficient_symbol, force_expressions
 
 if TYPE_CHECKING:
-    from .model import AbkowitzModel
-    from .ships import Ship
-
-__all__ = [
-    "ACCELERATIONS",
-    "coefficient_symbol",
-    "coefficient_table_latex",
-    "coriolis_expressions",
-    "equations_latex",
-    "equations_text",
-    "force_expressions",
-    "generate_python",
-    "latex_document_part",
-    "model_equations",
-]
-
-#: The non-dimensional accelerations of paper eq. 14 (du'/dt', dv'/dt', dr'/dt').
-ACCELERATIONS = tuple(sympy.Symbol(name, real=True) for name in ("u_dot'", "v_dot'", "r_dot'"))
-_ACC_TEXT = ("u_dot'", "v_dot'", "r_dot'")
-_ACC_LATEX = (r"\dot{u}'", r"\dot{v}'", r"\dot{r}'")
-_DU, _V, _R = (sympy.Symbol(name, real=True) for name in ("du", "v", "r"))
-#: How the Coriolis terms' total surge speed u' = 1 + du is written.
-_U_TOTAL = sympy.Symbol("u_total", real=True)
-_CORIOLIS_TEXT = {"u_total": "(1 + du)", "v": "v", "r": "r"}
-_CORIOLIS_LATEX = {"u_total": r"(1 + \Delta u')", "v": "v'", "r": "r'"}
-
-
-# ---------------------------------------------------------------------------------------------
-# sympy equations (paper eq. 14-15)
-# ---------------------------------------------------------------------------------------------
-def coefficient_symbol(dof: str, term: Term) -> sympy.Symbol:
-    """The sympy symbol of a coefficient, named by :meth:`Term.identifier` (``Y_vvr``).
-
-    Examples
-    --------
-    >>> coefficient_symbol("Y", Term("v^2 r"))
-    Y_vvr
-    """
-    return sympy.Symbol(term.identifier(dof), real=True)
-
-
-def _active_terms(model: AbkowitzModel, dof: str) -> list[tuple[Term, float]]:
-    """The terms of ``dof`` with a non-zero coefficient, in library order."""
-    return [(term, model.coefficients[dof][term.text]) for term in model.library.terms[dof]
-            if model.coefficients[dof][term.text] != 0.0]
-
-
-def force_expressions(model: AbkowitzModel, numeric: bool = False) -> dict[str, sympy.Expr]:
-    """Hydrodynamic forces X', Y', N' of paper eq. 15 (Prime I) as sympy expressions.
-
-    Parameters
-    ----------
-    model : AbkowitzModel
-    numeric : bool
-        If True the coefficients are numbers (:class:`sympy.Float`, the exact double);
-        otherwise symbols named like ``X_vv`` (:func:`coefficient_symbol`).  Zero
-        coefficients are left out either way.
-
-    Returns
-    -------
-    dict
-        ``{"X": expr, "Y": expr, "N": expr}`` in the library's variables (``du``, ``v``,
-        ``r``, ``delta`` and any channels such as ``psi``), real symbols.
-
-    Examples
-    --------
-    >>> from sindyship.model import paper_model
-    >>> from sindyship.ships import load_ship
-    >>> forces = force_expressions(paper_model(load_ship("kcs")))
-    >>> len(forces["X"].args), len(forces["Y"].args)  # X'_0 of the paper is 0
-    (15, 22)
-    >>> forces["Y"].has(sympy.Symbol("Y_vvr", real=True))
-    True
-    """
-    out = {}
-    for dof in DOFS:
-        total: sympy.Expr = sympy.Integer(0)
-        for term, value in _active_terms(model, dof):
-            coef = sympy.Float(value) if numeric else coefficient_symbol(dof, term)
-            total = total + coef * term.sympy()
-        out[dof] = total
-    return out
-
-
-def _coriolis_polynomials(ship: Ship) -> dict[str, sympy.Poly]:
-    """Coriolis terms of :func:`sindyship.targets.coriolis` as polynomials in (u', v', r')."""
-    exprs = coriolis(ship, _U_TOTAL, _V, _R)
-    return {dof: sympy.Poly(expr, _U_TOTAL, _V, _R) for dof, expr in zip(DOFS, exprs,
-                                                                         strict=True)}
-
-
-def coriolis_expressions(ship: Ship) -> dict[str, sympy.Expr]:
-    """Coriolis terms of the protocol on the right-hand side of eq. 14, with u' = 1 + du.
-
-    They come from :func:`sindyship.targets.coriolis` evaluated on sympy symbols.
-
-    Examples
-    --------
-    >>> from sindyship.ships import load_ship
-    >>> c = coriolis_expressions(load_ship("kcs"))
-    >>> sorted(str(s) for s in c["N"].free_symbols)
-    ['du', 'r', 'v']
-    """
-    exprs = coriolis(ship, 1 + _DU, _V, _R)
-    return {dof: sympy.sympify(expr) for dof, expr in zip(DOFS, exprs, strict=True)}
-
-
-def model_equations(model: AbkowitzModel, numeric: bool = False) -> dict[str, sympy.Eq]:
-    """Paper eq. 14, one equation per degree of freedom, in Prime I.
-
-    The left-hand side is the mass-matrix row (:func:`sindyship.targets.abkowitz_mass_matrix`)
-    times the accelerations :data:`ACCELERATIONS`; the right-hand side the force of eq. 15
-    (:func:`force_expressions`) plus the Coriolis terms (:func:`coriolis_expressions`).
-    Inertia values are numbers; coefficients are symbols unless ``numeric``.
-
-    Examples
-    --------
-    >>> from sindyship.model import paper_model
-    >>> from sindyship.ships import load_ship
-    >>> eqs = model_equations(paper_model(load_ship("kcs")), numeric=True)
-    >>> round(float(eqs["X"].lhs.coeff(ACCELERATIONS[0])) * 1e5, 2)
-    885.32
-    >>> point = {sympy.Symbol(n, real=True): 0.0 for n in ("du", "v", "r", "delta")}
-    >>> float(eqs["X"].rhs.subs(point))  # X'_0 of the paper is 0
-    0.0
-    """
-    M = abkowitz_mass_matrix(model.ship)
-    forces = force_expressions(model, numeric=numeric)
-    extra = coriolis_expressions(model.ship)
-    out = {}
-    for i, dof in enumerate(DOFS):
-        lhs = sum((sympy.Float(M[i, j]) * ACCELERATIONS[j] for j in range(3) if M[i, j] != 0.0),
-                  sympy.Integer(0))
-        out[dof] = sympy.Eq(lhs, forces[dof] + extra[dof], evaluate=False)
-    return out
-
-
-# ---------------------------------------------------------------------------------------------
-# Text and LaTeX
-# ---------------------------------------------------------------------------------------------
-def _check_precision(precision: int) -> int:
-    if isinstance(precision, bool) or not isinstance(precision, int | np.integer) \
-            or not 1 <= precision <= 17:
-        raise SindyshipInputError(
-            f"precision must be a whole number of significant digits from 1 to 17, not "
-            f"{precision!r}."
-        )
-    return int(precision)
-
-
-def _number_text(value: float, precision: int) -> str:
-    return f"{value:.{precision}g}"
-
-
-def _number_latex(value: float, precision: int) -> str:
-    """A number in LaTeX with ``precision`` significant digits (``2.5 \\times 10^{-5}``)."""
-    text = f"{value:.{precision}g}"
-    if "e" in text:
-        mantissa, exponent = text.split("e")
-        text = rf"{mantissa} \times 10^{{{int(exponent)}}}"
-    return text
-
-
-def _monomial(powers: Mapping[str, int], names: Mapping[str, str], latex: bool) -> str:
-    words = []
-    for name, power in powers.items():
-        if power == 0:
-            continue
-        sup = "" if power == 1 else (f"^{{{power}}}" if latex else f"^{power}")
-        words.append(names[name] + sup)
-    return " ".join(words)
-
-
-def _equation_pieces(model: AbkowitzModel, dof: str, *, latex: bool, numeric: bool,
-                     precision: int) -> tuple[str, list[tuple[float, str]]]:
-    """Left-hand side text and the signed right-hand-side pieces (sign, body) of eq. 14."""
-    M = abkowitz_mass_matrix(model.ship)
-    i = DOFS.index(dof)
-    number = _number_latex if latex else _number_text
-    acc = _ACC_LATEX if latex else _ACC_TEXT
-    lhs_parts = []
-    for j in range(3):
-        if M[i, j] != 0.0:
-            sign = "-" if M[i, j] < 0 else "+"
-            lhs_parts.append((sign, f"{number(abs(M[i, j]), precision)} {acc[j]}"))
-    lhs = " ".join(f"{s} {b}" for s, b in lhs_parts).removeprefix("+ ")
-    if lhs.startswith("- "):
-        lhs = "-" + lhs[2:]
-    pieces: list[tuple[float, str]] = []
-    for term, value in _active_terms(model, dof):
-        monomial = term.latex_term() if latex else term.text
-        monomial = "" if monomial == "1" else monomial
-        if monomial[:1].isdigit():  # a numeric factor: keep it apart from the coefficient
-            monomial = (r"\cdot " if latex else "* ") + monomial
-        if numeric:
-            body = f"{number(abs(value), precision)} {monomial}".strip()
-            pieces.append((math.copysign(1.0, value), body))
-        else:
-            name = term.latex(dof) if latex else term.identifier(dof)
-            pieces.append((1.0, f"{name} {monomial}".strip()))
-    names = _CORIOLIS_LATEX if latex else _CORIOLIS_TEXT
-    for powers, value in _coriolis_polynomials(model.ship)[dof].terms():
-        value = float(value)
-        if value == 0.0:
-            continue
-        named = dict(zip(("u_total", "v", "r"), powers, strict=True))
-        body = f"{number(abs(value), precision)} {_monomial(named, names, latex)}"
-        pieces.append((math.copysign(1.0, value), body.strip()))
-    return lhs, pieces
-
-
-def _join(pieces: list[tuple[float, str]]) -> list[str]:
-    """Signed pieces as words ``["-0.1 v", "+ 0.2 r", ...]`` (the first without a plus)."""
-    words = []
-    for k, (sign, body) in enumerate(pieces):
-        if k == 0:
-            words.append(("-" if sign < 0 else "") + body)
-        else:
-            words.append(("- " if sign < 0 else "+ ") + body)
-    return words or ["0"]
-
-
-def _header(model: AbkowitzModel) -> str:
-    return (f"Abkowitz model of {model.ship.name} (eq. 14-15, Prime I): library "
-            f"{model.library.name}, optimizer {model.optimizer.get('name', 'given')}, "
-            f"{model.rudder_signal} rudder")
-
-
-def equations_text(model: AbkowitzModel, precision: int = 4, *, width: int = 100) -> str:
-    """The model's equations (paper eq. 14) as plain text, one block per degree of freedom.
-
-    Each block reads ``mass-matrix row . accelerations = hydrodynamic terms + Coriolis
-    terms`` with the library's term spelling (``du``, ``v^2 r``, ...) and u' written as
-    ``(1 + du)`` in the Coriolis terms.  Meant for ``str(model)``.
-
-    Parameters
-    ----------
-    model : AbkowitzModel
-    precision : int
-        Significant digits of every number.
-    width : int
-        Lines are wrapped at this many characters.
-
-    Examples
-    --------
-    >>> from sindyship.model import paper_model
-    >>> from sindyship.ships import load_ship
-    >>> text = equations_text(paper_model(load_ship("kcs")), precision=3)
-    >>> [line[:3] for line in text.splitlines() if line[1:3] == ": "]
-    ['X: ', 'Y: ', 'N: ']
-    """
-    precision = _check_precision(precision)
-    lines = textwrap.wrap(_header(model), width=width, subsequent_indent="    ")
-    for dof in DOFS:
-        lhs, pieces = _equation_pieces(model, dof, latex=False, numeric=True,
-                                       precision=precision)
-        line = f"{dof}: {lhs} ="
-        for word in _join(pieces):
-            if len(line) + 1 + len(word) > width:
-                lines.append(line)
-                line = "      " + word
-            else:
-                line += " " + word
-        lines.append(line)
-    return "\n".join(lines)
-
-
-def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool = True,
-                    terms_per_line: int = 4) -> str:
-    """The model's equations (paper eq. 14-15) as one LaTeX ``align`` environment.
-
-    Parameters
-    ----------
-    model : AbkowitzModel
-    precision : int
-        Significant digits of every number (``1.234 \\times 10^{-5}`` form when small).
-    numeric : bool
-        Coefficients as numbers (default) or by name (``X'_{vv}``, as in Tables 7-9).
-    terms_per_line : int
-        Right-hand-side terms per printed line; continuation lines are ``\\nonumber``.
-
-    Returns
-    -------
-    str
-        ``\\begin{align} ... \\end{align}`` (needs amsmath); variables are primed Prime I
-        quantities, ``\\Delta u' = u' - 1``, and u' = 1 + Delta u' in the Coriolis terms.
-
-    Examples
-    --------
-    >>> from sindyship.model import paper_model
-    >>> from sindyship.ships import load_ship
-    >>> tex = equations_latex(paper_model(load_ship("kcs")), precision=3)
-    >>> print(tex.splitlines()[1].split(" - 0.000508")[0])
-    0.00885 \\dot{u}' &= -0.00227 \\Delta u'
-    """
-    precision = _check_precision(precision)
-    if terms_per_line < 1:
-        raise SindyshipInputError(f"terms_per_line must be at least 1, not {terms_per_line}.")
-    rows = [r"\begin{align}"]
-    for n, dof in enumerate(DOFS):
-        lhs, pieces = _equation_pieces(model, dof, latex=True, numeric=numeric,
-                                       precision=precision)
-        words = _join(pieces)
-        chunks = [words[k:k + terms_per_line] for k in range(0, len(words), terms_per_line)]
-        last = n == len(DOFS) - 1
-        for k, chunk in enumerate(chunks):
-            start = f"{lhs} &= " if k == 0 else r"&\quad "
-            end = "" if (last and k == len(chunks) - 1) else (
-                r" \\" if k == len(chunks) - 1 else r" \nonumber \\")
-            rows.append(start + " ".join(chunk) + end)
-    rows.append(r"\end{align}")
-    return "\n".join(rows)
-
-
-def _latex_text(text: str) -> str:
-    """Plain text made safe inside LaTeX (special characters escaped)."""
-    table = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#",
-             "_": r"\_", "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}",
-             "^": r"\textasciicircum{}"}
-    return "".join(table.get(c, c) for c in str(text))
-
-
-def _table_number(value: float, precision: int) -> str:
-    """A table entry x 1e-5 with at least ``precision`` significant digits (integers kept)."""
-    if value is None or not math.isfinite(value):
-        return "--"
-    if value == 0.0:
-        return "$0$"
-    decimals = max(0, precision - 1 - math.floor(math.log10(abs(value))))
-    text = f"{value:.{decimals}f}"
-    return f"${text}$"
-
-
-def coefficient_table_latex(model: AbkowitzModel, precision: int = 4, *,
-                            reference: Mapping[str, Mapping[str, float]] | None = None,
-                            label: str | None = None, reference_label: str = "Reference") -> str:
-    """The coefficients as a booktabs ``tabular`` in the style of paper Tables 7-9.
-
-    Values are Prime I times 1e5, one block per degree of freedom, every library term
-    listed (zero coefficients as 0).
-
-    Parameters
-    ----------
-    model : AbkowitzModel
-    precision : int
-        Significant digits (integer digits are always kept, as in the paper's tables).
-    reference : dict, optional
-        ``{"X": {term: value}, ...}`` Prime I values printed beside the model's (e.g. the
-        paper's LS column or :func:`sindyship.taylor.taylor_reference`); a missing or NaN
-        value prints as ``--``.
-    label, reference_label : str
-        Column headings (default: the optimizer's name, and ``"Reference"``).
-
-    Examples
-    --------
-    >>> from sindyship.model import paper_model
-    >>> from sindyship.ships import load_ship
-    >>> model = paper_model(load_ship("kcs"))
-    >>> table = coefficient_table_latex(model, reference=model.coefficients,
-    ...                                 reference_label="Paper LS")
-    >>> print(table.splitlines()[3])
-    Coefficient & paper-ls & Paper LS \\\\
-    >>> [line for line in table.splitlines() if line.startswith("$Y'_{vvr}")]
-    ["$Y'_{vvr}$ & $-230253$ & $-230253$ \\\\\\\\"]
-    """
-    precision = _check_precision(precision)
-    heading = _latex_text(label if label is not None else model.optimizer.get("name", "model"))
-    columns = ["Coefficient", heading]
-    if reference is not None:
-        columns.append(_latex_text(reference_label))
-    rows = [
-        r"\begin{tabular}{l" + "r" * (len(columns) - 1) + "}",
-        r"\toprule",
-        r"\multicolumn{" + str(len(columns)) + r"}{l}{Prime I, $\times 10^{-5}$} \\",
-        " & ".join(columns) + r" \\",
-    ]
-    for dof in DOFS:
-        rows.append(r"\midrule")
-        for term in model.library.terms[dof]:
-            cells = [f"${term.latex(dof)}$",
-                     _table_number(model.coefficients[dof][term.text] * 1e5, precision)]
-            if reference is not None:
-                ref = reference.get(dof, {}).get(term.text)
-                cells.append(_table_number(None if ref is None else float(ref) * 1e5,
-                                           precision))
-            rows.append(" & ".join(cells) + r" \\")
-    rows += [r"\bottomrule", r"\end{tabular}"]
-    return "\n".join(rows)
+    from ..model import AbkowitzModel
+    from ..ships import Ship
 
 
 # ---------------------------------------------------------------------------------------------
@@ -683,7 +265,7 @@ def _kernel_source() -> str:
     the generated module flies with the very code the library runs."""
     import inspect
 
-    from .simulation import kernels
+    from ..simulation import kernels
 
     text = inspect.getsource(kernels)
     return "\n\n" + text[text.index(kernels.KERNEL_MARK):]
@@ -720,8 +302,8 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
 
     Examples
     --------
-    >>> from sindyship.model import paper_model
-    >>> from sindyship.ships import load_ship
+    >>> import numpy as np
+    >>> from sindyship import load_ship, paper_model
     >>> source = generate_python(paper_model(load_ship("kcs")))
     >>> namespace = {}
     >>> exec(compile(source, "kcs_sim.py", "exec"), namespace)  # doctest only
@@ -729,7 +311,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     >>> flight.states.shape, flight.diverged_at
     ((7, 60), None)
     """
-    from .simulation import default_step, integrator_for
+    from ..simulation import default_step, integrator_for
 
     dynamics = model.dynamics(channels)  # checks that every channel has a value
     integrator = integrator_for(dynamics, [])
@@ -877,24 +459,3 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     # Exotic libraries (long channel names, many factors) can make a line long.
     lines = [line if len(line) <= 99 else line + "  # noqa: E501" for line in lines]
     return "\n".join(lines) + "\n" + _kernel_source() + _RUNTIME.rstrip() + "\n"
-
-
-def latex_document_part(model: AbkowitzModel, precision: int = 4) -> str:
-    """The LaTeX that ``sindyship export --latex`` writes: equations and coefficient table.
-
-    Examples
-    --------
-    >>> from sindyship.model import paper_model
-    >>> from sindyship.ships import load_ship
-    >>> part = latex_document_part(paper_model(load_ship("kcs")))
-    >>> part.count("{align}"), part.count("{tabular}"), part.count("toprule")
-    (2, 2, 1)
-    """
-    return "\n".join([
-        r"% Abkowitz model exported by sindyship " + __version__ + " (needs amsmath, booktabs)",
-        "% " + _header(model).replace("%", r"\%"),
-        equations_latex(model, precision),
-        "",
-        coefficient_table_latex(model, precision),
-        "",
-    ])

@@ -1,0 +1,135 @@
+"""The model as sympy: coefficient symbols, the forces of eq. 15 and the equations of eq. 14."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import sympy
+
+from ..targets import DOFS, abkowitz_mass_matrix, coriolis
+from ..terms import Term
+
+if TYPE_CHECKING:
+    from ..model import AbkowitzModel
+    from ..ships import Ship
+
+
+#: The non-dimensional accelerations of paper eq. 14 (du'/dt', dv'/dt', dr'/dt').
+ACCELERATIONS = tuple(sympy.Symbol(name, real=True) for name in ("u_dot'", "v_dot'", "r_dot'"))
+_ACC_TEXT = ("u_dot'", "v_dot'", "r_dot'")
+_ACC_LATEX = (r"\dot{u}'", r"\dot{v}'", r"\dot{r}'")
+_DU, _V, _R = (sympy.Symbol(name, real=True) for name in ("du", "v", "r"))
+#: How the Coriolis terms' total surge speed u' = 1 + du is written.
+_U_TOTAL = sympy.Symbol("u_total", real=True)
+_CORIOLIS_TEXT = {"u_total": "(1 + du)", "v": "v", "r": "r"}
+_CORIOLIS_LATEX = {"u_total": r"(1 + \Delta u')", "v": "v'", "r": "r'"}
+
+
+# ---------------------------------------------------------------------------------------------
+# sympy equations (paper eq. 14-15)
+# ---------------------------------------------------------------------------------------------
+def coefficient_symbol(dof: str, term: Term) -> sympy.Symbol:
+    """The sympy symbol of a coefficient, named by :meth:`Term.identifier` (``Y_vvr``).
+
+    Examples
+    --------
+    >>> coefficient_symbol("Y", Term("v^2 r"))
+    Y_vvr
+    """
+    return sympy.Symbol(term.identifier(dof), real=True)
+
+
+def _active_terms(model: AbkowitzModel, dof: str) -> list[tuple[Term, float]]:
+    """The terms of ``dof`` with a non-zero coefficient, in library order."""
+    return [(term, model.coefficients[dof][term.text]) for term in model.library.terms[dof]
+            if model.coefficients[dof][term.text] != 0.0]
+
+
+def force_expressions(model: AbkowitzModel, numeric: bool = False) -> dict[str, sympy.Expr]:
+    """Hydrodynamic forces X', Y', N' of paper eq. 15 (Prime I) as sympy expressions.
+
+    Parameters
+    ----------
+    model : AbkowitzModel
+    numeric : bool
+        If True the coefficients are numbers (:class:`sympy.Float`, the exact double);
+        otherwise symbols named like ``X_vv`` (:func:`coefficient_symbol`).  Zero
+        coefficients are left out either way.
+
+    Returns
+    -------
+    dict
+        ``{"X": expr, "Y": expr, "N": expr}`` in the library's variables (``du``, ``v``,
+        ``r``, ``delta`` and any channels such as ``psi``), real symbols.
+
+    Examples
+    --------
+    >>> from sindyship.model import paper_model
+    >>> from sindyship.ships import load_ship
+    >>> forces = force_expressions(paper_model(load_ship("kcs")))
+    >>> len(forces["X"].args), len(forces["Y"].args)  # X'_0 of the paper is 0
+    (15, 22)
+    >>> forces["Y"].has(sympy.Symbol("Y_vvr", real=True))
+    True
+    """
+    out = {}
+    for dof in DOFS:
+        total: sympy.Expr = sympy.Integer(0)
+        for term, value in _active_terms(model, dof):
+            coef = sympy.Float(value) if numeric else coefficient_symbol(dof, term)
+            total = total + coef * term.sympy()
+        out[dof] = total
+    return out
+
+
+def _coriolis_polynomials(ship: Ship) -> dict[str, sympy.Poly]:
+    """Coriolis terms of :func:`sindyship.targets.coriolis` as polynomials in (u', v', r')."""
+    exprs = coriolis(ship, _U_TOTAL, _V, _R)
+    return {dof: sympy.Poly(expr, _U_TOTAL, _V, _R) for dof, expr in zip(DOFS, exprs,
+                                                                         strict=True)}
+
+
+def coriolis_expressions(ship: Ship) -> dict[str, sympy.Expr]:
+    """Coriolis terms of the protocol on the right-hand side of eq. 14, with u' = 1 + du.
+
+    They come from :func:`sindyship.targets.coriolis` evaluated on sympy symbols.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> c = coriolis_expressions(load_ship("kcs"))
+    >>> sorted(str(s) for s in c["N"].free_symbols)
+    ['du', 'r', 'v']
+    """
+    exprs = coriolis(ship, 1 + _DU, _V, _R)
+    return {dof: sympy.sympify(expr) for dof, expr in zip(DOFS, exprs, strict=True)}
+
+
+def model_equations(model: AbkowitzModel, numeric: bool = False) -> dict[str, sympy.Eq]:
+    """Paper eq. 14, one equation per degree of freedom, in Prime I.
+
+    The left-hand side is the mass-matrix row (:func:`sindyship.targets.abkowitz_mass_matrix`)
+    times the accelerations :data:`ACCELERATIONS`; the right-hand side the force of eq. 15
+    (:func:`force_expressions`) plus the Coriolis terms (:func:`coriolis_expressions`).
+    Inertia values are numbers; coefficients are symbols unless ``numeric``.
+
+    Examples
+    --------
+    >>> from sindyship.model import paper_model
+    >>> from sindyship.ships import load_ship
+    >>> eqs = model_equations(paper_model(load_ship("kcs")), numeric=True)
+    >>> round(float(eqs["X"].lhs.coeff(ACCELERATIONS[0])) * 1e5, 2)
+    885.32
+    >>> point = {sympy.Symbol(n, real=True): 0.0 for n in ("du", "v", "r", "delta")}
+    >>> float(eqs["X"].rhs.subs(point))  # X'_0 of the paper is 0
+    0.0
+    """
+    M = abkowitz_mass_matrix(model.ship)
+    forces = force_expressions(model, numeric=numeric)
+    extra = coriolis_expressions(model.ship)
+    out = {}
+    for i, dof in enumerate(DOFS):
+        lhs = sum((sympy.Float(M[i, j]) * ACCELERATIONS[j] for j in range(3) if M[i, j] != 0.0),
+                  sympy.Integer(0))
+        out[dof] = sympy.Eq(lhs, forces[dof] + extra[dof], evaluate=False)
+    return out

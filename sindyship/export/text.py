@@ -1,0 +1,300 @@
+"""The model as text and LaTeX: equations, the coefficient table, the exported document part."""
+
+from __future__ import annotations
+
+import math
+import textwrap
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .. import __version__
+from ..errors import SindyshipInputError
+from ..targets import DOFS, abkowitz_mass_matrix
+from .symbolic import (
+    _ACC_LATEX,
+    _ACC_TEXT,
+    _CORIOLIS_LATEX,
+    _CORIOLIS_TEXT,
+    _active_terms,
+    _coriolis_polynomials,
+)
+
+if TYPE_CHECKING:
+    from ..model import AbkowitzModel
+
+
+# ---------------------------------------------------------------------------------------------
+# Text and LaTeX
+# ---------------------------------------------------------------------------------------------
+def _check_precision(precision: int) -> int:
+    if isinstance(precision, bool) or not isinstance(precision, int | np.integer) \
+            or not 1 <= precision <= 17:
+        raise SindyshipInputError(
+            f"precision must be a whole number of significant digits from 1 to 17, not "
+            f"{precision!r}."
+        )
+    return int(precision)
+
+
+def _number_text(value: float, precision: int) -> str:
+    return f"{value:.{precision}g}"
+
+
+def _number_latex(value: float, precision: int) -> str:
+    """A number in LaTeX with ``precision`` significant digits (``2.5 \\times 10^{-5}``)."""
+    text = f"{value:.{precision}g}"
+    if "e" in text:
+        mantissa, exponent = text.split("e")
+        text = rf"{mantissa} \times 10^{{{int(exponent)}}}"
+    return text
+
+
+def _monomial(powers: Mapping[str, int], names: Mapping[str, str], latex: bool) -> str:
+    words = []
+    for name, power in powers.items():
+        if power == 0:
+            continue
+        sup = "" if power == 1 else (f"^{{{power}}}" if latex else f"^{power}")
+        words.append(names[name] + sup)
+    return " ".join(words)
+
+
+def _equation_pieces(model: AbkowitzModel, dof: str, *, latex: bool, numeric: bool,
+                     precision: int) -> tuple[str, list[tuple[float, str]]]:
+    """Left-hand side text and the signed right-hand-side pieces (sign, body) of eq. 14."""
+    M = abkowitz_mass_matrix(model.ship)
+    i = DOFS.index(dof)
+    number = _number_latex if latex else _number_text
+    acc = _ACC_LATEX if latex else _ACC_TEXT
+    lhs_parts = []
+    for j in range(3):
+        if M[i, j] != 0.0:
+            sign = "-" if M[i, j] < 0 else "+"
+            lhs_parts.append((sign, f"{number(abs(M[i, j]), precision)} {acc[j]}"))
+    lhs = " ".join(f"{s} {b}" for s, b in lhs_parts).removeprefix("+ ")
+    if lhs.startswith("- "):
+        lhs = "-" + lhs[2:]
+    pieces: list[tuple[float, str]] = []
+    for term, value in _active_terms(model, dof):
+        monomial = term.latex_term() if latex else term.text
+        monomial = "" if monomial == "1" else monomial
+        if monomial[:1].isdigit():  # a numeric factor: keep it apart from the coefficient
+            monomial = (r"\cdot " if latex else "* ") + monomial
+        if numeric:
+            body = f"{number(abs(value), precision)} {monomial}".strip()
+            pieces.append((math.copysign(1.0, value), body))
+        else:
+            name = term.latex(dof) if latex else term.identifier(dof)
+            pieces.append((1.0, f"{name} {monomial}".strip()))
+    names = _CORIOLIS_LATEX if latex else _CORIOLIS_TEXT
+    for powers, value in _coriolis_polynomials(model.ship)[dof].terms():
+        value = float(value)
+        if value == 0.0:
+            continue
+        named = dict(zip(("u_total", "v", "r"), powers, strict=True))
+        body = f"{number(abs(value), precision)} {_monomial(named, names, latex)}"
+        pieces.append((math.copysign(1.0, value), body.strip()))
+    return lhs, pieces
+
+
+def _join(pieces: list[tuple[float, str]]) -> list[str]:
+    """Signed pieces as words ``["-0.1 v", "+ 0.2 r", ...]`` (the first without a plus)."""
+    words = []
+    for k, (sign, body) in enumerate(pieces):
+        if k == 0:
+            words.append(("-" if sign < 0 else "") + body)
+        else:
+            words.append(("- " if sign < 0 else "+ ") + body)
+    return words or ["0"]
+
+
+def _header(model: AbkowitzModel) -> str:
+    return (f"Abkowitz model of {model.ship.name} (eq. 14-15, Prime I): library "
+            f"{model.library.name}, optimizer {model.optimizer.get('name', 'given')}, "
+            f"{model.rudder_signal} rudder")
+
+
+def equations_text(model: AbkowitzModel, precision: int = 4, *, width: int = 100) -> str:
+    """The model's equations (paper eq. 14) as plain text, one block per degree of freedom.
+
+    Each block reads ``mass-matrix row . accelerations = hydrodynamic terms + Coriolis
+    terms`` with the library's term spelling (``du``, ``v^2 r``, ...) and u' written as
+    ``(1 + du)`` in the Coriolis terms.  Meant for ``str(model)``.
+
+    Parameters
+    ----------
+    model : AbkowitzModel
+    precision : int
+        Significant digits of every number.
+    width : int
+        Lines are wrapped at this many characters.
+
+    Examples
+    --------
+    >>> from sindyship.model import paper_model
+    >>> from sindyship.ships import load_ship
+    >>> text = equations_text(paper_model(load_ship("kcs")), precision=3)
+    >>> [line[:3] for line in text.splitlines() if line[1:3] == ": "]
+    ['X: ', 'Y: ', 'N: ']
+    """
+    precision = _check_precision(precision)
+    lines = textwrap.wrap(_header(model), width=width, subsequent_indent="    ")
+    for dof in DOFS:
+        lhs, pieces = _equation_pieces(model, dof, latex=False, numeric=True,
+                                       precision=precision)
+        line = f"{dof}: {lhs} ="
+        for word in _join(pieces):
+            if len(line) + 1 + len(word) > width:
+                lines.append(line)
+                line = "      " + word
+            else:
+                line += " " + word
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool = True,
+                    terms_per_line: int = 4) -> str:
+    """The model's equations (paper eq. 14-15) as one LaTeX ``align`` environment.
+
+    Parameters
+    ----------
+    model : AbkowitzModel
+    precision : int
+        Significant digits of every number (``1.234 \\times 10^{-5}`` form when small).
+    numeric : bool
+        Coefficients as numbers (default) or by name (``X'_{vv}``, as in Tables 7-9).
+    terms_per_line : int
+        Right-hand-side terms per printed line; continuation lines are ``\\nonumber``.
+
+    Returns
+    -------
+    str
+        ``\\begin{align} ... \\end{align}`` (needs amsmath); variables are primed Prime I
+        quantities, ``\\Delta u' = u' - 1``, and u' = 1 + Delta u' in the Coriolis terms.
+
+    Examples
+    --------
+    >>> from sindyship.model import paper_model
+    >>> from sindyship.ships import load_ship
+    >>> tex = equations_latex(paper_model(load_ship("kcs")), precision=3)
+    >>> print(tex.splitlines()[1].split(" - 0.000508")[0])
+    0.00885 \\dot{u}' &= -0.00227 \\Delta u'
+    """
+    precision = _check_precision(precision)
+    if terms_per_line < 1:
+        raise SindyshipInputError(f"terms_per_line must be at least 1, not {terms_per_line}.")
+    rows = [r"\begin{align}"]
+    for n, dof in enumerate(DOFS):
+        lhs, pieces = _equation_pieces(model, dof, latex=True, numeric=numeric,
+                                       precision=precision)
+        words = _join(pieces)
+        chunks = [words[k:k + terms_per_line] for k in range(0, len(words), terms_per_line)]
+        last = n == len(DOFS) - 1
+        for k, chunk in enumerate(chunks):
+            start = f"{lhs} &= " if k == 0 else r"&\quad "
+            end = "" if (last and k == len(chunks) - 1) else (
+                r" \\" if k == len(chunks) - 1 else r" \nonumber \\")
+            rows.append(start + " ".join(chunk) + end)
+    rows.append(r"\end{align}")
+    return "\n".join(rows)
+
+
+def _latex_text(text: str) -> str:
+    """Plain text made safe inside LaTeX (special characters escaped)."""
+    table = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#",
+             "_": r"\_", "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}",
+             "^": r"\textasciicircum{}"}
+    return "".join(table.get(c, c) for c in str(text))
+
+
+def _table_number(value: float, precision: int) -> str:
+    """A table entry x 1e-5 with at least ``precision`` significant digits (integers kept)."""
+    if value is None or not math.isfinite(value):
+        return "--"
+    if value == 0.0:
+        return "$0$"
+    decimals = max(0, precision - 1 - math.floor(math.log10(abs(value))))
+    text = f"{value:.{decimals}f}"
+    return f"${text}$"
+
+
+def coefficient_table_latex(model: AbkowitzModel, precision: int = 4, *,
+                            reference: Mapping[str, Mapping[str, float]] | None = None,
+                            label: str | None = None, reference_label: str = "Reference") -> str:
+    """The coefficients as a booktabs ``tabular`` in the style of paper Tables 7-9.
+
+    Values are Prime I times 1e5, one block per degree of freedom, every library term
+    listed (zero coefficients as 0).
+
+    Parameters
+    ----------
+    model : AbkowitzModel
+    precision : int
+        Significant digits (integer digits are always kept, as in the paper's tables).
+    reference : dict, optional
+        ``{"X": {term: value}, ...}`` Prime I values printed beside the model's (e.g. the
+        paper's LS column or :func:`sindyship.taylor.taylor_reference`); a missing or NaN
+        value prints as ``--``.
+    label, reference_label : str
+        Column headings (default: the optimizer's name, and ``"Reference"``).
+
+    Examples
+    --------
+    >>> from sindyship.model import paper_model
+    >>> from sindyship.ships import load_ship
+    >>> model = paper_model(load_ship("kcs"))
+    >>> table = coefficient_table_latex(model, reference=model.coefficients,
+    ...                                 reference_label="Paper LS")
+    >>> print(table.splitlines()[3])
+    Coefficient & paper-ls & Paper LS \\\\
+    >>> [line for line in table.splitlines() if line.startswith("$Y'_{vvr}")]
+    ["$Y'_{vvr}$ & $-230253$ & $-230253$ \\\\\\\\"]
+    """
+    precision = _check_precision(precision)
+    heading = _latex_text(label if label is not None else model.optimizer.get("name", "model"))
+    columns = ["Coefficient", heading]
+    if reference is not None:
+        columns.append(_latex_text(reference_label))
+    rows = [
+        r"\begin{tabular}{l" + "r" * (len(columns) - 1) + "}",
+        r"\toprule",
+        r"\multicolumn{" + str(len(columns)) + r"}{l}{Prime I, $\times 10^{-5}$} \\",
+        " & ".join(columns) + r" \\",
+    ]
+    for dof in DOFS:
+        rows.append(r"\midrule")
+        for term in model.library.terms[dof]:
+            cells = [f"${term.latex(dof)}$",
+                     _table_number(model.coefficients[dof][term.text] * 1e5, precision)]
+            if reference is not None:
+                ref = reference.get(dof, {}).get(term.text)
+                cells.append(_table_number(None if ref is None else float(ref) * 1e5,
+                                           precision))
+            rows.append(" & ".join(cells) + r" \\")
+    rows += [r"\bottomrule", r"\end{tabular}"]
+    return "\n".join(rows)
+
+
+
+def latex_document_part(model: AbkowitzModel, precision: int = 4) -> str:
+    """The LaTeX that ``sindyship export --latex`` writes: equations and coefficient table.
+
+    Examples
+    --------
+    >>> from sindyship.model import paper_model
+    >>> from sindyship.ships import load_ship
+    >>> part = latex_document_part(paper_model(load_ship("kcs")))
+    >>> part.count("{align}"), part.count("{tabular}"), part.count("toprule")
+    (2, 2, 1)
+    """
+    return "\n".join([
+        r"% Abkowitz model exported by sindyship " + __version__ + " (needs amsmath, booktabs)",
+        "% " + _header(model).replace("%", r"\%"),
+        equations_latex(model, precision),
+        "",
+        coefficient_table_latex(model, precision),
+        "",
+    ])
