@@ -18,7 +18,7 @@ from pysindy.feature_library.base import ConcatLibrary
 from sklearn.base import clone
 from sklearn.linear_model import LinearRegression
 
-import sindyship.library as library_module
+import sindyship.library._files as library_module
 from sindyship.errors import SindyshipInputError
 from sindyship.library import (
     DOFS,

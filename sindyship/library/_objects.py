@@ -1,0 +1,245 @@
+"""Term libraries and effects (paper eq. 15, 17): the objects."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from sindyship.errors import SindyshipInputError
+from sindyship.terms import CORE_VARIABLES, Term
+
+from ._checks import (
+    _CHANNEL_RE,
+    _LIBRARY_KEYS,
+    DOFS,
+    _check_keys,
+    _frozen_terms,
+    _name,
+    _read_terms,
+    _text,
+    _variables,
+    _where,
+)
+
+if TYPE_CHECKING:
+    pass
+
+
+# ---------------------------------------------------------------------------- the objects
+@dataclass(frozen=True)
+class TermLibrary:
+    """The terms of X, Y and N of a manoeuvring model, read from a library file.
+
+    Parameters
+    ----------
+    name : str
+        Stable identifier, e.g. ``"abkowitz"``; ``"abkowitz+asymmetry"`` once extended.
+    system : str
+        The non-dimensional system of the variables and coefficients, e.g. ``"prime-I"``.
+    description : str
+        What the library is, for people (cite the equation it comes from).
+    terms : mapping of str to tuple of Term
+        The terms per degree of freedom, keyed by ``"X"``, ``"Y"``, ``"N"`` in that order
+        (term texts are parsed).  Within a degree of freedom no two terms may be equal up
+        to a constant factor.
+    source : Path, optional
+        The file the library was read from.
+    effects : tuple of str
+        Names of the effects added by :meth:`extended`, in order.
+
+    Examples
+    --------
+    >>> from sindyship.library import load_library
+    >>> library = load_library("abkowitz")
+    >>> {dof: len(terms) for dof, terms in library.terms.items()}
+    {'X': 16, 'Y': 22, 'N': 22}
+    >>> sorted(library.variables), sorted(library.channels)
+    (['delta', 'du', 'r', 'v'], [])
+    >>> TermLibrary("toy", "prime-I", "", {"X": ["du"], "Y": ["v"], "N": ["r", "r v^0"]})
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: library "toy": the term "r v^0" is not valid: \
+"^" is followed by one digit 1-9; found "0" at character 5.
+    """
+
+    name: str
+    system: str
+    description: str
+    terms: Mapping[str, tuple[Term, ...]]
+    source: Path | None = field(default=None, compare=False)
+    effects: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        label = self.source if self.source is not None else f'library "{self.name}"'
+        frozen = _frozen_terms(self.terms, label, all_dofs=True)
+        object.__setattr__(self, "terms", frozen)
+        object.__setattr__(self, "effects", tuple(self.effects))
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.system, self.description, *self.terms.items(), self.effects))
+
+    @property
+    def variables(self) -> frozenset[str]:
+        """All variables the terms use."""
+        return _variables(self.terms)
+
+    @property
+    def channels(self) -> frozenset[str]:
+        """The variables beyond du, v, r and delta: data channels the library needs."""
+        return self.variables - set(CORE_VARIABLES)
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        """The input columns for :class:`AbkowitzFeatureLibrary`: du, v, r, delta, channels.
+
+        The state of a pysindy fit is ``[du, v, r]``; the rest is its control input ``u``.
+        """
+        return (*CORE_VARIABLES, *sorted(self.channels))
+
+    def extended(self, *effects: Effect) -> TermLibrary:
+        """This library with the terms of ``effects`` added.
+
+        Each effect's terms are appended per degree of freedom, skipping those the library
+        already has (by :meth:`Term.canonical`, up to a constant factor).
+
+        Examples
+        --------
+        >>> base = TermLibrary("toy", "prime-I", "", {"X": ["du"], "Y": ["v"], "N": ["r"]})
+        >>> drift = Effect("drift", "Drift", "A made-up effect.", ("psi",),
+        ...                {"Y": ["sin(psi)", "v"], "N": ["cos(psi)"]})
+        >>> bigger = base.extended(drift)
+        >>> bigger.name, [t.text for t in bigger.terms["Y"]], sorted(bigger.channels)
+        ('toy+drift', ['v', 'sin(psi)'], ['psi'])
+        """
+        terms = {dof: list(self.terms[dof]) for dof in DOFS}
+        names = list(self.effects)
+        for effect in effects:
+            if effect.name in names:
+                continue
+            names.append(effect.name)
+            for dof in DOFS:
+                present = {t.canonical(scale=False) for t in terms[dof]}
+                terms[dof] += [
+                    t for t in effect.terms[dof] if t.canonical(scale=False) not in present
+                ]
+        added = names[len(self.effects) :]
+        return TermLibrary(
+            name="+".join([self.name, *added]),
+            system=self.system,
+            description=self.description,
+            terms=terms,
+            source=self.source,
+            effects=tuple(names),
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready description (name, system, description, effects, term texts).
+
+        Examples
+        --------
+        >>> from sindyship.library import load_library
+        >>> library = load_library("abkowitz-noconst")
+        >>> TermLibrary.from_dict(library.to_dict()) == library
+        True
+        """
+        return {
+            "name": self.name,
+            "system": self.system,
+            "description": self.description,
+            "effects": list(self.effects),
+            "terms": {dof: [t.text for t in self.terms[dof]] for dof in DOFS},
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], *, source: str | Path | None = None) -> TermLibrary:
+        """The library saved by :meth:`to_dict` (e.g. inside a model JSON), validated.
+
+        Parameters
+        ----------
+        data : mapping
+            As made by :meth:`to_dict`.
+        source : str or Path, optional
+            Where ``data`` comes from, for error messages.
+        """
+        label = source if source is not None else "saved library"
+        if not isinstance(data, Mapping):
+            raise SindyshipInputError(f"{_where(label)}a library must be a JSON object.")
+        _check_keys(data, {**_LIBRARY_KEYS, "effects": False}, label)
+        effects = data.get("effects", [])
+        if not isinstance(effects, list) or not all(isinstance(e, str) for e in effects):
+            raise SindyshipInputError(f"{_where(label)}effects must be a list of effect names.")
+        return cls(
+            name=_name(data, label, extended=True),
+            system=_text(data, "system", label),
+            description=_text(data, "description", label),
+            terms=_read_terms(data["terms"], label, None, all_dofs=True),
+            source=Path(source) if source is not None else None,
+            effects=tuple(effects),
+        )
+
+
+@dataclass(frozen=True)
+class Effect:
+    """A catalogued physical effect: its physics, the channels it needs, its terms.
+
+    Parameters
+    ----------
+    name : str
+        Stable identifier (``"asymmetry"``, ``"crossflow"``, ...).
+    title : str
+        A short title for reports.
+    physics : str
+        One paragraph: what the effect is, how it shows in the residuals, what to measure.
+    channels : tuple of str
+        Data channels the effect needs beyond u, v, r and delta; every such variable its
+        terms use must be listed here.
+    terms : mapping of str to tuple of Term
+        Extra terms per degree of freedom; a degree of freedom the effect does not touch
+        has an empty tuple.
+    source : Path, optional
+        The file the effect was read from.
+
+    Examples
+    --------
+    >>> Effect("e", "E", "Text.", (), {"Y": ["abs(v) v"], "N": ["abs(r) r"]}).terms["X"]
+    ()
+    """
+
+    name: str
+    title: str
+    physics: str
+    channels: tuple[str, ...]
+    terms: Mapping[str, tuple[Term, ...]]
+    source: Path | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        label = self.source if self.source is not None else f'effect "{self.name}"'
+        frozen = _frozen_terms(self.terms, label, all_dofs=False)
+        if not any(frozen.values()):
+            raise SindyshipInputError(f"{_where(label)}the effect has no terms.")
+        channels = tuple(self.channels)
+        for channel in channels:
+            if not isinstance(channel, str) or not _CHANNEL_RE.fullmatch(channel):
+                raise SindyshipInputError(f"{_where(label)}{channel!r} is not a channel name.")
+            if channel in CORE_VARIABLES:
+                raise SindyshipInputError(
+                    f'{_where(label)}"{channel}" is always available; list only the channels '
+                    "beyond du, v, r and delta."
+                )
+        undeclared = sorted(_variables(frozen) - set(CORE_VARIABLES) - set(channels))
+        if undeclared:
+            raise SindyshipInputError(
+                f'{_where(label)}the terms use the channel "{undeclared[0]}"; add it to channels.'
+            )
+        object.__setattr__(self, "terms", frozen)
+        object.__setattr__(self, "channels", channels)
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.title, self.physics, self.channels, *self.terms.items()))
+
+    @property
+    def variables(self) -> frozenset[str]:
+        """All variables the effect's terms use."""
+        return _variables(self.terms)
