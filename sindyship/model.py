@@ -25,6 +25,7 @@ from .errors import SindyshipInputError
 from .library import TermLibrary, nondimensional_variables
 from .ships import Ship, load_ship, ship_digest, ship_from_dict, ship_to_dict
 from .targets import DOFS, abkowitz_mass_matrix, coriolis
+from .terms import evaluate_factor
 from .trajectory import Trajectory
 
 FORMAT_VERSION = 2
@@ -163,7 +164,7 @@ class AbkowitzModel:
             column = 1.0
             for factor in term.factors:
                 if factor not in cache:
-                    cache[factor] = term_factor(factor, values)
+                    cache[factor] = evaluate_factor(factor, values)
                 column = column * cache[factor]
             columns[k] = column
         return {dof: np.tensordot(self._weights[dof], columns, axes=1) for dof in DOFS}
@@ -418,25 +419,6 @@ def _no_duplicate_keys(pairs: list[tuple[str, object]]) -> dict:
     if repeated:
         raise SindyshipInputError(f"the key {repeated[0]!r} appears twice in one JSON object")
     return dict(pairs)
-
-
-_FUNCTIONS = {"abs": np.abs, "sign": np.sign, "sin": np.sin, "cos": np.cos}
-
-
-def term_factor(factor, values: Mapping[str, np.ndarray]):
-    """One factor ``(function, base, power)`` of a term, evaluated on the variables."""
-    function, base, power = factor
-    if isinstance(base, str):
-        if base not in values:
-            raise SindyshipInputError(
-                f"the model needs the variable {base!r}, which the data do not provide."
-            )
-        column = np.asarray(values[base], dtype=float)
-    else:
-        column = float(base)
-    if function is not None:
-        column = _FUNCTIONS[function](column)
-    return column**power if power != 1 else column
 
 
 def _jsonable(value):

@@ -1,343 +1,30 @@
-"""Terms of a manoeuvring model: a whitelist parser and the :class:`Term` object.
-
-A term is one monomial of the Abkowitz Taylor series (paper eq. 15), written in the small
-language of the term-library files (``libraries/*.toml``)::
-
-    term   := "1" | factor (" " factor)*
-    factor := atom ("^" digit)?
-    atom   := variable | number | ("abs" | "sin" | "cos" | "sign") "(" variable ")"
-
-Variables are the non-dimensional motion variables ``du`` (= u' - 1), ``v``, ``r``, ``delta``
-and named data channels (``psi``, ``n``, ``wind_speed``, ``wind_dir``, ...).  Library files are
-untrusted input, so the text is read by a hand-written tokenizer that accepts exactly this
-grammar and nothing else: it is never handed to ``eval``, ``sympify`` or a parser of Python
-or sympy syntax.  A bad term raises :class:`~sindyship.errors.SindyshipInputError` with one
-sentence naming the file, the line and the term.
-
-A :class:`Term` is made once from its text, and everything else comes from it: the numeric
-column (:meth:`Term.evaluate`), the sympy expression (:meth:`Term.sympy`), the coefficient's
-printed name (:attr:`Term.subscript`, :meth:`Term.latex`), a Python identifier for generated
-code (:meth:`Term.identifier`) and the LaTeX of the monomial (:meth:`Term.latex_term`).
-
-Examples
---------
->>> import numpy as np
->>> term = parse_term("v^2 r")
->>> term.factors
-(Factor(function=None, base='v', power=2), Factor(function=None, base='r', power=1))
->>> term.evaluate({"v": np.array([0.1, 0.2]), "r": np.array([1.0, -1.0])})
-array([ 0.01, -0.04])
->>> term.latex("Y"), term.identifier("Y"), term.latex_term()
-("Y'_{vvr}", 'Y_vvr', "v'^{2} r'")
->>> parse_term("r v v").canonical()
-'v^2 r'
-"""
+"""A term: its parsed factors, its numbers, its printed, LaTeX and sympy forms."""
 
 from __future__ import annotations
 
-import json
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from decimal import Decimal, localcontext
 from fractions import Fraction
 from pathlib import Path
-from types import MappingProxyType
-from typing import NamedTuple
 
 import numpy as np
 import sympy
 
-from sindyship.errors import SindyshipInputError
-
-__all__ = [
-    "CORE_VARIABLES",
-    "FUNCTIONS",
-    "Factor",
-    "MAX_DEGREE",
-    "MAX_FACTORS",
-    "MAX_TERM_LENGTH",
-    "Term",
-    "VARIABLES",
-    "Variable",
-    "describe_variable",
-    "parse_term",
-]
-
-#: Functions a factor may apply to a variable.
-FUNCTIONS = ("abs", "sign", "sin", "cos")
-#: The motion variables of the Abkowitz expansion (paper eq. 15), in the paper's order.
-CORE_VARIABLES = ("du", "v", "r", "delta")
-#: Longest term text accepted [characters].
-MAX_TERM_LENGTH = 120
-#: Most factors in one term.
-MAX_FACTORS = 8
-#: Largest sum of the exponents in one term (keeps every column finite for finite data).
-MAX_DEGREE = 9
-_MAX_NAME_LENGTH = 32
-_MAX_NUMBER_LENGTH = 10
-_DIGITS = "0123456789"
-_LOWER = "abcdefghijklmnopqrstuvwxyz"
-_NAME_RE = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
-_ATOMIC_LATEX_RE = re.compile(r"[A-Za-z]|\\[A-Za-z]+")
-#: Names that cannot be variables, with the reason shown to the user.
-_RESERVED = {
-    "u": 'the library variable for surge is "du" (= u/U0 - 1)',
-    **{name: "it is a function name" for name in FUNCTIONS},
-}
-
-_NUMPY_FUNCTIONS = {"abs": np.abs, "sign": np.sign, "sin": np.sin, "cos": np.cos}
-_SYMPY_FUNCTIONS = {"abs": sympy.Abs, "sign": sympy.sign, "sin": sympy.sin, "cos": sympy.cos}
-_LATEX_FUNCTIONS = {"sign": r"\operatorname{sgn}", "sin": r"\sin", "cos": r"\cos"}
-_TEXT_FUNCTIONS = {"sign": "sgn", "sin": "sin", "cos": "cos"}
-
-
-@dataclass(frozen=True)
-class Variable:
-    """How one library variable is made from SI data and how it is printed.
-
-    Parameters
-    ----------
-    name : str
-        The name used in term text (``"du"``, ``"v"``, ``"psi"``, ...).
-    column : str
-        The trajectory channel it is computed from (``"rudder"`` means the actual rudder angle
-        if recorded, else the commanded one).
-    scaling : str
-        Prime-I non-dimensionalisation (paper section 2.2) with the design speed U0 and
-        length L: ``"surge"`` u/U0 - 1, ``"speed"`` value/U0, ``"rate"`` value L/U0,
-        ``"none"`` the SI value unchanged (angles in rad, other channels as recorded).
-    symbol : str
-        LaTeX of the variable in a term (a prime marks a non-dimensional value).
-    subscript : str
-        Plain text of the variable in a coefficient name (``"d"`` for delta, as ``X'_vd``).
-    subscript_latex : str
-        LaTeX of the variable in a coefficient subscript (``\\delta`` for delta).
-    description : str
-        One line for people: what the variable is.
-    """
-
-    name: str
-    column: str
-    scaling: str
-    symbol: str
-    subscript: str
-    subscript_latex: str
-    description: str
-
-
-#: The variables with a known meaning; any other channel is used as recorded (SI, unscaled).
-VARIABLES: Mapping[str, Variable] = MappingProxyType(
-    {
-        v.name: v
-        for v in (
-            Variable("du", "u", "surge", r"\Delta u'", "u", "u", "surge speed change u/U0 - 1"),
-            Variable("v", "v", "speed", "v'", "v", "v", "sway speed v/U0"),
-            Variable("r", "r", "rate", "r'", "r", "r", "yaw rate r L/U0"),
-            Variable("delta", "rudder", "none", r"\delta", "d", r"\delta", "rudder angle [rad]"),
-            Variable("psi", "psi", "none", r"\psi", "psi", r"\psi", "heading [rad]"),
-            Variable("n", "n", "rate", "n'", "n", "n", "propeller revolutions n L/U0"),
-            Variable(
-                "wind_speed",
-                "wind_speed",
-                "speed",
-                "V_{w}'",
-                "wind_speed",
-                "V_{w}",
-                "wind speed over U0",
-            ),
-            Variable(
-                "wind_dir",
-                "wind_dir",
-                "none",
-                r"\psi_{w}",
-                "wind_dir",
-                r"\psi_{w}",
-                "direction the wind comes from, clockwise from north [rad]",
-            ),
-        )
-    }
+from ..errors import SindyshipInputError
+from ._parser import Factor, _message, _parse, _quote, _TermError
+from ._variables import (
+    _ATOMIC_LATEX_RE,
+    _LATEX_FUNCTIONS,
+    _NUMPY_FUNCTIONS,
+    _SYMPY_FUNCTIONS,
+    _TEXT_FUNCTIONS,
+    CORE_VARIABLES,
+    FUNCTIONS,
+    VARIABLES,
+    describe_variable,
 )
-
-
-def describe_variable(name: str) -> Variable:
-    """The :class:`Variable` record of ``name``; a channel without one is used as recorded.
-
-    Examples
-    --------
-    >>> describe_variable("r").scaling
-    'rate'
-    >>> describe_variable("depth").symbol
-    '\\\\mathrm{depth}'
-    """
-    known = VARIABLES.get(name)
-    if known is not None:
-        return known
-    latex = r"\mathrm{" + name.replace("_", r"\_") + "}"
-    return Variable(name, name, "none", latex, name, latex, f"channel {name} as recorded")
-
-
-class Factor(NamedTuple):
-    """One factor of a term: ``function(base)^power``.
-
-    ``function`` is one of :data:`FUNCTIONS` or None; ``base`` is a variable name (str) or a
-    number (float); ``power`` is 1-9.
-    """
-
-    function: str | None
-    base: str | float
-    power: int
-
-
-class _TermError(SindyshipInputError):
-    """A term that breaks the grammar; ``reason`` says how, without the location."""
-
-    def __init__(self, text: object, reason: str) -> None:
-        self.text = text
-        self.reason = reason
-        super().__init__(_message(text, reason, None, None))
-
-
-def _quote(text: object) -> str:
-    """The term as it appears in a one-line message (escaped, shortened)."""
-    shown = text if isinstance(text, str) else repr(text)
-    if len(shown) > 60:
-        shown = shown[:57] + "..."
-    return json.dumps(shown, ensure_ascii=False)
-
-
-def _message(text: object, reason: str, source: str | Path | None, line: int | None) -> str:
-    where = ""
-    if source is not None:
-        where = f"{source}, line {line}: " if line is not None else f"{source}: "
-    elif line is not None:
-        where = f"line {line}: "
-    return f"{where}the term {_quote(text)} is not valid: {reason}."
-
-
-class _Scanner:
-    """Reads one term text left to right; every method either consumes input or raises."""
-
-    def __init__(self, text: str) -> None:
-        self.text = text
-        self.pos = 0
-
-    def fail(self, reason: str) -> _TermError:
-        return _TermError(self.text, reason)
-
-    def peek(self) -> str:
-        return self.text[self.pos] if self.pos < len(self.text) else ""
-
-    def where(self) -> str:
-        char = self.peek()
-        if not char:
-            return "at the end"
-        return f"{json.dumps(char, ensure_ascii=False)} at character {self.pos + 1}"
-
-    def take(self, allowed: str) -> str:
-        start = self.pos
-        while self.pos < len(self.text) and self.text[self.pos] in allowed:
-            self.pos += 1
-        return self.text[start : self.pos]
-
-    def factors(self) -> tuple[Factor, ...]:
-        out = [self.factor()]
-        while self.pos < len(self.text):
-            if self.peek() != " ":
-                raise self.fail(f"unexpected {self.where()}")
-            self.pos += 1
-            if self.peek() in ("", " "):
-                raise self.fail("factors are separated by single spaces, with none at the ends")
-            out.append(self.factor())
-            if len(out) > MAX_FACTORS:
-                raise self.fail(f"a term has at most {MAX_FACTORS} factors")
-        return tuple(out)
-
-    def factor(self) -> Factor:
-        char = self.peek()
-        function: str | None = None
-        if char and char in _DIGITS:
-            base: str | float = self.number()
-        elif char and char in _LOWER:
-            start = self.pos
-            word = self.take(_LOWER + _DIGITS + "_")
-            if self.peek() == "(":
-                if word not in FUNCTIONS:
-                    raise self.fail(
-                        f'"{word}" is not a known function (use one of {", ".join(FUNCTIONS)})'
-                    )
-                self.pos += 1
-                function = word
-                if not self.peek() or self.peek() not in _LOWER:
-                    raise self.fail(f"{word}() applies to a variable; found {self.where()}")
-                base = self.variable(self.pos, self.take(_LOWER + _DIGITS + "_"))
-                if self.peek() != ")":
-                    raise self.fail(f'expected ")" to close {word}(, found {self.where()}')
-                self.pos += 1
-            else:
-                base = self.variable(start, word)
-        elif char == "":
-            raise self.fail("a factor is missing at the end")
-        else:
-            raise self.fail(f"unexpected {self.where()}")
-        power = 1
-        if self.peek() == "^":
-            self.pos += 1
-            digit = self.peek()
-            if not digit or digit not in "123456789":
-                raise self.fail(f'"^" is followed by one digit 1-9; found {self.where()}')
-            self.pos += 1
-            if self.peek() and self.peek() in _DIGITS:
-                raise self.fail("an exponent is a single digit 1-9")
-            power = int(digit)
-        return Factor(function, base, power)
-
-    def variable(self, start: int, name: str) -> str:
-        if name in _RESERVED:
-            hint = f"; write {name}(v)" if name in FUNCTIONS else ""
-            raise self.fail(f'"{name}" cannot be a variable: {_RESERVED[name]}{hint}')
-        if len(name) > _MAX_NAME_LENGTH:
-            raise self.fail(f"a variable name has at most {_MAX_NAME_LENGTH} characters")
-        if not _NAME_RE.fullmatch(name):
-            raise self.fail(
-                f'"{name}" (character {start + 1}) is not a variable name: lower-case letters, '
-                "digits and single underscores between them, starting with a letter"
-            )
-        return name
-
-    def number(self) -> float:
-        digits = self.take(_DIGITS)
-        if self.peek() == ".":
-            self.pos += 1
-            decimals = self.take(_DIGITS)
-            if not decimals:
-                raise self.fail(f"a digit must follow the decimal point at character {self.pos}")
-            digits += "." + decimals
-        if self.peek() and self.peek() not in " ^":
-            raise self.fail(f"a number stands alone as a factor; unexpected {self.where()}")
-        if len(digits) > _MAX_NUMBER_LENGTH:
-            raise self.fail(f"a number has at most {_MAX_NUMBER_LENGTH} characters")
-        value = float(digits)
-        if value == 0.0:
-            raise self.fail("a zero factor makes the whole column zero")
-        return value
-
-
-def _parse(text: object) -> tuple[Factor, ...]:
-    """The factors of ``text``; raises :class:`_TermError` if it breaks the grammar."""
-    if not isinstance(text, str):
-        raise _TermError(text, f"a term is text, not {type(text).__name__}")
-    if not text.strip():
-        raise _TermError(text, "it is empty")
-    if len(text) > MAX_TERM_LENGTH:
-        raise _TermError(text, f"a term has at most {MAX_TERM_LENGTH} characters")
-    if text == "1":
-        return ()
-    factors = _Scanner(text).factors()
-    degree = sum(f.power for f in factors)
-    if degree > MAX_DEGREE:
-        raise _TermError(text, f"its exponents add up to {degree}, more than {MAX_DEGREE}")
-    return factors
 
 
 def parse_term(text: str, *, source: str | Path | None = None, line: int | None = None) -> Term:
@@ -410,6 +97,29 @@ def _join_subscript(tokens: list[tuple[str, bool]], separator: str) -> str:
         out += token
         previous_compact = compact
     return out
+
+
+def evaluate_factor(factor: Factor, values: Mapping[str, np.ndarray]):
+    """One factor ``(function, base, power)`` of a term, evaluated on the variables: the one
+    place a term's numbers are made (:meth:`Term.evaluate` and a fitted model's forces).
+
+    Examples
+    --------
+    >>> evaluate_factor(Factor("abs", "v", 2), {"v": np.array([-2.0, 3.0])})
+    array([4., 9.])
+    """
+    function, base, power = factor
+    if isinstance(base, str):
+        if base not in values:
+            raise SindyshipInputError(
+                f"the model needs the variable {base!r}, which the data do not provide."
+            )
+        column = np.asarray(values[base], dtype=float)
+    else:
+        column = float(base)
+    if function is not None:
+        column = _NUMPY_FUNCTIONS[function](column)
+    return column**power if power != 1 else column
 
 
 @dataclass(frozen=True)
@@ -554,11 +264,8 @@ class Term:
             arrays[name] = np.asarray(values[name], dtype=float)
         given = arrays.values() if arrays else (np.asarray(a, dtype=float) for a in values.values())
         out = np.ones(np.broadcast_shapes(*(a.shape for a in given)))
-        for function, base, power in self.factors:
-            column = arrays[base] if isinstance(base, str) else base
-            if function is not None:
-                column = _NUMPY_FUNCTIONS[function](column)
-            out = out * column**power
+        for factor in self.factors:
+            out = out * evaluate_factor(factor, arrays)
         return out
 
     def sympy(self) -> sympy.Expr:

@@ -1,0 +1,123 @@
+"""The variables a term may use, their non-dimensionalisation and printed names."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+import sympy
+
+#: Functions a factor may apply to a variable.
+FUNCTIONS = ("abs", "sign", "sin", "cos")
+#: The motion variables of the Abkowitz expansion (paper eq. 15), in the paper's order.
+CORE_VARIABLES = ("du", "v", "r", "delta")
+#: Longest term text accepted [characters].
+MAX_TERM_LENGTH = 120
+#: Most factors in one term.
+MAX_FACTORS = 8
+#: Largest sum of the exponents in one term (keeps every column finite for finite data).
+MAX_DEGREE = 9
+_MAX_NAME_LENGTH = 32
+_MAX_NUMBER_LENGTH = 10
+_DIGITS = "0123456789"
+_LOWER = "abcdefghijklmnopqrstuvwxyz"
+_NAME_RE = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
+_ATOMIC_LATEX_RE = re.compile(r"[A-Za-z]|\\[A-Za-z]+")
+#: Names that cannot be variables, with the reason shown to the user.
+_RESERVED = {
+    "u": 'the library variable for surge is "du" (= u/U0 - 1)',
+    **{name: "it is a function name" for name in FUNCTIONS},
+}
+
+_NUMPY_FUNCTIONS = {"abs": np.abs, "sign": np.sign, "sin": np.sin, "cos": np.cos}
+_SYMPY_FUNCTIONS = {"abs": sympy.Abs, "sign": sympy.sign, "sin": sympy.sin, "cos": sympy.cos}
+_LATEX_FUNCTIONS = {"sign": r"\operatorname{sgn}", "sin": r"\sin", "cos": r"\cos"}
+_TEXT_FUNCTIONS = {"sign": "sgn", "sin": "sin", "cos": "cos"}
+
+
+@dataclass(frozen=True)
+class Variable:
+    """How one library variable is made from SI data and how it is printed.
+
+    Parameters
+    ----------
+    name : str
+        The name used in term text (``"du"``, ``"v"``, ``"psi"``, ...).
+    column : str
+        The trajectory channel it is computed from (``"rudder"`` means the actual rudder angle
+        if recorded, else the commanded one).
+    scaling : str
+        Prime-I non-dimensionalisation (paper section 2.2) with the design speed U0 and
+        length L: ``"surge"`` u/U0 - 1, ``"speed"`` value/U0, ``"rate"`` value L/U0,
+        ``"none"`` the SI value unchanged (angles in rad, other channels as recorded).
+    symbol : str
+        LaTeX of the variable in a term (a prime marks a non-dimensional value).
+    subscript : str
+        Plain text of the variable in a coefficient name (``"d"`` for delta, as ``X'_vd``).
+    subscript_latex : str
+        LaTeX of the variable in a coefficient subscript (``\\delta`` for delta).
+    description : str
+        One line for people: what the variable is.
+    """
+
+    name: str
+    column: str
+    scaling: str
+    symbol: str
+    subscript: str
+    subscript_latex: str
+    description: str
+
+
+#: The variables with a known meaning; any other channel is used as recorded (SI, unscaled).
+VARIABLES: Mapping[str, Variable] = MappingProxyType(
+    {
+        v.name: v
+        for v in (
+            Variable("du", "u", "surge", r"\Delta u'", "u", "u", "surge speed change u/U0 - 1"),
+            Variable("v", "v", "speed", "v'", "v", "v", "sway speed v/U0"),
+            Variable("r", "r", "rate", "r'", "r", "r", "yaw rate r L/U0"),
+            Variable("delta", "rudder", "none", r"\delta", "d", r"\delta", "rudder angle [rad]"),
+            Variable("psi", "psi", "none", r"\psi", "psi", r"\psi", "heading [rad]"),
+            Variable("n", "n", "rate", "n'", "n", "n", "propeller revolutions n L/U0"),
+            Variable(
+                "wind_speed",
+                "wind_speed",
+                "speed",
+                "V_{w}'",
+                "wind_speed",
+                "V_{w}",
+                "wind speed over U0",
+            ),
+            Variable(
+                "wind_dir",
+                "wind_dir",
+                "none",
+                r"\psi_{w}",
+                "wind_dir",
+                r"\psi_{w}",
+                "direction the wind comes from, clockwise from north [rad]",
+            ),
+        )
+    }
+)
+
+
+def describe_variable(name: str) -> Variable:
+    """The :class:`Variable` record of ``name``; a channel without one is used as recorded.
+
+    Examples
+    --------
+    >>> describe_variable("r").scaling
+    'rate'
+    >>> describe_variable("depth").symbol
+    '\\\\mathrm{depth}'
+    """
+    known = VARIABLES.get(name)
+    if known is not None:
+        return known
+    latex = r"\mathrm{" + name.replace("_", r"\_") + "}"
+    return Variable(name, name, "none", latex, name, latex, f"channel {name} as recorded")
