@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import SindyshipInputError
-from .library import TermLibrary, load_effect, load_library
+from .library import TermLibrary, load_effect, load_library, record_variables
 from .model import AbkowitzModel
 from .ships import Ship
 from .targets import DOFS, regression_targets
@@ -69,8 +69,6 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
     if not records:
         raise SindyshipInputError("no records to fit; pass at least one measurement CSV.")
     check_channels(library, records)
-    shell = AbkowitzModel(ship=ship, library=library, coefficients={},
-                          rudder_signal=rudder_signal)
     n_total = sum(record.n_samples for record in records)
     # one column-major array per degree of freedom, filled column by column: no stacking
     # copies, and the layout LAPACK works in
@@ -80,7 +78,7 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
     start = 0
     for index, record in enumerate(records):
         stop = start + record.n_samples
-        values = shell.variables(record)
+        values = record_variables(record, library, ship.L, ship.U0, rudder_signal)
         forces = regression_targets(record, ship, method=derivative, window=window)
         for dof in DOFS:
             for j, term in enumerate(library.terms[dof]):

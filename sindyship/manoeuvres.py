@@ -206,7 +206,8 @@ def fly(dynamics, manoeuvres: Sequence[Manoeuvre], *, state0: np.ndarray | None 
     Parameters
     ----------
     dynamics : object
-        Simulator dynamics (see :func:`sindyship.simulation.simulate_batch`).
+        Simulator dynamics (see :func:`sindyship.simulation.simulate_batch`), such as
+        :class:`sindyship.mmg.MMGModel`, or a fitted model (its ``dynamics()`` flies).
     manoeuvres : sequence of Manoeuvre
     state0 : ndarray, optional
         Initial state; default :func:`initial_state`.
@@ -229,6 +230,8 @@ def fly(dynamics, manoeuvres: Sequence[Manoeuvre], *, state0: np.ndarray | None 
     >>> round(float(run["u"][-1] / 12.348), 4)  # the straight-run equilibrium u' = 1.0001
     1.0001
     """
+    if not hasattr(dynamics, "accelerations") and hasattr(dynamics, "dynamics"):
+        dynamics = dynamics.dynamics()  # a fitted model flies through its dynamics
     ship = dynamics.ship
     s0 = initial_state(ship) if state0 is None else np.asarray(state0, dtype=float)
     groups: dict[tuple, list[int]] = {}

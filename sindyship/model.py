@@ -22,7 +22,7 @@ import pandas as pd
 
 from . import __version__
 from .errors import SindyshipInputError
-from .library import TermLibrary, nondimensional_variables
+from .library import TermLibrary, record_variables
 from .ships import Ship, load_ship, ship_digest, ship_from_dict, ship_to_dict
 from .targets import DOFS, abkowitz_mass_matrix, coriolis
 from .terms import evaluate_factor
@@ -171,19 +171,8 @@ class AbkowitzModel:
 
     def variables(self, traj: Trajectory) -> dict[str, np.ndarray]:
         """The library's non-dimensional variables of a record (with this model's rudder)."""
-        rudder = None
-        if self.rudder_signal == "commanded":
-            if not traj.has("delta_c"):
-                raise SindyshipInputError(
-                    f"{traj.name}: the model uses the commanded rudder but the record has no "
-                    "delta_c column; record it or fit with --rudder-signal actual."
-                )
-            rudder = traj["delta_c"]
-        elif not traj.has("delta"):
-            rudder = traj["delta_c"]
-        needed = set(self.library.variables) | {"du", "v", "r", "delta"}
-        return nondimensional_variables(traj, self.ship.L, self.ship.U0, needed=needed,
-                                        rudder=rudder)
+        return record_variables(traj, self.library, self.ship.L, self.ship.U0,
+                                self.rudder_signal)
 
     def predict_forces(self, traj: Trajectory) -> dict[str, np.ndarray]:
         """Forces of eq. 15 predicted for a record (Prime I), one array per degree of freedom."""

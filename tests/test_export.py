@@ -488,3 +488,28 @@ def test_cmd_export_rejects_bad_input(model, tmp_path, monkeypatch, argv, messag
     argv = [a.format(model="m.json", model_n="n.json", folder="folder") for a in argv]
     with pytest.raises(SindyshipInputError, match=message):
         export_verb.run(_args(*argv))
+
+
+def test_hostile_names_stay_text_in_latex_and_python(tmp_path, protocol_runs):
+    """A ship name with newlines, a LaTeX command and a triple quote: the LaTeX keeps it on the
+    comment line, escaped, and the generated module parses and holds the name exactly."""
+    import ast
+
+    from sindyship.export import latex_document_part
+    from sindyship.identify import fit
+    from sindyship.ships import load_ship
+
+    evil = 'evil\n\\input{/etc/passwd}\n""" ; import os'
+    (tmp_path / "evil.toml").write_text(
+        f"name = {json.dumps(evil)}\n[particulars]\nL = 230.0\nB = 32.2\nd = 10.8\n"
+        "displacement = 52030.0\nrho = 1025.0\nU0 = 12.348\nx_G = -3.404\n[mass]\nk_zz = 0.25\n")
+    ship = load_ship(tmp_path / "evil.toml")
+    assert ship.name == evil
+    model = fit(protocol_runs["train"][:3], ship)
+    tex = latex_document_part(model)
+    assert not any(line.lstrip().startswith("\\input") for line in tex.splitlines())
+    source = generate_python(model)
+    ast.parse(source)
+    namespace: dict = {}
+    exec(compile(source, "evil_sim.py", "exec"), namespace)
+    assert namespace["SHIP"] == evil

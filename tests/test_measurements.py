@@ -493,12 +493,19 @@ def test_failed_write_leaves_nothing_half_written(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]
 
 
-def test_write_into_a_missing_folder(tmp_path):
+def test_write_into_a_missing_folder_creates_it(tmp_path):
+    """One missing-folder policy for every writer: the folder is created."""
     target = tmp_path / "missing" / "run.csv"
+    write_csv(Trajectory(frame_of(), "run"), target)
+    assert read_csv(target).data.equals(frame_of())
+
+
+def test_write_where_a_file_blocks_the_folder(tmp_path):
+    (tmp_path / "blocked").write_text("a file, not a folder")
+    target = tmp_path / "blocked" / "run.csv"
     with pytest.raises(SindyshipInputError) as caught:
         write_csv(Trajectory(frame_of(), "run"), target)
     assert str(target) in str(caught.value)
-    assert not target.parent.exists()
 
 
 # --- in-memory frames share the validator ------------------------------------------------------

@@ -140,3 +140,13 @@ def test_random_rudder_is_reproducible_by_seed(kcs):
     assert not np.array_equal(a["delta_c"], c["delta_c"])
     assert np.degrees(np.abs(a["delta_c"])).max() <= 20.0
     assert len(np.unique(a["delta_c"])) >= 5
+
+
+def test_fly_takes_a_fitted_model_as_it_does_an_mmg(kcs):
+    from sindyship.model import paper_model
+
+    model = paper_model(kcs)
+    plan = [Manoeuvre("zigzag", rudder=20, check=20, duration=300)]
+    (direct,) = fly(model, plan)
+    (through,) = fly(model.dynamics(), plan)
+    np.testing.assert_array_equal(direct.state(), through.state())

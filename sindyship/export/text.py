@@ -111,9 +111,11 @@ def _join(pieces: list[tuple[float, str]]) -> list[str]:
 
 
 def _header(model: AbkowitzModel) -> str:
-    return (f"Abkowitz model of {model.ship.name} (eq. 14-15, Prime I): library "
+    """One line naming the model (names from files are flattened: no control characters)."""
+    text = (f"Abkowitz model of {model.ship.name} (eq. 14-15, Prime I): library "
             f"{model.library.name}, optimizer {model.optimizer.get('name', 'given')}, "
             f"{model.rudder_signal} rudder")
+    return " ".join(text.split())
 
 
 def equations_text(model: AbkowitzModel, precision: int = 4, *, width: int = 100) -> str:
@@ -292,7 +294,7 @@ def latex_document_part(model: AbkowitzModel, precision: int = 4) -> str:
     """
     return "\n".join([
         r"% Abkowitz model exported by sindyship " + __version__ + " (needs amsmath, booktabs)",
-        "% " + _header(model).replace("%", r"\%"),
+        "% " + _latex_text(_header(model)),
         equations_latex(model, precision),
         "",
         coefficient_table_latex(model, precision),

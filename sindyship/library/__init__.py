@@ -61,7 +61,7 @@ from ._files import (
 )
 from ._objects import Effect, TermLibrary
 from ._pysindy import AbkowitzFeatureLibrary
-from ._variables import feature_matrix, nondimensional_variables
+from ._variables import feature_matrix, nondimensional_variables, record_variables
 
 __all__ = [
     "DOFS",
@@ -75,4 +75,5 @@ __all__ = [
     "load_effect",
     "load_library",
     "nondimensional_variables",
+    "record_variables",
 ]

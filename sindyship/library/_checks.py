@@ -9,6 +9,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
 from sindyship.errors import SindyshipInputError
+from sindyship.targets import DOFS
 from sindyship.terms import Term, parse_term
 
 if TYPE_CHECKING:
@@ -16,7 +17,6 @@ if TYPE_CHECKING:
 
 
 #: The degrees of freedom of the manoeuvring model: surge force, sway force, yaw moment.
-DOFS = ("X", "Y", "N")
 _NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 _CHANNEL_RE = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
 _MAX_FILE_BYTES = 1_000_000

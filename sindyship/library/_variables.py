@@ -149,3 +149,27 @@ def feature_matrix(terms: Sequence[Term | str], values: Mapping[str, np.ndarray]
     if not columns:
         return np.empty((*shape, 0))
     return np.stack([np.broadcast_to(c, shape) for c in columns], axis=-1)
+
+
+def record_variables(record: Trajectory, library: TermLibrary, L: float, U0: float,
+                     rudder_signal: str = "actual") -> dict[str, np.ndarray]:
+    """The non-dimensional variables a library's terms need from a record, with the rudder
+    angle the fit uses: the actual one (``delta``, else ``delta_c``) or the commanded one.
+
+    Raises
+    ------
+    SindyshipInputError
+        When the commanded rudder is asked for and the record has no ``delta_c``.
+    """
+    rudder = None
+    if rudder_signal == "commanded":
+        if not record.has("delta_c"):
+            raise SindyshipInputError(
+                f"{record.name}: the model uses the commanded rudder but the record has no "
+                "delta_c column; record it or fit with --rudder-signal actual."
+            )
+        rudder = record["delta_c"]
+    elif not record.has("delta"):
+        rudder = record["delta_c"]
+    needed = set(library.variables) | set(CORE_VARIABLES)
+    return nondimensional_variables(record, L, U0, needed=needed, rudder=rudder)
