@@ -326,24 +326,45 @@ def turning_figures(traj: Trajectory, L: float, *, execute: int | None = None) -
     }
 
 
-def zigzag_figures(traj: Trajectory) -> dict:
-    """First and second overshoot angles [deg] and the period of a zig-zag [s].
+def zigzag_events(traj: Trajectory) -> dict:
+    """Rudder reversals, heading peaks and overshoots of a zig-zag record.
 
-    The overshoot is the heading excursion beyond the check angle after each rudder
-    reversal; the period is the time between the first and third reversals.
+    The overshoot is the heading excursion beyond the heading at each rudder reversal (the
+    check angle), up to the next reversal.
+
+    Returns
+    -------
+    dict
+        ``reversals`` and ``peaks`` (sample indices), ``overshoots_deg`` (one per leg between
+        reversals) and ``heading_deg`` (heading change from the first sample).
     """
     psi = np.degrees(traj["psi"] - traj["psi"][0])
     cmd = traj["delta_c"] if traj.has("delta_c") else traj.rudder
     sign = np.sign(cmd)
     reversals = np.flatnonzero(np.diff(sign) != 0) + 1
     reversals = reversals[sign[reversals - 1] != 0]
-    overshoots = []
+    overshoots, peaks = [], []
     for a, b in zip(reversals[:-1], reversals[1:], strict=False):
         seg = psi[a:b]
         if sign[a - 1] > 0:
+            peaks.append(a + int(np.argmax(seg)))
             overshoots.append(float(seg.max() - psi[a]))
         else:
+            peaks.append(a + int(np.argmin(seg)))
             overshoots.append(float(psi[a] - seg.min()))
+    return {"reversals": reversals, "peaks": np.array(peaks, dtype=int),
+            "overshoots_deg": overshoots, "heading_deg": psi}
+
+
+def zigzag_figures(traj: Trajectory) -> dict:
+    """First and second overshoot angles [deg] and the period of a zig-zag [s].
+
+    The overshoot is the heading excursion beyond the check angle after each rudder
+    reversal (:func:`zigzag_events`); the period is the time between the first and third
+    reversals.
+    """
+    events = zigzag_events(traj)
+    reversals, overshoots = events["reversals"], events["overshoots_deg"]
     t = traj.t
     period = float(t[reversals[2]] - t[reversals[0]]) if len(reversals) >= 3 else math.nan
     return {
@@ -351,3 +372,45 @@ def zigzag_figures(traj: Trajectory) -> dict:
         "second_overshoot_deg": overshoots[1] if len(overshoots) > 1 else math.nan,
         "period_s": period,
     }
+
+
+def imo_criteria(kind: str, L_over_V: float, *, rudder: float = 35.0, check: float = 0.0
+                 ) -> dict[str, float]:
+    """The IMO manoeuvrability criteria that apply (Resolution MSC.137(76), Standards for ship
+    manoeuvrability, 2002, section 5.2).
+
+    Turning ability (35 deg rudder): advance at most 4.5 L, tactical diameter at most 5 L.
+    10/10 zig-zag: first overshoot at most 10 deg if L/V < 10 s, 20 deg if L/V >= 30 s and
+    5 + 0.5 L/V deg in between; second overshoot at most 25 deg, 40 deg and 17.5 + 0.75 L/V.
+    20/20 zig-zag: first overshoot at most 25 deg.
+
+    Parameters
+    ----------
+    kind : {"turning-circle", "zigzag"}
+    L_over_V : float
+        Ship length over approach speed [s].
+    rudder, check : float
+        Rudder and check angle [deg] of the manoeuvre.
+
+    Returns
+    -------
+    dict
+        Criterion name -> limit (``advance_L``, ``tactical_diameter_L``,
+        ``first_overshoot_deg``, ``second_overshoot_deg``); empty where none applies.
+
+    Examples
+    --------
+    >>> imo_criteria("zigzag", 18.63, rudder=10, check=10)["first_overshoot_deg"]
+    14.315
+    """
+    if kind == "turning-circle":
+        return {"advance_L": 4.5, "tactical_diameter_L": 5.0} if abs(rudder) == 35 else {}
+    if kind != "zigzag":
+        return {}
+    if (abs(rudder), check) == (10, 10):
+        first = 10.0 if L_over_V < 10 else 20.0 if L_over_V >= 30 else 5 + 0.5 * L_over_V
+        second = 25.0 if L_over_V < 10 else 40.0 if L_over_V >= 30 else 17.5 + 0.75 * L_over_V
+        return {"first_overshoot_deg": first, "second_overshoot_deg": second}
+    if (abs(rudder), check) == (20, 20):
+        return {"first_overshoot_deg": 25.0}
+    return {}

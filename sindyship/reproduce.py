@@ -96,19 +96,33 @@ def _write_outputs(out: Path, output: dict, models: dict, flights: dict, test, s
         write_text_atomic(out / f"equations-{method}.tex", latex_document_part(model))
         write_text_atomic(out / f"simulator-{method}.py", generate_python(
             model, source_note="sindyship reproduce: the paper's KCS training set"))
-    write_text_atomic(out / "coefficients.csv", table.to_csv(index=False))
+    labels = {c: c if c in ("equation", "term", "paper_name") else f"{c} [x 1e-5, Prime I]"
+              for c in table.columns}
+    write_text_atomic(out / "coefficients.csv", table.rename(columns=labels).to_csv(index=False))
     for name, fig in figures:
         save_figure(fig, out / name)
     write_text_atomic(out / "results.json", json.dumps(output, indent=2) + "\n")
 
 
 def _trajectory_figures(test, flights: dict, ship) -> list:
-    from .plotting import trajectory_overlay
+    """Per held-out record: the track overlay, and the standard figure of its manoeuvre (a
+    zig-zag's heading and rudder with its overshoots, a turn with advance and tactical
+    diameter), each beside the IMO criteria."""
+    from .evaluation import recognised_zigzag
+    from .plotting import plot_turning_circle, plot_zigzag, trajectory_overlay
 
-    return [(f"trajectory-{rec.name}.png",
-             trajectory_overlay(rec, {m.upper(): flights[m][k] for m in flights},
-                                L=ship.L, title=f"Held-out {rec.name}"))
-            for k, rec in enumerate(test)]
+    out = []
+    for k, rec in enumerate(test):
+        flown = {m.upper(): flights[m][k] for m in flights}
+        out.append((f"trajectory-{rec.name}.png",
+                    trajectory_overlay(rec, flown, L=ship.L, title=f"Held-out {rec.name}")))
+        if recognised_zigzag(rec) is not None:
+            out.append((f"zigzag-{rec.name}.png",
+                        plot_zigzag(rec, flights=flown, L=ship.L, U=ship.U0)))
+        else:
+            out.append((f"turning-{rec.name}.png",
+                        plot_turning_circle(rec, L=ship.L, flights=flown)))
+    return out
 
 
 def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,

@@ -19,6 +19,7 @@ from .diagnosis import (
     plot_rounds,
     save_diagnosis_figures,
 )
+from .manoeuvres import plot_turning_circle, plot_zigzag
 from .trajectories import (
     CHANNEL_LABELS,
     STATE_PANELS,
@@ -44,7 +45,9 @@ __all__ = [
     "plot_residual_time_series",
     "plot_rounds",
     "plot_time_series",
+    "plot_turning_circle",
     "plot_track",
+    "plot_zigzag",
     "save_diagnosis_figures",
     "single_axes",
     "sparsity_path",
