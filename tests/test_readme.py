@@ -113,3 +113,17 @@ def test_the_kvlcc2_turns_are_pinned():
     for side, figures in NUMBERS["kvlcc2_turns_yy"].items():
         for key in ("advance_L", "tactical_diameter_L"):
             assert fresh[side][key] == pytest.approx(figures[key], rel=1e-6), (side, key)
+
+
+def test_the_noise_ratios_are_pinned(kcs, protocol_runs):
+    """1 % noise (seed 1), 21 s Savitzky-Golay smoothing, least squares: the held-out error
+    over the clean one, as scripts/regenerate_golden.py computes it (tests/golden/kcs.json)."""
+    path = ROOT / "scripts" / "regenerate_golden.py"
+    spec = importlib.util.spec_from_file_location("regenerate_golden", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    runs = {r.name: r for r in protocol_runs["train"] + protocol_runs["test"]}
+    ratios = module.noise_ratios(kcs, runs, protocol_runs["test"])
+    golden = json.loads((ROOT / "tests" / "golden" / "kcs.json").read_text())
+    assert ratios == pytest.approx(golden["noise_one_percent"], rel=1e-6)
+    assert max(ratios.values()) < 1.5  # 1 % noise costs at most half the clean accuracy
