@@ -34,11 +34,9 @@ def detect_zigzag(record: Trajectory) -> tuple[float, float, int] | None:
 
     Examples
     --------
-    >>> from sindyship.ships import load_ship
-    >>> from sindyship.mmg import MMGModel
-    >>> from sindyship.manoeuvres import Manoeuvre, fly
-    >>> (run,) = fly(MMGModel(load_ship("kcs")), [Manoeuvre("zigzag", rudder=20, check=20,
-    ...                                                        duration=600)])
+    >>> from sindyship import MMGModel, Manoeuvre, fly, load_ship
+    >>> plan = [Manoeuvre("zigzag", rudder=20, check=20, duration=600)]
+    >>> (run,) = fly(MMGModel(load_ship("kcs")), plan)
     >>> detect_zigzag(run)
     (20.0, 20.0, 1)
     """

@@ -212,11 +212,9 @@ def recognise_zigzag(record: Trajectory) -> ZigZag | None:
 
     Examples
     --------
-    >>> from sindyship.ships import load_ship
-    >>> from sindyship.mmg import MMGModel
-    >>> from sindyship.manoeuvres import Manoeuvre, fly
-    >>> (run,) = fly(MMGModel(load_ship("kcs")), [Manoeuvre("zigzag", rudder=20, check=20,
-    ...                                                        duration=600)])
+    >>> from sindyship import MMGModel, Manoeuvre, fly, load_ship
+    >>> plan = [Manoeuvre("zigzag", rudder=20, check=20, duration=600)]
+    >>> (run,) = fly(MMGModel(load_ship("kcs")), plan)
     >>> recognise_zigzag(run)
     ZigZag(amplitude_deg=20.0, check_deg=20.0, first_sign=1, start_time=0.0)
     """
