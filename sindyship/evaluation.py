@@ -137,13 +137,23 @@ def command_for(record: Trajectory):
     return PrescribedRudder(record.t, record["delta"])
 
 
+def _dynamics_for(flier, records: Sequence[Trajectory]):
+    """Dynamics that fly ``records``: a dynamics object as given, or a fitted model's dynamics
+    with the channels its library uses taken from the records as time series."""
+    if hasattr(flier, "accelerations") or not hasattr(flier, "dynamics"):
+        return flier
+    return flier.dynamics(records=records)
+
+
 def fly_like(dynamics, records: Sequence[Trajectory], *, step: float | None = None
              ) -> list[Trajectory]:
-    """Fly ``dynamics`` the way each record was flown, from each record's first row."""
+    """Fly ``dynamics`` (or a fitted model, with its records' channels) the way each record
+    was flown, from each record's first row."""
     out = []
     for record in records:
         state0 = record.state()[:, 0]
-        (result,) = simulate_batch(dynamics, [command_for(record)], record.t, state0, step=step)
+        (result,) = simulate_batch(_dynamics_for(dynamics, [record]), [command_for(record)],
+                                   record.t, state0, step=step)
         out.append(result_to_trajectory(result, record.name))
     return out
 
@@ -159,7 +169,8 @@ def fly_like_batch(dynamics, records: Sequence[Trajectory], *, step: float | Non
     for idx in groups.values():
         t = records[idx[0]].t
         state0 = np.column_stack([records[i].state()[:, 0] for i in idx])
-        results = simulate_batch(dynamics, [command_for(records[i]) for i in idx], t, state0,
+        flier = _dynamics_for(dynamics, [records[i] for i in idx])
+        results = simulate_batch(flier, [command_for(records[i]) for i in idx], t, state0,
                                  step=step)
         for i, res in zip(idx, results, strict=True):
             out[i] = result_to_trajectory(res, records[i].name)
@@ -303,7 +314,7 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
     :func:`distance_errors` plus :func:`flown_as` (with ``execute_s`` where a lead-in was cut).
     """
     cut = [from_execute(record) for record in records]
-    flown = fly_like_batch(model.dynamics(), cut, step=step)
+    flown = fly_like_batch(model, cut, step=step)
     out = {}
     for rec, short, f in zip(records, cut, flown, strict=True):
         out[rec.name] = {**distance_errors(f, short, model.ship.L), **flown_as(rec)}

@@ -22,13 +22,49 @@ import pandas as pd
 
 from . import __version__
 from .errors import SindyshipInputError
-from .library import TermLibrary, record_variables
+from .library import TermLibrary, nondimensional_variables, record_variables
 from .ships import Ship, load_ship, ship_digest, ship_from_dict, ship_to_dict
 from .targets import DOFS, abkowitz_mass_matrix, coriolis
 from .terms import evaluate_factor
 from .trajectory import Trajectory
 
 FORMAT_VERSION = 2
+
+
+@dataclass(frozen=True)
+class ChannelSeries:
+    """Recorded channels as time series for a batch of flights (one row per member).
+
+    Values are in the library's scaling (:func:`sindyship.library.nondimensional_variables`)
+    and are interpolated linearly at the integrator's stage times, held at the end values
+    outside the record.
+
+    Examples
+    --------
+    >>> series = ChannelSeries(np.array([0.0, 10.0]), {"n": np.array([[1.0, 3.0]])})
+    >>> float(series.at(2.5, np.array([0]))["n"][0])
+    1.5
+    """
+
+    times: np.ndarray
+    values: Mapping[str, np.ndarray]
+
+    def at(self, t: float, members: np.ndarray) -> dict[str, np.ndarray]:
+        """The channels of ``members`` at time ``t``."""
+        times = self.times
+        if len(times) < 2:
+            return {name: v[members, 0] for name, v in self.values.items()}
+        k = int(np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2))
+        w = min(max((t - times[k]) / (times[k + 1] - times[k]), 0.0), 1.0)
+        return {name: (1.0 - w) * v[members, k] + w * v[members, k + 1]
+                for name, v in self.values.items()}
+
+    @classmethod
+    def from_records(cls, records, names, L: float, U0: float) -> ChannelSeries:
+        """The channels ``names`` of records that share their sample times."""
+        values = [nondimensional_variables(r, L, U0, needed=names) for r in records]
+        return cls(np.asarray(records[0].t, dtype=float),
+                   {name: np.vstack([v[name] for v in values]) for name in names})
 
 
 @dataclass(frozen=True)
@@ -45,6 +81,12 @@ class AbkowitzDynamics:
 
     model: AbkowitzModel
     channels: Mapping[str, float] = field(default_factory=dict)
+    series: ChannelSeries | None = None
+
+    @property
+    def time_varying(self) -> bool:
+        """Whether recorded channels vary in the flight (the integrator then passes the time)."""
+        return self.series is not None
 
     @property
     def ship(self) -> Ship:
@@ -54,14 +96,17 @@ class AbkowitzDynamics:
     def rudder_input(self) -> str:
         return "commanded" if self.model.rudder_signal == "commanded" else "actual"
 
-    def accelerations(self, u, v, r, delta, psi, branch=None):
-        """Accelerations (du/dt, dv/dt, dr/dt) in SI from SI state values."""
+    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None):
+        """Accelerations (du/dt, dv/dt, dr/dt) in SI from SI state values; the recorded
+        channels at time ``t`` of the flights ``members`` when the dynamics has a series."""
         model = self.model
         ship = model.ship
         U0, L = ship.U0, ship.L
         un = u / U0
         values = {"du": un - 1.0, "v": v / U0, "r": r * L / U0, "delta": delta, "psi": psi}
         values.update(self.channels)
+        if self.series is not None:
+            values.update(self.series.at(t, members))
         forces = model.forces_from_values(values)
         X_C, Y_C, N_C = coriolis(ship, un, values["v"], values["r"])
         Minv = model.inverse_mass
@@ -178,9 +223,24 @@ class AbkowitzModel:
         """Forces of eq. 15 predicted for a record (Prime I), one array per degree of freedom."""
         return self.forces_from_values(self.variables(traj))
 
-    def dynamics(self, channels: Mapping[str, float] | None = None) -> AbkowitzDynamics:
-        """Simulator dynamics of eq. 14 (see :mod:`sindyship.simulation`)."""
-        missing = sorted(set(self.library.channels) - {"psi"} - set(channels or {}))
+    @property
+    def recorded_channels(self) -> list[str]:
+        """The channels the library uses that a flight takes from the record (all but psi)."""
+        return sorted(set(self.library.channels) - {"psi"})
+
+    def dynamics(self, channels: Mapping[str, float] | None = None, *, records=None
+                 ) -> AbkowitzDynamics:
+        """Simulator dynamics of eq. 14 (see :mod:`sindyship.simulation`).
+
+        Channels the library uses beyond the heading come from ``records`` as time series
+        (records that share their sample times, one flight each), or are held at the constant
+        values of ``channels`` (library scaling).
+        """
+        if records is not None and self.recorded_channels:
+            series = ChannelSeries.from_records(list(records), self.recorded_channels,
+                                                self.ship.L, self.ship.U0)
+            return AbkowitzDynamics(self, dict(channels or {}), series)
+        missing = sorted(set(self.recorded_channels) - set(channels or {}))
         if missing:
             raise SindyshipInputError(
                 f"the model's library uses the channel {missing[0]!r}; pass its value to fly "

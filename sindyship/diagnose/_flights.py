@@ -5,36 +5,23 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
-import numpy as np
-
-from ..evaluation import fly_like, fly_like_batch
+from ..evaluation import fly_like_batch
 from ..library import (
     DOFS,
     TermLibrary,
-    nondimensional_variables,
 )
-from ..model import AbkowitzDynamics, AbkowitzModel
+from ..model import AbkowitzModel
 from ..trajectory import Trajectory
 
 
 # =============================================================================== flights
-def _channel_means(model: AbkowitzModel, record: Trajectory) -> dict[str, float]:
-    """The record's mean value of each channel the model needs beyond psi (non-dimensional)."""
-    channels = sorted(model.library.channels - {"psi"})
-    if not channels:
-        return {}
-    values = nondimensional_variables(record, model.ship.L, model.ship.U0, needed=channels)
-    return {name: float(np.mean(values[name])) for name in channels}
-
-
 def fly_model(model: AbkowitzModel, records: Sequence[Trajectory]) -> list[Trajectory]:
     """Fly an identified model the way each record was flown.
 
-    The same flights as ``fly_like_batch(model.dynamics(), records)``
-    (:mod:`sindyship.evaluation`): zig-zags closed loop, other records replaying their rudder,
-    from each record's first row.  Channels the library uses beyond the heading (``n``,
-    ``phi``, ...) are held at their mean over the record, since the flight does not compute
-    them.
+    The flights of ``fly_like_batch(model, records)`` (:mod:`sindyship.evaluation`): zig-zags
+    closed loop, other records replaying their rudder, from each record's first row.  Channels
+    the library uses beyond the heading (``n``, ``wind_speed``, ...) come from each record as
+    time series, interpolated at the integrator's stage times.
 
     Parameters
     ----------
@@ -46,13 +33,7 @@ def fly_model(model: AbkowitzModel, records: Sequence[Trajectory]) -> list[Traje
     list of Trajectory
         In the order of ``records``; ``meta["diverged_at"]`` is the divergence time or None.
     """
-    if not model.library.channels - {"psi"}:
-        return fly_like_batch(model.dynamics(), records)
-    out = []
-    for record in records:
-        dynamics = AbkowitzDynamics(model, _channel_means(model, record))
-        out.extend(fly_like(dynamics, [record]))
-    return out
+    return fly_like_batch(model, records)
 
 
 def _model_payload(model: AbkowitzModel) -> dict:

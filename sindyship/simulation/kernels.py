@@ -229,6 +229,8 @@ class _Integrator:
         cur = getattr(dynamics, "current", (0.0, 0.0))
         self.current = (float(cur[0]), float(cur[1]))
         self.switching = getattr(dynamics, "switching", None)
+        # dynamics whose inputs vary in time (recorded channels) take the time and the members
+        self.time_varying = bool(getattr(dynamics, "time_varying", False))
         # A model identified on the commanded angle takes the command as its rudder input.
         self.rudder_input = getattr(dynamics, "rudder_input", "actual")
         self.commands = list(commands)
@@ -245,7 +247,11 @@ class _Integrator:
         """Time derivative of the state columns ``y`` (7, k) for the given members."""
         u, v, r, _x, _y, psi, delta = y
         rudder = delta_c if self.rudder_input == "commanded" else delta
-        a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, rudder, psi, branch=branch)
+        if self.time_varying:
+            a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, rudder, psi, branch=branch, t=t,
+                                                        members=members)
+        else:
+            a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, rudder, psi, branch=branch)
         c, s = np.cos(psi), np.sin(psi)
         target = np.minimum(np.maximum(delta_c, -self.delta_max), self.delta_max)
         ddelta = np.minimum(np.maximum((target - delta) / self.T, -self.rate_max), self.rate_max)

@@ -44,8 +44,7 @@ def _fold_task(smoothed: Sequence[Trajectory], raw: Trajectory, held_out: int, s
     with threadpool_limits(limits=1, user_api="blas"):
         model = fit(train, ship, library=library, optimizer=optimizer, params=params,
                     rudder_signal=rudder_signal)
-        channels = _flight_channels(model, raw)
-        (flown,) = fly_like(model.dynamics(channels), [start], step=step)
+        (flown,) = fly_like(model, [start], step=step)
     return distance_errors(flown, raw, ship.L)
 
 
@@ -61,17 +60,6 @@ def _with_initial_state(raw: Trajectory, smoothed: Trajectory) -> Trajectory:
     for column in ("u", "v", "r", "x", "y", "psi"):
         data.loc[data.index[0], column] = float(smoothed[column][0])
     return Trajectory(data, name=raw.name, meta=dict(raw.meta))
-
-
-def _flight_channels(model, record: Trajectory) -> dict[str, float] | None:
-    """Extra library channels held at their record mean for a flight (None if none)."""
-    from ..library import nondimensional_variables
-
-    extra = sorted(set(model.library.channels) - {"psi"})
-    if not extra:
-        return None
-    values = nondimensional_variables(record, model.ship.L, model.ship.U0, needed=extra)
-    return {name: float(np.mean(values[name])) for name in extra}
 
 
 def _cv_scores(means: np.ndarray, failed: np.ndarray) -> np.ndarray:

@@ -1,0 +1,67 @@
+"""Recorded channels fly as time series wherever a model flies."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sindyship.evaluation import evaluate, fly_like_batch
+from sindyship.library import TermLibrary
+from sindyship.manoeuvres import Manoeuvre, fly
+from sindyship.mmg import MMGModel
+from sindyship.model import AbkowitzModel, ChannelSeries, paper_model
+from sindyship.trajectory import Trajectory
+
+
+def _with_depth(record: Trajectory, depth: np.ndarray) -> Trajectory:
+    data = record.data.copy()
+    data["depth"] = depth
+    return Trajectory(data, name=record.name, meta=dict(record.meta))
+
+
+@pytest.fixture(scope="module")
+def depth_model(kcs):
+    """The paper's LS model with a sway force that grows with a recorded channel."""
+    base = paper_model(kcs)
+    terms = {dof: [t.text for t in base.library.terms[dof]] for dof in "XYN"}
+    terms["Y"].append("depth")
+    library = TermLibrary("with-depth", "prime-I", "", terms)
+    coefficients = {dof: dict(base.coefficients[dof]) for dof in "XYN"}
+    coefficients["Y"]["depth"] = 2e-5  # per metre of the channel (scaled as given)
+    return AbkowitzModel(kcs, library, coefficients)
+
+
+def test_a_channel_series_interpolates_at_the_stage_times():
+    series = ChannelSeries(np.array([0.0, 1.0, 2.0]), {"n": np.array([[0.0, 2.0, 2.0],
+                                                                      [1.0, 1.0, 5.0]])})
+    at = series.at(1.5, np.array([1, 0]))
+    np.testing.assert_allclose(at["n"], [3.0, 2.0])
+    np.testing.assert_allclose(series.at(-1.0, np.array([0]))["n"], [0.0])  # held at the ends
+
+
+def test_a_varying_channel_flies_as_recorded_not_at_its_mean(kcs, depth_model):
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=20, duration=600)])
+    ramp = _with_depth(run, np.linspace(0.0, 200.0, run.n_samples))
+    flat = _with_depth(run, np.full(run.n_samples, 100.0))  # the ramp's mean, held
+    (along_ramp,) = fly_like_batch(depth_model, [ramp])
+    (at_mean,) = fly_like_batch(depth_model, [flat])
+    gap = np.hypot(along_ramp["x"] - at_mean["x"], along_ramp["y"] - at_mean["y"]) / kcs.L
+    assert gap[-1] > 0.05  # the ramp is flown, not its mean
+    # two records flown together keep their own channels
+    both = fly_like_batch(depth_model, [ramp, flat.with_name("flat")])
+    np.testing.assert_allclose(both[0]["x"], along_ramp["x"], rtol=1e-12)
+    np.testing.assert_allclose(both[1]["x"], at_mean["x"], rtol=1e-12)
+
+
+def test_evaluate_flies_a_channel_model_without_being_told_the_values(kcs, depth_model):
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=400)])
+    errors = evaluate(depth_model, [_with_depth(run, np.linspace(0.0, 50.0, run.n_samples))])
+    assert errors[run.name]["completed"] and errors[run.name]["flown_as"] == "zigzag"
+
+
+def test_channel_free_models_fly_exactly_as_before(kcs, protocol_runs):
+    model = paper_model(kcs)
+    direct = fly_like_batch(model.dynamics(), protocol_runs["test"])
+    through = fly_like_batch(model, protocol_runs["test"])
+    for a, b in zip(direct, through, strict=True):
+        np.testing.assert_array_equal(a.state(), b.state())
