@@ -24,6 +24,7 @@ from . import __version__
 from .errors import SindyshipInputError
 from .library import TermLibrary, nondimensional_variables, record_variables
 from .ships import Ship, load_ship, ship_digest, ship_from_dict, ship_to_dict
+from .simulation.kernels import ChannelSeries
 from .targets import DOFS, abkowitz_mass_matrix, coriolis
 from .terms import evaluate_factor
 from .trajectory import Trajectory
@@ -31,40 +32,12 @@ from .trajectory import Trajectory
 FORMAT_VERSION = 2
 
 
-@dataclass(frozen=True)
-class ChannelSeries:
-    """Recorded channels as time series for a batch of flights (one row per member).
-
-    Values are in the library's scaling (:func:`sindyship.library.nondimensional_variables`)
-    and are interpolated linearly at the integrator's stage times, held at the end values
-    outside the record.
-
-    Examples
-    --------
-    >>> series = ChannelSeries(np.array([0.0, 10.0]), {"n": np.array([[1.0, 3.0]])})
-    >>> float(series.at(2.5, np.array([0]))["n"][0])
-    1.5
-    """
-
-    times: np.ndarray
-    values: Mapping[str, np.ndarray]
-
-    def at(self, t: float, members: np.ndarray) -> dict[str, np.ndarray]:
-        """The channels of ``members`` at time ``t``."""
-        times = self.times
-        if len(times) < 2:
-            return {name: v[members, 0] for name, v in self.values.items()}
-        k = int(np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2))
-        w = min(max((t - times[k]) / (times[k + 1] - times[k]), 0.0), 1.0)
-        return {name: (1.0 - w) * v[members, k] + w * v[members, k + 1]
-                for name, v in self.values.items()}
-
-    @classmethod
-    def from_records(cls, records, names, L: float, U0: float) -> ChannelSeries:
-        """The channels ``names`` of records that share their sample times."""
-        values = [nondimensional_variables(r, L, U0, needed=names) for r in records]
-        return cls(np.asarray(records[0].t, dtype=float),
-                   {name: np.vstack([v[name] for v in values]) for name in names})
+def channel_series(records, names, L: float, U0: float) -> ChannelSeries:
+    """The channels ``names`` of records that share their sample times, in the library's
+    scaling (:func:`sindyship.library.nondimensional_variables`), one row per record."""
+    values = [nondimensional_variables(r, L, U0, needed=names) for r in records]
+    return ChannelSeries(np.asarray(records[0].t, dtype=float),
+                         {name: np.vstack([v[name] for v in values]) for name in names})
 
 
 @dataclass(frozen=True)
@@ -237,8 +210,8 @@ class AbkowitzModel:
         values of ``channels`` (library scaling).
         """
         if records is not None and self.recorded_channels:
-            series = ChannelSeries.from_records(list(records), self.recorded_channels,
-                                                self.ship.L, self.ship.U0)
+            series = channel_series(list(records), self.recorded_channels, self.ship.L,
+                                    self.ship.U0)
             return AbkowitzDynamics(self, dict(channels or {}), series)
         missing = sorted(set(self.recorded_channels) - set(channels or {}))
         if missing:

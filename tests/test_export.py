@@ -25,6 +25,7 @@ import sympy
 
 from sindyship.cli import export as export_verb
 from sindyship.errors import SindyshipInputError
+from sindyship.evaluation import fly_like_batch
 from sindyship.export import (
     ACCELERATIONS,
     coefficient_symbol,
@@ -37,7 +38,8 @@ from sindyship.export import (
     model_equations,
 )
 from sindyship.library import TermLibrary, load_library
-from sindyship.manoeuvres import fly, protocol_manoeuvres
+from sindyship.manoeuvres import Manoeuvre, fly, protocol_manoeuvres
+from sindyship.mmg import MMGModel
 from sindyship.model import AbkowitzModel, paper_model
 from sindyship.simulation import (
     FeedbackCommand,
@@ -47,6 +49,7 @@ from sindyship.simulation import (
     simulate_batch,
 )
 from sindyship.targets import DOFS, abkowitz_mass_matrix, coriolis
+from sindyship.trajectory import Trajectory
 
 ROOT = Path(__file__).resolve().parents[1]
 RTOL = 1e-9  # the generated integrator against sindyship's, relative to each channel's size
@@ -275,21 +278,32 @@ def test_generated_module_passes_ruff(model, kcs, tmp_path):
     assert done.returncode == 0, done.stdout + done.stderr
 
 
-def test_generate_python_needs_channel_values(kcs):
-    terms = {dof: ["du", "v", "r", "delta"] for dof in DOFS}
+def test_the_generated_simulator_flies_recorded_channels(kcs, tmp_path):
+    """A model whose library uses the revolutions n: the generated module takes them as a time
+    series over t (SI) and flies as sindyship does with the record's channel."""
+    base = paper_model(kcs)
+    terms = {dof: [t.text for t in base.library.terms[dof]] for dof in DOFS}
     terms["X"].append("n")
     library = TermLibrary("with-n", "prime-I", "", terms)
-    coefficients = {dof: {t: 1e-4 for t in terms[dof]} for dof in DOFS}
+    coefficients = {dof: dict(base.coefficients[dof]) for dof in DOFS}
+    coefficients["X"]["n"] = 2e-5  # surge force per unit of n' = n L / U0
     with_n = AbkowitzModel(kcs, library, coefficients)
-    with pytest.raises(SindyshipInputError, match="channel 'n'"):
-        generate_python(with_n)
-    source = generate_python(with_n, channels={"n": 35.86})
-    assert "CHANNEL_N = 35.86" in source and "X_n * CHANNEL_N" in source
+    source = generate_python(with_n)
+    assert "CHANNEL_N = math.nan" in source and "CHANNEL_SCALING" in source
+    sim = load_module(source, tmp_path / "sim_n.py")
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=20, duration=300)])
+    n = np.linspace(1.5, 2.2, run.n_samples)  # revolutions [rps] that change in the record
+    data = run.data.copy()
+    data["n"] = n
+    record = Trajectory(data, name=run.name)
+    (ours,) = fly_like_batch(with_n, [record])
+    theirs = sim.simulate(record.t, record["delta_c"], record.state()[:, 0], {"n": n})
+    assert ours.meta["diverged_at"] is None and theirs.diverged_at is None
+    assert np.max(np.hypot(ours["x"] - theirs.states[3], ours["y"] - theirs.states[4])
+                  ) / kcs.L < 1e-10
+    with pytest.raises(ValueError, match="channel 'n'"):
+        sim.simulate(record.t, 0.0, None, {})
 
-
-# ---------------------------------------------------------------------------------------------
-# sympy equations, text and LaTeX
-# ---------------------------------------------------------------------------------------------
 def _symbols():
     return {name: sympy.Symbol(name, real=True) for name in ("du", "v", "r", "delta")}
 
@@ -474,7 +488,6 @@ def test_export_refuses_a_precision_out_of_range_when_parsing(model, tmp_path, c
     (["{model}", "--latex", "same.txt", "--python", "same.txt"], "two different files"),
     (["{model}", "--python", "{folder}"], "is a folder"),
     (["{model}", "--channel", "n"], "NAME=VALUE"),
-    (["{model_n}", "--python", "sim.py"], "--channel n=VALUE"),
 ])
 def test_cmd_export_rejects_bad_input(model, tmp_path, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)

@@ -37,7 +37,9 @@ def add_parser(sub) -> None:
                    "(default 4)")
     add_ship(p, default=None)
     p.add_argument("--channel", action="append", default=[], metavar="NAME=VALUE",
-                   help="constant value of an extra channel the library uses (repeatable)")
+                   help="default value (library scaling) of a recorded channel the library "
+                   "uses, repeatable; the generated simulate() and zigzag() take the channels "
+                   "as time series (channels=...), and without a default they must")
     add_json(p)
 
 
@@ -91,12 +93,6 @@ def run(args) -> int:
     ship = load_ship(args.ship) if args.ship else None
     model = AbkowitzModel.load(args.model, ship=ship)
     channels = _parse_channels(args.channel)
-    missing = sorted(set(model.library.channels) - {"psi"} - set(channels))
-    if args.python and missing:
-        raise SindyshipInputError(
-            f"{args.model}: the model's library uses the channel {missing[0]!r}, which the "
-            f"simulator holds constant; give its value with --channel {missing[0]}=VALUE."
-        )
     if args.python:
         code = generate_python(model, source_note=f"Exported from {Path(args.model).name}.",
                                channels=channels)

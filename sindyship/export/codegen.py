@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import re
 import textwrap
 from collections.abc import Mapping
@@ -13,6 +14,7 @@ from sympy.printing.numpy import NumPyPrinter
 
 from .. import __version__
 from ..targets import DOFS, abkowitz_mass_matrix
+from ..terms import channel_scaling
 from .symbolic import _active_terms, _coriolis_polynomials, coefficient_symbol, force_expressions
 
 if TYPE_CHECKING:
@@ -53,20 +55,22 @@ def _literal(text: str) -> str:
 
 
 def _constant(value: float) -> str:
-    """A float as Python source that reads back to the same double."""
-    return repr(float(value))
+    """A float as Python source that reads back to the same double (NaN as ``math.nan``)."""
+    value = float(value)
+    return "math.nan" if math.isnan(value) else repr(value)
 
 
 def _forces_source(model: AbkowitzModel, channel_names: Mapping[str, str]) -> list[str]:
     """Body of the generated ``forces`` function: sympy cse of eq. 15, library order."""
     forces = force_expressions(model)
-    rename = {sympy.Symbol(name, real=True): sympy.Symbol(const, real=True)
-              for name, const in channel_names.items()}
+    rename = {sympy.Symbol(name, real=True): sympy.Symbol(f"ch_{name}", real=True)
+              for name in channel_names}
     exprs = [forces[dof].xreplace(rename) for dof in DOFS]
     replacements, reduced = sympy.cse(exprs, symbols=sympy.numbered_symbols("p"),
                                       optimizations="basic")
     printer = _Printer({"fully_qualified_modules": True})
-    lines = []
+    lines = [f"    ch_{name} = {const} if channels is None else channels[{_literal(name)}]"
+             for name, const in channel_names.items()]
     if replacements:
         lines.append("    # Products shared by the terms (sympy cse)")
     for symbol, expr in replacements:
@@ -122,12 +126,32 @@ _RUNTIME = '''
 # The model as the kernel flies it, and the public functions
 # ---------------------------------------------------------------------------------------------
 class _Model:
-    \"\"\"The generated dynamics in the form the kernel's integrator flies.\"\"\"
+    \"\"\"The generated dynamics in the form the kernel's integrator flies: recorded channels
+    as time series (``series``, one row per flight) or values (``values``), library scaling.\"\"\"
 
     rudder_input = RUDDER_INPUT
     current = (0.0, 0.0)
     switching = None
-    accelerations = staticmethod(accelerations)
+
+    def __init__(self, series=None, values=None):
+        self.series = series
+        self.values = values
+        self.time_varying = series is not None
+
+    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None):
+        channels = self.values if self.series is None else self.series.at(t, members)
+        return accelerations(u, v, r, delta, psi, branch, channels)
+
+
+def _scaled(channels):
+    \"\"\"Channels given in SI (as in the measurement CSV) in the library's scaling.\"\"\"
+    if channels is None:
+        return None
+    missing = sorted(set(CHANNEL_SCALING) - set(channels))
+    if missing:
+        raise ValueError(f"give the channel {missing[0]!r} (the model's library uses it)")
+    return {name: np.asarray(channels[name], dtype=float) * factor + offset
+            for name, (factor, offset) in CHANNEL_SCALING.items()}
 
 
 _SERVO = (T_SERVO, RATE_MAX, DELTA_MAX)
@@ -154,7 +178,7 @@ class Flight(NamedTuple):
     diverged_at: float | None
 
 
-def rhs(t, state, delta_c):
+def rhs(t, state, delta_c, channels=None):
     \"\"\"Time derivative of the state (paper eq. 12-14 and the kinematics).
 
     Parameters
@@ -165,6 +189,9 @@ def rhs(t, state, delta_c):
         ``[u, v, r, x, y, psi, delta]`` (SI).
     delta_c : float or ndarray of shape (N,)
         Commanded rudder angle [rad].
+    channels : mapping of str to float or ndarray of shape (N,), optional
+        The recorded channels the library uses, SI as in the measurement CSV (default: the
+        CHANNEL_ constants).
 
     Returns
     -------
@@ -175,11 +202,12 @@ def rhs(t, state, delta_c):
     columns = state.reshape(N_STATE, -1)
     commands = np.broadcast_to(np.asarray(delta_c, dtype=float), columns.shape[1]).copy()
     members = np.arange(columns.shape[1])
-    out = _Integrator(_Model, [], _SERVO).rhs(t, columns, commands, members, None)
+    model = _Model(values=_scaled(channels))
+    out = _Integrator(model, [], _SERVO).rhs(t, columns, commands, members, None)
     return out.reshape(state.shape)
 
 
-def _fly(command, t, state0, step, check_divergence):
+def _fly(command, t, state0, step, check_divergence, channels):
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or t.size == 0:
         raise ValueError("t must be a one-dimensional array of output times")
@@ -188,12 +216,15 @@ def _fly(command, t, state0, step, check_divergence):
     y = np.array([U0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0] if state0 is None else state0,
                  dtype=float).reshape(N_STATE)
     h_max = DEFAULT_STEP if step is None else float(step)
-    integ = _Integrator(_Model, [command], _SERVO)
+    scaled = _scaled(channels)
+    series = None if scaled is None else ChannelSeries(t, {
+        name: np.broadcast_to(values, t.shape)[None, :] for name, values in scaled.items()})
+    integ = _Integrator(_Model(series=series), [command], _SERVO)
     (result,) = integrate(integ, [command], t, y, h_max, check_divergence, L, U0)
     return Flight(result.t, result.states, result.delta_c, result.diverged_at)
 
 
-def simulate(t, delta_c, state0=None, *, step=None, check_divergence=True):
+def simulate(t, delta_c, state0=None, channels=None, *, step=None, check_divergence=True):
     \"\"\"Fly the model with a commanded rudder through the servo (paper eq. 12-14).
 
     Parameters
@@ -207,6 +238,9 @@ def simulate(t, delta_c, state0=None, *, step=None, check_divergence=True):
         over it (feedback control).
     state0 : array_like, shape (7,), optional
         Initial ``[u, v, r, x, y, psi, delta]`` (SI); default straight ahead at U0.
+    channels : mapping of str to array_like of shape (N,), optional
+        The recorded channels the library uses, over ``t``, SI as in the measurement CSV,
+        interpolated at the integrator's stage times (default: the CHANNEL_ constants).
     step : float, optional
         Runge-Kutta step [s]; default ``DEFAULT_STEP``.  States at output times inside a
         step come from its cubic Hermite interpolant; steps are split exactly where the
@@ -220,7 +254,7 @@ def simulate(t, delta_c, state0=None, *, step=None, check_divergence=True):
     \"\"\"
     t = np.asarray(t, dtype=float)
     if callable(delta_c):
-        return _fly(FeedbackCommand(delta_c), t, state0, step, check_divergence)
+        return _fly(FeedbackCommand(delta_c), t, state0, step, check_divergence, channels)
     angles = np.asarray(delta_c, dtype=float)
     if angles.ndim == 0:
         angles = np.full(t.shape, float(angles))
@@ -230,10 +264,10 @@ def simulate(t, delta_c, state0=None, *, step=None, check_divergence=True):
         )
     if not np.all(np.isfinite(angles)):
         raise ValueError("delta_c must be finite")
-    return _fly(StepCommand(t, angles), t, state0, step, check_divergence)
+    return _fly(StepCommand(t, angles), t, state0, step, check_divergence, channels)
 
 
-def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, *, step=None,
+def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, channels=None, *, step=None,
            check_divergence=True):
     \"\"\"Fly a zig-zag closed loop: rudder +-rudder_deg, reversed at +-check_deg of heading.
 
@@ -250,6 +284,8 @@ def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, *, step=None,
         Initial state (SI); default straight ahead at U0.
     first_sign : int
         +1: first rudder to starboard; -1: to port.
+    channels : mapping of str to array_like of shape (N,), optional
+        As for ``simulate``.
     step, check_divergence
         As for ``simulate``.
 
@@ -258,7 +294,7 @@ def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, *, step=None,
     Flight
     \"\"\"
     command = ZigZagCommand(math.radians(rudder_deg), math.radians(check_deg), first_sign)
-    return _fly(command, t, state0, step, check_divergence)
+    return _fly(command, t, state0, step, check_divergence, channels)
 '''
 
 
@@ -315,7 +351,9 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     """
     from ..simulation import default_step, integrator_for
 
-    dynamics = model.dynamics(channels)  # checks that every channel has a value
+    # channels without a default value must be given when the module flies (NaN until then)
+    defaults = {name: math.nan for name in model.recorded_channels} | dict(channels or {})
+    dynamics = model.dynamics(defaults)
     integrator = integrator_for(dynamics, [])
     ship = model.ship
     channel_names = {name: f"CHANNEL_{name.upper()}" for name in sorted(model.library.channels)
@@ -367,7 +405,8 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     ]
 
     lines = [*doc, "", "from __future__ import annotations", "", "import math",
-             "from collections.abc import Callable, Sequence", "from typing import NamedTuple",
+             "from collections.abc import Callable, Mapping, Sequence",
+             "from typing import NamedTuple",
              "",
              "import numpy as np", ""]
     lines += [
@@ -399,9 +438,17 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     coriolis_constants, coriolis_lines = _coriolis_source(ship)
     lines += coriolis_constants
     if channel_names:
-        lines += ["", "# Channels held constant (library scaling)"]
+        lines += ["", "# Recorded channels: default values (library scaling; NaN: give them when",
+                  "# flying) and the scaling from SI, value * factor + offset"]
         for name, const in channel_names.items():
-            lines.append(f"{const} = {_constant((channels or {})[name])}  # {name}")
+            lines.append(f"{const} = {_constant((channels or {}).get(name, math.nan))}  # {name}")
+        lines.append("CHANNEL_SCALING = {")
+        for name in channel_names:
+            factor, offset = channel_scaling(name, ship.L, ship.U0)
+            lines.append(f"    {_literal(name)}: ({_constant(factor)}, {_constant(offset)}),")
+        lines.append("}")
+    else:
+        lines += ["", "CHANNEL_SCALING = {}  # the library uses no recorded channel"]
     lines += [
         "",
         "# ---------------------------------------------------------------------------------",
@@ -423,7 +470,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
               for ident, dof, text in entries]
     lines += ["}", "", ""]
     lines += [
-        "def forces(du, v, r, delta, psi=0.0):",
+        "def forces(du, v, r, delta, psi=0.0, channels=None):",
         '    """Hydrodynamic forces (X\', Y\', N\') of paper eq. 15, Prime I.',
         "",
         "    Parameters",
@@ -434,11 +481,13 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "        Rudder angle [rad].",
         "    psi : float or ndarray",
         "        Heading [rad] (used only by heading-dependent terms).",
+        "    channels : mapping, optional",
+        "        Recorded channels in the library's scaling (default: the CHANNEL_ constants).",
         '    """',
         *_forces_source(model, channel_names),
         "",
         "",
-        "def accelerations(u, v, r, delta, psi, branch=None):",
+        "def accelerations(u, v, r, delta, psi, branch=None, channels=None):",
         '    """Accelerations (du/dt, dv/dt, dr/dt) [SI] of paper eq. 14 from SI state values.',
         "",
         "    The hydrodynamic forces of eq. 15 plus the Coriolis terms (rigid body plus added",
@@ -448,7 +497,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "    un = u / U0",
         "    vn = v / U0",
         "    rn = r * L / U0",
-        "    X, Y, N = forces(un - 1.0, vn, rn, delta, psi)",
+        "    X, Y, N = forces(un - 1.0, vn, rn, delta, psi, channels)",
         "    # Coriolis terms, rigid body plus added mass (right-hand side of eq. 14)",
         *coriolis_lines,
         "    X = X + X_c",

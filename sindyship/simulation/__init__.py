@@ -23,6 +23,7 @@ from __future__ import annotations
 from .integrator import default_step, integrator_for, servo_of, simulate_batch
 from .kernels import (
     N_STATE,
+    ChannelSeries,
     ConstantCommand,
     FeedbackCommand,
     PrescribedRudder,
@@ -38,6 +39,7 @@ from .kernels import (
 
 __all__ = [
     "N_STATE",
+    "ChannelSeries",
     "ConstantCommand",
     "FeedbackCommand",
     "PrescribedRudder",

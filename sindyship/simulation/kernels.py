@@ -10,7 +10,7 @@ the line that marks the kernel's start), so both fly a model with the same code.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -154,6 +154,37 @@ class PrescribedRudder(RudderCommand):
 # ---------------------------------------------------------------------------------------------
 # Results
 # ---------------------------------------------------------------------------------------------
+class ChannelSeries:
+    """Recorded channels as time series for a batch of flights (one row per member).
+
+    Values are in the library's scaling (:func:`sindyship.library.nondimensional_variables`)
+    and are interpolated linearly at the integrator's stage times, held at the end values
+    outside the record.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> series = ChannelSeries(np.array([0.0, 10.0]), {"n": np.array([[1.0, 3.0]])})
+    >>> float(series.at(2.5, np.array([0]))["n"][0])
+    1.5
+    """
+
+    def __init__(self, times: np.ndarray, values: Mapping[str, np.ndarray]):
+        self.times = np.asarray(times, dtype=float)
+        self.values = {name: np.atleast_2d(np.asarray(v, dtype=float))
+                       for name, v in values.items()}
+
+    def at(self, t: float, members: np.ndarray) -> dict[str, np.ndarray]:
+        """The channels of ``members`` at time ``t``."""
+        times = self.times
+        if len(times) < 2:
+            return {name: v[members, 0] for name, v in self.values.items()}
+        k = int(np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2))
+        w = min(max((t - times[k]) / (times[k + 1] - times[k]), 0.0), 1.0)
+        return {name: (1.0 - w) * v[members, k] + w * v[members, k + 1]
+                for name, v in self.values.items()}
+
+
 class SimulationResult:
     """States at the output times of one simulated manoeuvre.
 

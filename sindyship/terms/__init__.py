@@ -45,6 +45,7 @@ from ._variables import (
     MAX_TERM_LENGTH,
     VARIABLES,
     Variable,
+    channel_scaling,
     describe_variable,
 )
 
@@ -58,6 +59,7 @@ __all__ = [
     "Term",
     "VARIABLES",
     "Variable",
+    "channel_scaling",
     "describe_variable",
     "evaluate_factor",
     "parse_term",

@@ -121,3 +121,17 @@ def describe_variable(name: str) -> Variable:
         return known
     latex = r"\mathrm{" + name.replace("_", r"\_") + "}"
     return Variable(name, name, "none", latex, name, latex, f"channel {name} as recorded")
+
+
+def channel_scaling(name: str, L: float, U0: float) -> tuple[float, float]:
+    """``(factor, offset)`` that turn a channel in SI into the library's scaling,
+    ``value * factor + offset`` (the scalings of :func:`nondimensional_variables`).
+
+    Examples
+    --------
+    >>> channel_scaling("n", 230.0, 12.348)[0] == 230.0 / 12.348
+    True
+    """
+    kind = describe_variable(name).scaling
+    return {"surge": (1.0 / U0, -1.0), "speed": (1.0 / U0, 0.0), "rate": (L / U0, 0.0),
+            "none": (1.0, 0.0)}[kind]
