@@ -89,9 +89,6 @@ from ._svr import _svr_objective as _svr_objective
 from ._svr import _with_ones as _with_ones
 from ._threads import one_blas_thread
 
-#: Former private name of :func:`one_blas_thread`, kept for existing imports.
-_one_blas_thread = one_blas_thread
-
 __all__ = [
     "OPTIMIZERS",
     "STLSQ",
