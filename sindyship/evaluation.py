@@ -27,6 +27,7 @@ from .simulation import (
     simulate_batch,
 )
 from .trajectory import Trajectory
+from .trials import recognise_zigzag, trim, zigzag_levels
 
 
 def detect_zigzag(record: Trajectory) -> tuple[float, float, int] | None:
@@ -115,23 +116,21 @@ def recognised_zigzag(record: Trajectory) -> tuple[float, float, int, float] | N
     strict = detect_zigzag(record)
     if strict is not None:
         return (*strict, float(record.t[0]))
-    from .trials import recognise_zigzag
-
     found = recognise_zigzag(record)
     return None if found is None else tuple(found)
 
 
 def command_for(record: Trajectory):
     """The rudder command that re-flies a record (see the module docstring)."""
-    zigzag = recognised_zigzag(record)
-    if zigzag is not None:
-        rudder, check, first, _ = zigzag
-        if detect_zigzag(record) is not None:
-            return ZigZagCommand(math.radians(rudder), math.radians(check), first)
-        from .trials import zigzag_levels
-
+    strict = detect_zigzag(record)
+    if strict is not None:
+        rudder, check, first = strict
+        return ZigZagCommand(math.radians(rudder), math.radians(check), first)
+    logged = recognise_zigzag(record)
+    if logged is not None:
         levels = tuple(math.radians(abs(level)) for level in zigzag_levels(record))
-        return RecordedZigZag(math.radians(rudder), math.radians(check), first, levels=levels)
+        return RecordedZigZag(math.radians(logged.amplitude_deg), math.radians(logged.check_deg),
+                              logged.first_sign, levels=levels)
     if record.has("delta_c"):
         return StepCommand(record.t, record["delta_c"])
     return PrescribedRudder(record.t, record["delta"])
@@ -302,8 +301,6 @@ def from_execute(record: Trajectory) -> Trajectory:
     zigzag = recognised_zigzag(record)
     if zigzag is None or zigzag[3] <= record.t[0] + 1e-9:
         return record
-    from .trials import trim
-
     return trim(record, (zigzag[3], float(record.t[-1])))
 
 
