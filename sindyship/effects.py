@@ -23,6 +23,19 @@ command's ``--effect NAME=VALUE`` option:
 ``rudder_offset``
     A rudder-angle indicator offset [deg]: recorded angle = true angle + offset.  The rudder
     programme is flown on the indicator (an autopilot commanding 10 deg gets 10 - offset deg).
+``wind``, ``wind_dir``, ``gust``, ``wind_wander``
+    A true wind of mean speed ``wind`` [m/s] coming FROM ``wind_dir`` [deg, clockwise from
+    north], with gusts of standard deviation ``gust`` times the mean speed (correlation time
+    L/U0) and a direction that wanders with a standard deviation of ``wind_wander`` [deg]
+    (correlation time 20 L/U0); the force follows the apparent wind on a container ship's
+    windage (:func:`sindyship.conditions.wind_force`).  Recorded as the channels
+    ``wind_speed`` [m/s] and ``wind_dir`` [rad, from].
+``rps``, ``rps_step``, ``rps_step_at``, ``rps_vary``
+    Propeller revolutions ``rps`` times the ship's design ``n_P`` (default 1), changed by
+    ``rps_step`` times ``n_P`` at the fraction ``rps_step_at`` of the record (default 0.5, the
+    middle), plus a slow random variation of standard deviation ``rps_vary`` times ``n_P``
+    (correlation time 5 L/U0).  Recorded as the channel ``n`` [rps].  The run starts at the
+    design speed, so a record at other revolutions begins by speeding up or slowing down.
 ``noise``
     Gaussian measurement noise with a standard deviation of ``noise`` times each channel's RMS
     for u, v, r and delta (positions and heading get their own levels through
@@ -43,6 +56,7 @@ import numpy as np
 from .errors import SindyshipInputError
 from .mmg import MMGModel
 from .ships import Ship
+from .simulation.kernels import ChannelSeries
 from .trajectory import Trajectory
 
 # Gauss-Legendre nodes for the cross-flow integral over x' in [-1/2, 1/2].
@@ -72,16 +86,47 @@ class Effects:
     rudder_offset: float = 0.0
     noise: float = 0.0
     quantise: int = 0
+    wind: float = 0.0
+    wind_dir: float = 0.0
+    gust: float = 0.0
+    wind_wander: float = 0.0
+    rps: float = 1.0
+    rps_step: float = 0.0
+    rps_step_at: float = 0.5
+    rps_vary: float = 0.0
     seed: int = 0
 
     def active(self) -> list[str]:
         """Names of the effects switched on."""
         main = ("load", "current", "crossflow", "prop_side_force", "rudder_offset", "noise",
-                "quantise")
-        return [name for name in main if getattr(self, name)]
+                "quantise", "wind", "rps_step", "rps_vary")
+        return [name for name in main if getattr(self, name)] + (
+            ["rps"] if self.rps != 1.0 else [])
 
-    def dynamics(self, ship: Ship) -> MMGModel:
-        """The MMG model of ``ship`` with the physical effects in its right-hand side."""
+    @property
+    def varies_in_time(self) -> bool:
+        """Whether the effects change during a run (wind, revolutions): each run then has its
+        own series of conditions."""
+        return bool(self.wind or self.rps != 1.0 or self.rps_step or self.rps_vary)
+
+    def conditions(self, ship: Ship, times: np.ndarray, index: int) -> dict[str, np.ndarray]:
+        """The wind and revolutions of the run ``index`` of a batch at ``times`` (SI, named as
+        the measurement CSV names them), from ``numpy.random.default_rng([seed, index])``."""
+        from .conditions import revolution_series, wind_series
+
+        rng = np.random.default_rng([self.seed, index])
+        out: dict[str, np.ndarray] = {}
+        if self.wind:
+            out.update(wind_series(times, self.wind, self.wind_dir, self.gust, self.wind_wander,
+                                   ship.time_scale, rng))
+        if self.rps != 1.0 or self.rps_step or self.rps_vary:
+            out["n"] = revolution_series(times, ship.propeller.n_P, self.rps, self.rps_step,
+                                         self.rps_step_at, self.rps_vary, ship.time_scale, rng)
+        return out
+
+    def dynamics(self, ship: Ship, conditions: ChannelSeries | None = None) -> MMGModel:
+        """The MMG model of ``ship`` with the physical effects in its right-hand side, and the
+        conditions of the runs it flies (:meth:`conditions`) as time series."""
         extra = []
         if self.load:
             extra.append(_steady_load(self.load, self.load_dir, self.load_arm))
@@ -94,12 +139,16 @@ class Effects:
             to = math.radians(self.current_dir)
             current = (self.current * math.cos(to), self.current * math.sin(to))
         return MMGModel(ship, extra_forces=tuple(extra),
-                        rudder_offset=math.radians(self.rudder_offset), current=current)
+                        rudder_offset=math.radians(self.rudder_offset), current=current,
+                        conditions=conditions)
 
-    def record(self, trajectory: Trajectory, ship: Ship) -> Trajectory:
-        """What an instrument records of a simulated run: over-ground velocities, noise,
-        quantisation."""
+    def record(self, trajectory: Trajectory, ship: Ship,
+               conditions: Mapping[str, np.ndarray] | None = None) -> Trajectory:
+        """What an instrument records of a simulated run: over-ground velocities, the
+        conditions' channels, noise, quantisation."""
         data = trajectory.data.copy()
+        for name, values in (conditions or {}).items():
+            data[name] = values
         if self.current:
             to = math.radians(self.current_dir)
             north, east = self.current * math.cos(to), self.current * math.sin(to)
@@ -134,6 +183,14 @@ EFFECT_RANGES = {
     "rudder_offset": (-10.0, 10.0, "deg"),
     "noise": (0.0, 1.0, "fraction of each channel's RMS"),
     "quantise": (0, 17, "significant figures, 0 for none"),
+    "wind": (0.0, 40.0, "m/s, a storm blows at 25"),
+    "wind_dir": (-360.0, 360.0, "deg"),
+    "gust": (0.0, 1.0, "fraction of the mean wind speed"),
+    "wind_wander": (0.0, 180.0, "deg"),
+    "rps": (0.2, 1.5, "fraction of the ship's design revolutions"),
+    "rps_step": (-0.8, 0.5, "fraction of the ship's design revolutions"),
+    "rps_step_at": (0.0, 1.0, "fraction of the record"),
+    "rps_vary": (0.0, 0.3, "fraction of the ship's design revolutions"),
     "seed": (0, 2**63 - 1, "a whole number"),
 }
 
@@ -164,7 +221,15 @@ def parse_effects(items: Iterable[str] | Mapping[str, float]) -> Effects:
                 f"effect {name} needs a number, not {raw!r} (e.g. --effect {name}=0.5)."
             ) from None
         values[name] = _bounded(name, value, raw)
-    return Effects(**values)
+    effects = Effects(**values)
+    lowest = effects.rps + min(effects.rps_step, 0.0) - 3.0 * effects.rps_vary
+    if lowest < 0.2:
+        raise SindyshipInputError(
+            f"effects rps={effects.rps:g}, rps_step={effects.rps_step:g} and "
+            f"rps_vary={effects.rps_vary:g} take the revolutions down to {lowest:.2g} of the "
+            "design value (rps + rps_step - 3 rps_vary); keep that at 0.2 or above."
+        )
+    return effects
 
 
 def _bounded(name: str, value: float, raw) -> float:
@@ -281,5 +346,19 @@ def simulate_with_effects(ship: Ship, manoeuvres, effects: Effects | None = None
     from .manoeuvres import fly
 
     effects = effects or Effects()
-    runs = fly(effects.dynamics(ship), manoeuvres, step=step)
-    return [effects.record(run, ship) for run in runs]
+    if not effects.varies_in_time:
+        runs = fly(effects.dynamics(ship), manoeuvres, step=step)
+        return [effects.record(run, ship) for run in runs]
+    records: list[Trajectory | None] = [None] * len(manoeuvres)
+    batches: dict[tuple, list[int]] = {}
+    for index, manoeuvre in enumerate(manoeuvres):
+        batches.setdefault((manoeuvre.duration, manoeuvre.dt), []).append(index)
+    for batch in batches.values():  # runs of one length fly together, each in its conditions
+        times = manoeuvres[batch[0]].times
+        conditions = [effects.conditions(ship, times, index) for index in batch]
+        series = ChannelSeries(times, {name: np.vstack([c[name] for c in conditions])
+                                       for name in conditions[0]})
+        runs = fly(effects.dynamics(ship, series), [manoeuvres[i] for i in batch], step=step)
+        for index, run, own in zip(batch, runs, conditions, strict=True):
+            records[index] = effects.record(run, ship, own)
+    return records

@@ -19,8 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .conditions import wind_force
 from .errors import SindyshipInputError
 from .ships import Ship
+from .simulation.kernels import ChannelSeries
 
 
 def thrust_coefficient(ship: Ship, J):
@@ -37,7 +39,7 @@ def rudder_inflow_angle(ship: Ship, u, v, r):
     return beta - ship.rudder.l_R * r
 
 
-def force_components(ship: Ship, u, v, r, delta, starboard=None) -> dict[str, tuple]:
+def force_components(ship: Ship, u, v, r, delta, starboard=None, n=None) -> dict[str, tuple]:
     """Hull, propeller, rudder and Coriolis forces of the MMG model (paper eq. 2-11).
 
     Parameters
@@ -52,6 +54,8 @@ def force_components(ship: Ship, u, v, r, delta, starboard=None) -> dict[str, tu
         Which flow straightening factor gamma_R to use (True: ``gamma_R_stbd``).  By default
         it follows the sign of beta_R (:func:`rudder_inflow_angle`); the simulator freezes it
         over each integration step and splits steps where it changes.
+    n : float or ndarray, optional
+        Propeller revolutions [rps]; default the ship's constant ``n_P``.
 
     Returns
     -------
@@ -69,7 +73,7 @@ def force_components(ship: Ship, u, v, r, delta, starboard=None) -> dict[str, tu
     """
     beta = np.arctan2(-v, u)
     zero = 0.0 * u
-    X_P, one_minus_w, J, K_T = _propeller(ship, u, v, r, beta)
+    X_P, one_minus_w, J, K_T = _propeller(ship, u, v, r, beta, n)
     return {
         "hull": _hull(ship, u, v, r, beta),
         "propeller": (X_P, zero, zero),
@@ -105,12 +109,13 @@ def _hull(ship: Ship, u, v, r, beta) -> tuple:
     return X_H, Y_H, N_H
 
 
-def _propeller(ship: Ship, u, v, r, beta) -> tuple:
-    """Propeller thrust (paper eq. 4-6) and the wake, advance ratio and K_T the rudder needs."""
+def _propeller(ship: Ship, u, v, r, beta, n=None) -> tuple:
+    """Propeller thrust (paper eq. 4-6) and the wake, advance ratio and K_T the rudder needs;
+    ``n`` [rps] defaults to the ship's constant ``n_P``."""
     prop = ship.propeller
     L, U0 = ship.particulars.L, ship.particulars.U0
     D_nd = prop.D_P / L
-    n_nd = prop.n_P * L / U0
+    n_nd = (prop.n_P if n is None else n) * L / U0
     if prop.wake_model == "drift":
         beta_P = beta - prop.x_P * r / np.sqrt(u * u + v * v)
         one_minus_w = 1.0 - prop.w_P0 * np.exp(-4.0 * beta_P * beta_P)
@@ -194,6 +199,11 @@ class MMGModel:
         Rudder-angle sensor offset [rad]: the water sees ``delta - rudder_offset``.
     current : tuple of float
         Uniform current (north, east) [m/s]; the integrator moves the ship with it.
+    conditions : ChannelSeries, optional
+        Conditions that vary in time, one row per flight of a batch, SI as the measurement CSV
+        names them: ``n`` [rps] replaces the constant revolutions ``n_P``; ``wind_speed`` [m/s]
+        and ``wind_dir`` [rad, from] add the wind force
+        (:func:`sindyship.conditions.wind_force`).
 
     Examples
     --------
@@ -208,6 +218,7 @@ class MMGModel:
     extra_forces: tuple = ()
     rudder_offset: float = 0.0
     current: tuple[float, float] = (0.0, 0.0)
+    conditions: ChannelSeries | None = None
 
     def __post_init__(self):
         ship = self.ship
@@ -227,23 +238,39 @@ class MMGModel:
         return rudder_inflow_angle(ship, state[0] / ship.U0, state[1] / ship.U0,
                                    state[2] * ship.L / ship.U0)
 
-    def forces(self, u, v, r, delta, psi, branch=None) -> dict[str, tuple]:
-        """Force breakdown (Prime II) at SI state values; ``"effects"`` holds extra forces."""
+    @property
+    def time_varying(self) -> bool:
+        """Whether conditions vary in the flight (the integrator then passes the time)."""
+        return self.conditions is not None
+
+    def forces(self, u, v, r, delta, psi, branch=None, now=None) -> dict[str, tuple]:
+        """Force breakdown (Prime II) at SI state values; ``"effects"`` holds extra forces.
+
+        ``now`` holds the conditions at this time (:attr:`conditions`), SI arrays by name."""
         ship = self.ship
         U0 = ship.U0
+        now = now or {}
         un, vn, rn = u / U0, v / U0, r * ship.L / U0
-        parts = force_components(ship, un, vn, rn, delta - self.rudder_offset, starboard=branch)
-        if self.extra_forces:
+        parts = force_components(ship, un, vn, rn, delta - self.rudder_offset, starboard=branch,
+                                 n=now.get("n"))
+        extra = list(self.extra_forces)
+        if "wind_speed" in now:
+            speed, come_from = now["wind_speed"], now["wind_dir"]
+            extra.append(lambda u_, v_, r_, d_, psi_: wind_force(ship, u_, v_, psi_, speed,
+                                                                 come_from))
+        if extra:
             X = Y = N = 0.0 * un
-            for extra in self.extra_forces:
-                dX, dY, dN = extra(un, vn, rn, delta - self.rudder_offset, psi)
+            for force in extra:
+                dX, dY, dN = force(un, vn, rn, delta - self.rudder_offset, psi)
                 X, Y, N = X + dX, Y + dY, N + dN
             parts["effects"] = (X, Y, N)
         return parts
 
-    def accelerations(self, u, v, r, delta, psi, branch=None):
-        """Accelerations (du/dt [m/s^2], dv/dt [m/s^2], dr/dt [rad/s^2]) at SI state values."""
-        parts = self.forces(u, v, r, delta, psi, branch=branch)
+    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None):
+        """Accelerations (du/dt [m/s^2], dv/dt [m/s^2], dr/dt [rad/s^2]) at SI state values;
+        with :attr:`conditions`, those at time ``t`` of the flights ``members``."""
+        now = self.conditions.at(t, members) if self.conditions is not None else None
+        parts = self.forces(u, v, r, delta, psi, branch=branch, now=now)
         X = Y = N = 0.0
         for pX, pY, pN in parts.values():
             X = X + pX

@@ -93,7 +93,7 @@ def test_quantise_keeps_significant_figures(kcs):
     assert digits.max() <= 3
 
 
-@pytest.mark.parametrize("bad", ["wind=3", "load=abc", "noise=-1", "quantise=2.5", "load"])
+@pytest.mark.parametrize("bad", ["gale=3", "load=abc", "noise=-1", "quantise=2.5", "load"])
 def test_bad_effect_is_one_clear_error(bad):
     with pytest.raises(SindyshipInputError, match="effect"):
         parse_effects([bad])

@@ -54,8 +54,8 @@ def add_parser(sub) -> None:
                    default=1.0, metavar="SECONDS",
                    help=f"sample interval [s], {MIN_STEP:g} to {MAX_STEP:g} (default 1)")
     p.add_argument("--seed", type=SEED, default=0,
-                   help="seed of the random rudder and of noise effects, a whole number >= 0 "
-                   "(default 0)")
+                   help="seed of the random rudder and of the random effects (noise, gusts, "
+                   "wind wander, revolution changes), a whole number >= 0 (default 0)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME=VALUE",
                    help="hidden physical effect, repeatable: load [Prime II force], load_dir "
                    "[deg, the direction the load comes FROM, clockwise from north], load_arm "
@@ -63,7 +63,11 @@ def add_parser(sub) -> None:
                    "direction the current flows TOWARD], crossflow [drag coefficient], "
                    "prop_side_force [Y' at the propeller], rudder_offset [deg: recorded = true "
                    "+ offset], noise [fraction of each channel's RMS], quantise [significant "
-                   "figures]; ranges: " + ", ".join(
+                   "figures], wind [m/s, the mean true wind, written as wind_speed and wind_dir], "
+                   "wind_dir [deg, the direction the wind comes FROM], gust [fraction of wind], "
+                   "wind_wander [deg], rps [fraction of the design revolutions, written as n], "
+                   "rps_step [fraction of the design revolutions], rps_step_at [fraction of the "
+                   "record], rps_vary [fraction of the design revolutions]; ranges: " + ", ".join(
                        f"{name} {low:g} to {high:g}" for name, (low, high, _)
                        in EFFECT_RANGES.items() if name != "seed"))
     p.add_argument("--out", required=True, metavar="FILE|DIR",
