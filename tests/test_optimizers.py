@@ -31,6 +31,7 @@ from sindyship.optimizers import (
     GroupedProblem,
     LassoCV,
     LeastSquares,
+    LeaveOneTrajectoryOut,
     make_optimizer,
 )
 
@@ -126,6 +127,7 @@ SMALL = [
 ]
 
 
+@pytest.mark.filterwarnings("ignore:no groups given")  # scikit-learn's checks pass no groups
 @parametrize_with_checks(SMALL)
 def test_sklearn_contract(estimator, check):
     # No check is expected to fail (expected_failed_checks is not needed).
@@ -394,7 +396,8 @@ def test_groups_select_leave_one_group_out(problem, name):
     est = make_optimizer(name, **FAST[name])
     with_groups = clone(est).fit(X, y, groups=groups)
     assert isinstance(with_groups.cv_, LeaveOneGroupOut)
-    without = clone(est).fit(X, y)
+    with pytest.warns(UserWarning, match="5 contiguous blocks, not leaving one manoeuvre out"):
+        without = clone(est).fit(X, y)
     assert isinstance(without.cv_, KFold) and not without.cv_.shuffle
     assert without.cv_.get_n_splits() == 5
     ten = clone(est).set_params(cv=10).fit(X, y, groups=groups)
@@ -508,6 +511,48 @@ def test_a_subclass_of_the_base_fits_through_the_template(problem):
 # ------------------------------------------------------------------------------------------
 
 
+def _trajectories(n: int = 4):
+    """Damped oscillations from different starts, 401 samples each, and their derivatives."""
+    t = np.linspace(0.0, 8.0, 401)
+    xs, dxs = [], []
+    for k in range(n):
+        phase = 0.7 * k
+        x = np.column_stack([np.exp(-0.3 * t) * np.cos(2 * t + phase),
+                             (1.0 + 0.2 * k) * np.exp(-0.3 * t) * np.sin(2 * t + phase)])
+        dx = np.column_stack([-0.3 * x[:, 0] - 2 * x[:, 1] + 0.05 * x[:, 0] ** 3,
+                              2 * x[:, 0] - 0.3 * x[:, 1] + 0.01])
+        xs.append(x)
+        dxs.append(dx + 1e-3 * np.sin(7.0 * t + k)[:, None])
+    return t, xs, dxs
+
+
+@pytest.mark.parametrize("name", ["stlsq", "lasso", "svr"])
+def test_pysindy_reaches_leave_one_trajectory_out(name):
+    """Through SINDy.fit (no groups) a LeaveOneTrajectoryOut cv gives the coefficients of a
+    direct fit with groups; without it the blocks are announced, not silent."""
+    t, xs, dxs = _trajectories()
+    library = ps.PolynomialLibrary(degree=3)
+    lengths = [len(x) for x in xs]
+    through = ps.SINDy(feature_library=library,
+                       optimizer=make_optimizer(name, **FAST[name],
+                                                cv=LeaveOneTrajectoryOut(lengths)))
+    through.fit(xs, t=t, x_dot=dxs)
+    features = ps.PolynomialLibrary(degree=3).fit_transform(np.vstack(xs))
+    direct = make_optimizer(name, **FAST[name]).fit(
+        features, np.vstack(dxs), groups=np.repeat(np.arange(len(xs)), lengths))
+    assert isinstance(direct.cv_, LeaveOneGroupOut)
+    np.testing.assert_allclose(through.coefficients(), direct.coef_, rtol=1e-9, atol=1e-12)
+    with pytest.warns(UserWarning, match="LeaveOneTrajectoryOut"):
+        ps.SINDy(feature_library=ps.PolynomialLibrary(degree=3),
+                 optimizer=make_optimizer(name, **FAST[name])).fit(xs, t=t, x_dot=dxs)
+
+
+def test_leave_one_trajectory_out_refuses_lengths_that_do_not_add_up():
+    X = np.zeros((10, 2))
+    with pytest.raises(SindyshipInputError, match="received 10 samples but .* add up to 9"):
+        list(LeaveOneTrajectoryOut([4, 5]).split(X))
+
+
 @pytest.mark.parametrize("name", sorted(OPTIMIZERS))
 def test_pysindy_plug_in(name):
     """pysindy.SINDy with a PolynomialLibrary fits and predicts with each optimizer."""
@@ -518,7 +563,7 @@ def test_pysindy_plug_in(name):
     x_dot[:, 1] += 0.01
     model = ps.SINDy(
         feature_library=ps.PolynomialLibrary(degree=3),
-        optimizer=make_optimizer(name, **FAST[name]),
+        optimizer=make_optimizer(name, **FAST[name], **({} if name == "ls" else {"cv": 5})),
     )
     model.fit(x, t=t, x_dot=x_dot)
     assert model.coefficients().shape == (2, 10)

@@ -42,7 +42,10 @@ Cross-validation.
     ``fit(X, y, groups=None)``.  ``cv=None`` (the default) means leave-one-group-out when
     ``groups`` is given (one group per manoeuvre: a held-out manoeuvre shares no samples with
     the training set) and 5 contiguous, unshuffled blocks (``KFold(5, shuffle=False)``) when it
-    is not.  An integer ``cv=k`` means ``k`` contiguous blocks, whatever ``groups`` is; the
+    is not, with a ``UserWarning`` that says so.  ``pysindy.SINDy.fit`` calls ``fit(X, y)``
+    without groups: give the optimizer ``cv=LeaveOneTrajectoryOut(lengths)``, the number of
+    samples of every trajectory in the order ``SINDy.fit`` gets them, to leave one manoeuvre
+    out there too.  An integer ``cv=k`` means ``k`` contiguous blocks, whatever ``groups`` is; the
     paper's 10-fold cross-validation is ``cv=10`` (MATLAB shuffles its folds: pass
     ``cv=KFold(10, shuffle=True, random_state=seed)`` for that, and note that on noise-free
     1 Hz data shuffled folds leak neighbouring samples and pick almost no regularisation).
@@ -76,6 +79,7 @@ from __future__ import annotations
 from ._base import _LinearModel as _LinearModel
 from ._compressed import GroupedProblem
 from ._compressed import _qr as _qr
+from ._cv import LeaveOneTrajectoryOut
 from ._lasso import LassoCV
 from ._lasso import _lasso_path_exact as _lasso_path_exact
 from ._least_squares import LeastSquares
@@ -96,6 +100,7 @@ __all__ = [
     "GroupedProblem",
     "LassoCV",
     "LeastSquares",
+    "LeaveOneTrajectoryOut",
     "make_optimizer",
     "one_blas_thread",
 ]

@@ -7,12 +7,14 @@ go to the more regularised candidate) are those of the package docstring of
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Iterator, Sequence
 from numbers import Integral
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from sklearn.model_selection import KFold, LeaveOneGroupOut, check_cv
+from sklearn.model_selection import BaseCrossValidator, KFold, LeaveOneGroupOut, check_cv
 
 from sindyship.errors import SindyshipInputError
 
@@ -29,8 +31,10 @@ _TIE_FLOOR = 1e-20
 def _resolve_cv(cv: Any, groups: NDArray | None) -> tuple[Any, NDArray | None]:
     """The splitter that ``cv`` and ``groups`` select, and the groups to hand to it.
 
-    Leave one group out when ``groups`` is given and ``cv`` is not, else contiguous blocks;
-    an integer always means contiguous blocks (groups unused).
+    Leave one group out when ``groups`` is given and ``cv`` is not, else 5 contiguous blocks
+    with a ``UserWarning`` (a fit that receives no groups, as through ``pysindy.SINDy``, would
+    otherwise change the protocol silently); an integer always means contiguous blocks
+    (groups unused).
 
     Parameters
     ----------
@@ -47,7 +51,7 @@ def _resolve_cv(cv: Any, groups: NDArray | None) -> tuple[Any, NDArray | None]:
 
     Examples
     --------
-    >>> _resolve_cv(None, None)
+    >>> _resolve_cv(5, np.array([0, 0, 1, 1]))
     (KFold(n_splits=5, random_state=None, shuffle=False), None)
     >>> _resolve_cv(None, np.array([0, 0, 1, 1]))[0]
     LeaveOneGroupOut()
@@ -55,10 +59,68 @@ def _resolve_cv(cv: Any, groups: NDArray | None) -> tuple[Any, NDArray | None]:
     if cv is None and groups is not None:
         return LeaveOneGroupOut(), groups
     if cv is None:
+        warnings.warn(
+            "no groups given: cross-validating over 5 contiguous blocks, not leaving one "
+            "manoeuvre out; pass groups= to fit, or cv=LeaveOneTrajectoryOut(lengths) when "
+            "pysindy.SINDy fits this optimizer, or cv=5 to ask for the blocks.",
+            UserWarning,
+            stacklevel=4,
+        )
         return KFold(n_splits=_DEFAULT_N_BLOCKS, shuffle=False), None
     if isinstance(cv, Integral):
         return KFold(n_splits=int(cv), shuffle=False), None
     return check_cv(cv), groups
+
+
+class LeaveOneTrajectoryOut(BaseCrossValidator):
+    """Leave one trajectory out, for samples that come as consecutive trajectories.
+
+    ``pysindy.SINDy.fit`` stacks the samples of a list of trajectories in order and calls the
+    optimizer's ``fit(X, y)`` without groups; give this splitter as the optimizer's ``cv`` to
+    keep the leave-one-manoeuvre-out protocol there.
+
+    Parameters
+    ----------
+    lengths : sequence of int
+        Number of samples of every trajectory, in the order ``SINDy.fit`` receives them.
+
+    Raises
+    ------
+    SindyshipInputError
+        From :meth:`split` when the samples are not as many as the lengths add up to.
+
+    Examples
+    --------
+    >>> cv = LeaveOneTrajectoryOut([2, 3])
+    >>> [test.tolist() for _, test in cv.split(np.zeros((5, 1)))]
+    [[0, 1], [2, 3, 4]]
+    """
+
+    def __init__(self, lengths: Sequence[int]):
+        self.lengths = [int(n) for n in lengths]
+
+    def get_n_splits(self, X=None, y=None, groups=None) -> int:
+        return len(self.lengths)
+
+    def _iter_test_indices(self, X=None, y=None, groups=None) -> Iterator[NDArray]:
+        n_samples = np.asarray(X).shape[0]
+        total = sum(self.lengths)
+        if n_samples != total:
+            raise SindyshipInputError(
+                f"the optimizer received {n_samples} samples but the trajectories of "
+                f"LeaveOneTrajectoryOut add up to {total}; give the lengths of the trajectories "
+                "as the fit receives them."
+            )
+        if len(self.lengths) < 2:
+            raise SindyshipInputError(
+                "leave-one-trajectory-out cross-validation needs at least two trajectories."
+            )
+        ends = np.cumsum(self.lengths)
+        for start, end in zip(ends - self.lengths, ends, strict=True):
+            yield np.arange(start, end)
+
+    def __repr__(self) -> str:
+        return f"LeaveOneTrajectoryOut({self.lengths})"
 
 
 def _splits(

@@ -246,7 +246,7 @@ class LassoCV(_LinearModel):
         largest penalty whose error is within one standard error (over folds) of it.
     cv : None, int, splitter or iterable, default=None
         Cross-validation scheme (package docstring): leave one group out when ``groups`` is
-        given, else 5 contiguous blocks; ``cv=10`` for the paper's 10 folds.
+        given, else 5 contiguous blocks with a warning; ``cv=10`` for the paper's 10 folds.
 
     Attributes
     ----------

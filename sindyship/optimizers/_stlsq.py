@@ -95,7 +95,8 @@ class STLSQ(_LinearModel):
         Maximum number of threshold-and-refit rounds.
     cv : None, int, splitter or iterable, default=None
         Cross-validation scheme when ``threshold="cv"`` (package docstring): leave one group
-        out when ``groups`` is given, else 5 contiguous blocks.
+        out when ``groups`` is given, else 5 contiguous blocks with a warning
+        (``LeaveOneTrajectoryOut`` leaves one trajectory out through ``pysindy.SINDy``).
 
     Attributes
     ----------

@@ -241,7 +241,7 @@ class SVR(_LinearModel):
     >>> v, r = rng.uniform(-0.3, 0.3, size=(2, 400))
     >>> X = np.column_stack([np.ones(400), v, r, v**3])
     >>> y = X @ np.array([1e-5, -1.2e-2, 2.6e-3, -2e-1])
-    >>> model = SVR(Cs=[1.0, 1e4], epsilons=[0.0, 0.1]).fit(X, y)
+    >>> model = SVR(Cs=[1.0, 1e4], epsilons=[0.0, 0.1], cv=5).fit(X, y)
     >>> print(model.C_, model.epsilon_)
     [10000.] [0.]
     >>> np.allclose(model.coef_, [[1e-5, -1.2e-2, 2.6e-3, -2e-1]], rtol=1e-3, atol=1e-7)
