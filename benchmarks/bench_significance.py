@@ -23,14 +23,11 @@ and how often it finds one that is present:
 from __future__ import annotations
 
 import json
-import math
 import time
 from pathlib import Path
 
-import numpy as np
-
 from sindyship.diagnose import diagnose
-from sindyship.effects import add_noise, parse_effects, simulate_with_effects
+from sindyship.effects import parse_effects, sensor_noise, simulate_with_effects
 from sindyship.manoeuvres import fly, protocol_manoeuvres
 from sindyship.mmg import MMGModel
 from sindyship.model import paper_model
@@ -39,19 +36,6 @@ from sindyship.ships import load_ship
 OUT = Path(__file__).parent / "results" / "significance.json"
 NOISE_LEVELS = (0.0, 0.005, 0.01, 0.02)
 SEEDS = (1, 2, 3)
-
-
-def noisy(records, level: float, seed: int):
-    """Records with white noise: ``level`` of each channel's RMS on u, v, r (and 0.1 deg on
-    heading and rudder, 0.5 m on positions when ``level`` > 0)."""
-    if level == 0.0:
-        return list(records)
-    out = []
-    for k, record in enumerate(records):
-        std = {c: level * float(np.sqrt(np.mean(record[c] ** 2))) for c in ("u", "v", "r")}
-        std.update({"psi": math.radians(0.1), "delta": math.radians(0.1), "x": 0.5, "y": 0.5})
-        out.append(add_noise(record, std, seed=1000 * seed + k))
-    return out
 
 
 def _case(records, ship, absent) -> dict:
@@ -83,7 +67,7 @@ def main() -> dict:
             clean = fly(dynamics, manoeuvres)
             for level in NOISE_LEVELS:
                 for seed in SEEDS if level else (0,):
-                    case = _case(noisy(clean, level, seed), ship, absent)
+                    case = _case(sensor_noise(clean, level, seed), ship, absent)
                     cases.append({"source": source, "manoeuvres": set_name, "noise": level,
                                   "seed": seed, **case})
                     print(f"{source:15s} {set_name:20s} noise {level:.3f} seed {seed}: "
@@ -96,7 +80,7 @@ def main() -> dict:
             effects = parse_effects([f"load={magnitude}", f"load_dir={direction}"])
             clean = simulate_with_effects(symmetric, plan, effects)
             for level in (0.0, 0.01):
-                result = diagnose(noisy(clean, level, 7), symmetric, fly_training=False,
+                result = diagnose(sensor_noise(clean, level, 7), symmetric, fly_training=False,
                                   confirm=0)
                 top = result.ranking[0]
                 env = next(s for s in result.ranking if s.effect.name == "environment")

@@ -36,6 +36,17 @@ command's ``--effect NAME=VALUE`` option:
     middle), plus a slow random variation of standard deviation ``rps_vary`` times ``n_P``
     (correlation time 5 L/U0).  Recorded as the channel ``n`` [rps].  The run starts at the
     design speed, so a record at other revolutions begins by speeding up or slowing down.
+``rudder_lag``
+    A rudder-angle sensor late by ``rudder_lag`` [s]: the recorded ``delta`` is the angle the
+    water saw that long before (held at its first value at the start); the commanded
+    ``delta_c`` is exact.
+``rudder_stall``
+    The rudder stalls at ``rudder_stall`` [deg] of effective angle of attack: its normal force
+    stops growing beyond it (:func:`sindyship.mmg.force_components`).
+``bank``, ``bank_distance``
+    A straight bank along north, ``bank_distance`` ship lengths east of the start (negative:
+    west), that pulls the ship toward it with an earth-fixed force of ``bank`` (Prime II) times
+    (L / distance)^2, acting a quarter length aft of midship.
 ``noise``
     Gaussian measurement noise with a standard deviation of ``noise`` times each channel's RMS
     for u, v, r and delta (positions and heading get their own levels through
@@ -94,12 +105,16 @@ class Effects:
     rps_step: float = 0.0
     rps_step_at: float = 0.5
     rps_vary: float = 0.0
+    rudder_lag: float = 0.0
+    rudder_stall: float = 0.0
+    bank: float = 0.0
+    bank_distance: float = 5.0
     seed: int = 0
 
     def active(self) -> list[str]:
         """Names of the effects switched on."""
         main = ("load", "current", "crossflow", "prop_side_force", "rudder_offset", "noise",
-                "quantise", "wind", "rps_step", "rps_vary")
+                "quantise", "wind", "rps_step", "rps_vary", "rudder_lag", "rudder_stall", "bank")
         return [name for name in main if getattr(self, name)] + (
             ["rps"] if self.rps != 1.0 else [])
 
@@ -138,9 +153,11 @@ class Effects:
         if self.current:
             to = math.radians(self.current_dir)
             current = (self.current * math.cos(to), self.current * math.sin(to))
+        stall = math.radians(self.rudder_stall) if self.rudder_stall else None
+        bank = (self.bank_distance * ship.L, self.bank) if self.bank else None
         return MMGModel(ship, extra_forces=tuple(extra),
                         rudder_offset=math.radians(self.rudder_offset), current=current,
-                        conditions=conditions)
+                        conditions=conditions, stall=stall, bank=bank)
 
     def record(self, trajectory: Trajectory, ship: Ship,
                conditions: Mapping[str, np.ndarray] | None = None) -> Trajectory:
@@ -149,6 +166,9 @@ class Effects:
         data = trajectory.data.copy()
         for name, values in (conditions or {}).items():
             data[name] = values
+        if self.rudder_lag:
+            t = data["t"].to_numpy(dtype=float)
+            data["delta"] = np.interp(t - self.rudder_lag, t, data["delta"].to_numpy(dtype=float))
         if self.current:
             to = math.radians(self.current_dir)
             north, east = self.current * math.cos(to), self.current * math.sin(to)
@@ -191,6 +211,10 @@ EFFECT_RANGES = {
     "rps_step": (-0.8, 0.5, "fraction of the ship's design revolutions"),
     "rps_step_at": (0.0, 1.0, "fraction of the record"),
     "rps_vary": (0.0, 0.3, "fraction of the ship's design revolutions"),
+    "rudder_lag": (0.0, 60.0, "s"),
+    "rudder_stall": (0.0, 45.0, "deg of effective angle of attack, 0 for none"),
+    "bank": (0.0, 0.05, "Prime II force at one ship length from the bank"),
+    "bank_distance": (-100.0, 100.0, "ship lengths east of the start, not 0"),
     "seed": (0, 2**63 - 1, "a whole number"),
 }
 
@@ -222,6 +246,11 @@ def parse_effects(items: Iterable[str] | Mapping[str, float]) -> Effects:
             ) from None
         values[name] = _bounded(name, value, raw)
     effects = Effects(**values)
+    if effects.bank and abs(effects.bank_distance) < 1.0:
+        raise SindyshipInputError(
+            f"effect bank_distance = {effects.bank_distance:g} puts the bank within one ship "
+            "length of the start; give at least 1 (ship lengths east, negative for west)."
+        )
     lowest = effects.rps + min(effects.rps_step, 0.0) - 3.0 * effects.rps_vary
     if lowest < 0.2:
         raise SindyshipInputError(
@@ -314,6 +343,29 @@ def add_noise(trajectory: Trajectory, std: Mapping[str, float], *, seed: int) ->
         if column in data.columns and std[column] > 0:
             data[column] = data[column] + rng.normal(0.0, std[column], len(data))
     return Trajectory(data, name=trajectory.name, meta=dict(trajectory.meta))
+
+
+def sensor_noise(records, level: float, seed: int) -> list[Trajectory]:
+    """Records with the measurement noise of the benchmarks: ``level`` times each record's RMS
+    on u, v and r, 0.1 deg on heading and rudder and 0.5 m on positions (none when ``level``
+    is 0); record k draws from ``1000 seed + k``.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> frame = pd.DataFrame({c: [1.0, 1.0, 1.0] for c in ("t", "u", "v", "r", "x", "y")})
+    >>> noisy = sensor_noise([Trajectory(frame, name="run")], 0.01, seed=1)[0]
+    >>> bool(abs(noisy["u"] - 1.0).max() < 0.05), bool((noisy["x"] != 1.0).any())
+    (True, True)
+    """
+    if level == 0.0:
+        return list(records)
+    out = []
+    for k, record in enumerate(records):
+        std = {c: level * float(np.sqrt(np.mean(record[c] ** 2))) for c in ("u", "v", "r")}
+        std.update({"psi": math.radians(0.1), "delta": math.radians(0.1), "x": 0.5, "y": 0.5})
+        out.append(add_noise(record, std, seed=1000 * seed + k))
+    return out
 
 
 def quantise(trajectory: Trajectory, digits: int) -> Trajectory:

@@ -136,6 +136,14 @@ def command_for(record: Trajectory):
     return PrescribedRudder(record.t, record["delta"])
 
 
+def _aligned(flier, records: Sequence[Trajectory]) -> list[Trajectory]:
+    """The records as a fitted model reads them: the channels its library delays moved to the
+    physics' time (:meth:`sindyship.library.TermLibrary.aligned`), so that a replayed rudder
+    is the one the water saw."""
+    library = getattr(flier, "library", None)
+    return [library.aligned(r) for r in records] if library is not None else list(records)
+
+
 def _dynamics_for(flier, records: Sequence[Trajectory]):
     """Dynamics that fly ``records``: a dynamics object as given, or a fitted model's dynamics
     with the channels its library uses taken from the records as time series."""
@@ -149,7 +157,7 @@ def fly_like(dynamics, records: Sequence[Trajectory], *, step: float | None = No
     """Fly ``dynamics`` (or a fitted model, with its records' channels) the way each record
     was flown, from each record's first row."""
     out = []
-    for record in records:
+    for record in _aligned(dynamics, records):
         state0 = record.state()[:, 0]
         (result,) = simulate_batch(_dynamics_for(dynamics, [record]), [command_for(record)],
                                    record.t, state0, step=step)
@@ -160,6 +168,7 @@ def fly_like(dynamics, records: Sequence[Trajectory], *, step: float | None = No
 def fly_like_batch(dynamics, records: Sequence[Trajectory], *, step: float | None = None
                    ) -> list[Trajectory]:
     """As :func:`fly_like`, integrating records with identical sample times together."""
+    records = _aligned(dynamics, records)
     groups: dict[tuple, list[int]] = {}
     for i, rec in enumerate(records):
         t = rec.t

@@ -102,10 +102,13 @@ def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
         Naming the file the term comes from (the library's or an effect's), the degree of
         freedom, the term, the channel and the record.
     """
+    from .library import available_effects
     from .terms import describe_variable
 
     origin = {}
     for name in library.effects:
+        if name not in available_effects():  # an effect file: the message names the library
+            continue
         effect = load_effect(name)
         for dof in DOFS:
             for term in effect.terms[dof]:

@@ -39,7 +39,8 @@ def rudder_inflow_angle(ship: Ship, u, v, r):
     return beta - ship.rudder.l_R * r
 
 
-def force_components(ship: Ship, u, v, r, delta, starboard=None, n=None) -> dict[str, tuple]:
+def force_components(ship: Ship, u, v, r, delta, starboard=None, n=None, stall=None
+                     ) -> dict[str, tuple]:
     """Hull, propeller, rudder and Coriolis forces of the MMG model (paper eq. 2-11).
 
     Parameters
@@ -56,6 +57,9 @@ def force_components(ship: Ship, u, v, r, delta, starboard=None, n=None) -> dict
         over each integration step and splits steps where it changes.
     n : float or ndarray, optional
         Propeller revolutions [rps]; default the ship's constant ``n_P``.
+    stall : float, optional
+        Rudder stall angle [rad]: the rudder's normal force stops growing when its effective
+        angle of attack alpha_R (eq. 8) exceeds it (lift saturates; default no stall).
 
     Returns
     -------
@@ -77,7 +81,7 @@ def force_components(ship: Ship, u, v, r, delta, starboard=None, n=None) -> dict
     return {
         "hull": _hull(ship, u, v, r, beta),
         "propeller": (X_P, zero, zero),
-        "rudder": _rudder(ship, u, v, r, delta, beta, one_minus_w, J, K_T, starboard),
+        "rudder": _rudder(ship, u, v, r, delta, beta, one_minus_w, J, K_T, starboard, stall),
         "coriolis": _coriolis(ship, u, v, r),
     }
 
@@ -127,7 +131,8 @@ def _propeller(ship: Ship, u, v, r, beta, n=None) -> tuple:
     return X_P, one_minus_w, J, K_T
 
 
-def _rudder(ship: Ship, u, v, r, delta, beta, one_minus_w, J, K_T, starboard) -> tuple:
+def _rudder(ship: Ship, u, v, r, delta, beta, one_minus_w, J, K_T, starboard, stall=None
+            ) -> tuple:
     """Rudder forces (paper eq. 7-10).
 
     ``lateral`` is -v'_R of eq. 10b, so that alpha_R = delta - atan2(lateral, u'_R) (eq. 8);
@@ -149,6 +154,8 @@ def _rudder(ship: Ship, u, v, r, delta, beta, one_minus_w, J, K_T, starboard) ->
         gamma = np.where(stbd, rud.gamma_R_stbd, rud.gamma_R_port)
         lateral = -gamma * (v + rud.l_R * r)
     alpha_R = delta - np.arctan2(lateral, u_R)
+    if stall is not None:
+        alpha_R = np.clip(alpha_R, -stall, stall)
     F_N = (rud.A_R / (ship.particulars.L * ship.particulars.d) * rud.f_alpha) \
         * (u_R * u_R + lateral * lateral) * np.sin(alpha_R)
     F_cos = F_N * np.cos(delta)
@@ -171,6 +178,15 @@ def _coriolis(ship: Ship, u, v, r) -> tuple:
         Y_C = -(m + mass.m_x) * u * r
     N_C = -mxg * u * r
     return X_C, Y_C, N_C
+
+
+def _bank_force(ship: Ship, bank: tuple[float, float], y_east, psi) -> tuple:
+    """Suction toward a bank along north at y = y_bank (see :class:`MMGModel`), Prime II."""
+    y_bank, strength = bank
+    distance = np.maximum(np.abs(y_bank - y_east), 0.5 * ship.L)
+    east = np.sign(y_bank - y_east) * strength * (ship.L / distance) ** 2
+    Y = east * np.cos(psi)
+    return east * np.sin(psi), Y, -0.25 * Y
 
 
 def mass_matrix(ship: Ship) -> np.ndarray:
@@ -199,6 +215,13 @@ class MMGModel:
         Rudder-angle sensor offset [rad]: the water sees ``delta - rudder_offset``.
     current : tuple of float
         Uniform current (north, east) [m/s]; the integrator moves the ship with it.
+    stall : float, optional
+        Rudder stall angle [rad] (:func:`force_components`).
+    bank : tuple of float, optional
+        ``(y_bank, strength)``: a straight bank along north at ``y = y_bank`` [m] that pulls
+        the ship toward it with an earth-fixed force ``strength (L / d)^2`` (Prime II, d the
+        distance to the bank), acting a quarter length aft of midship (bank suction on the
+        stern turns the bow away).  The integrator then passes the ship's position.
     conditions : ChannelSeries, optional
         Conditions that vary in time, one row per flight of a batch, SI as the measurement CSV
         names them: ``n`` [rps] replaces the constant revolutions ``n_P``; ``wind_speed`` [m/s]
@@ -219,6 +242,8 @@ class MMGModel:
     rudder_offset: float = 0.0
     current: tuple[float, float] = (0.0, 0.0)
     conditions: ChannelSeries | None = None
+    stall: float | None = None
+    bank: tuple[float, float] | None = None
 
     def __post_init__(self):
         ship = self.ship
@@ -239,21 +264,31 @@ class MMGModel:
                                    state[2] * ship.L / ship.U0)
 
     @property
+    def uses_position(self) -> bool:
+        """Whether the forces depend on the ship's position (a bank)."""
+        return self.bank is not None
+
+    @property
     def time_varying(self) -> bool:
         """Whether conditions vary in the flight (the integrator then passes the time)."""
         return self.conditions is not None
 
-    def forces(self, u, v, r, delta, psi, branch=None, now=None) -> dict[str, tuple]:
+    def forces(self, u, v, r, delta, psi, branch=None, now=None, position=None
+               ) -> dict[str, tuple]:
         """Force breakdown (Prime II) at SI state values; ``"effects"`` holds extra forces.
 
-        ``now`` holds the conditions at this time (:attr:`conditions`), SI arrays by name."""
+        ``now`` holds the conditions at this time (:attr:`conditions`), SI arrays by name;
+        ``position`` the ship's (x, y) [m] for a bank."""
         ship = self.ship
         U0 = ship.U0
         now = now or {}
         un, vn, rn = u / U0, v / U0, r * ship.L / U0
         parts = force_components(ship, un, vn, rn, delta - self.rudder_offset, starboard=branch,
-                                 n=now.get("n"))
+                                 n=now.get("n"), stall=self.stall)
         extra = list(self.extra_forces)
+        if self.bank is not None and position is not None:
+            y_east = position[1]
+            extra.append(lambda u_, v_, r_, d_, psi_: _bank_force(ship, self.bank, y_east, psi_))
         if "wind_speed" in now:
             speed, come_from = now["wind_speed"], now["wind_dir"]
             extra.append(lambda u_, v_, r_, d_, psi_: wind_force(ship, u_, v_, psi_, speed,
@@ -266,11 +301,13 @@ class MMGModel:
             parts["effects"] = (X, Y, N)
         return parts
 
-    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None):
+    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None,
+                      position=None):
         """Accelerations (du/dt [m/s^2], dv/dt [m/s^2], dr/dt [rad/s^2]) at SI state values;
-        with :attr:`conditions`, those at time ``t`` of the flights ``members``."""
+        with :attr:`conditions`, those at time ``t`` of the flights ``members``; with a bank,
+        at the ``position`` (x, y) [m]."""
         now = self.conditions.at(t, members) if self.conditions is not None else None
-        parts = self.forces(u, v, r, delta, psi, branch=branch, now=now)
+        parts = self.forces(u, v, r, delta, psi, branch=branch, now=now, position=position)
         X = Y = N = 0.0
         for pX, pY, pN in parts.values():
             X = X + pX

@@ -62,6 +62,12 @@ class AbkowitzDynamics:
         return self.series is not None
 
     @property
+    def uses_position(self) -> bool:
+        """Whether terms depend on where the ship is (x, y): the integrator then passes the
+        flight's own position, never the recorded one."""
+        return bool({"x", "y"} & set(self.model.library.variables))
+
+    @property
     def ship(self) -> Ship:
         return self.model.ship
 
@@ -69,9 +75,11 @@ class AbkowitzDynamics:
     def rudder_input(self) -> str:
         return "commanded" if self.model.rudder_signal == "commanded" else "actual"
 
-    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None):
+    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None,
+                      position=None):
         """Accelerations (du/dt, dv/dt, dr/dt) in SI from SI state values; the recorded
-        channels at time ``t`` of the flights ``members`` when the dynamics has a series."""
+        channels at time ``t`` of the flights ``members`` when the dynamics has a series, and
+        the flight's ``position`` (x, y) [m] when terms use it."""
         model = self.model
         ship = model.ship
         U0, L = ship.U0, ship.L
@@ -80,6 +88,8 @@ class AbkowitzDynamics:
         values.update(self.channels)
         if self.series is not None:
             values.update(self.series.at(t, members))
+        if position is not None:
+            values["x"], values["y"] = position
         forces = model.forces_from_values(values)
         X_C, Y_C, N_C = coriolis(ship, un, values["v"], values["r"])
         Minv = model.inverse_mass
@@ -198,8 +208,9 @@ class AbkowitzModel:
 
     @property
     def recorded_channels(self) -> list[str]:
-        """The channels the library uses that a flight takes from the record (all but psi)."""
-        return sorted(set(self.library.channels) - {"psi"})
+        """The channels the library uses that a flight takes from the record (all but the
+        heading and the position, which the flight integrates)."""
+        return sorted(set(self.library.channels) - {"psi", "x", "y"})
 
     def dynamics(self, channels: Mapping[str, float] | None = None, *, records=None
                  ) -> AbkowitzDynamics:
@@ -210,8 +221,8 @@ class AbkowitzModel:
         values of ``channels`` (library scaling).
         """
         if records is not None and self.recorded_channels:
-            series = channel_series(list(records), self.recorded_channels, self.ship.L,
-                                    self.ship.U0)
+            series = channel_series([self.library.aligned(r) for r in records],
+                                    self.recorded_channels, self.ship.L, self.ship.U0)
             return AbkowitzDynamics(self, dict(channels or {}), series)
         missing = sorted(set(self.recorded_channels) - set(channels or {}))
         if missing:

@@ -249,6 +249,12 @@ def _verdict_lines(diagnosis) -> list[str]:
                 f"{_ship_argument(diagnosis.ship)} --effects "
                 f"{','.join([*diagnosis.library.effects, top.effect.name])}; then diagnose "
                 "again with the same --effects.")
+    elif verdict == "add-discovered":
+        found = " and ".join(f.family for f in diagnosis.discovery.accepted)
+        text = (f"Verdict: no catalogued effect is meaningful, but {found} was discovered "
+                "beyond the catalogue (above): sindyship discover DATA.csv... --ship "
+                f"{_ship_argument(diagnosis.ship)} --out effect.toml, then fit and diagnose "
+                "with --effects effect.toml.")
     elif verdict == "unstable":
         flights = ", ".join(f"{name} at {when:.0f} s" for name, when in diagnosis.diverged.items())
         text = (f"Verdict: the model fails - its training flights diverged ({flights}) and no "
@@ -286,6 +292,8 @@ def diagnosis_report(diagnosis) -> str:
     lines += _compare_lines(diagnosis.comparisons)
     lines += _residual_lines(diagnosis)
     lines += _ranking_lines(diagnosis)
+    if diagnosis.discovery is not None:
+        lines += ["", discovery_report(diagnosis.discovery), ""]
     lines += _verdict_lines(diagnosis)
     return "\n".join(lines)
 
@@ -407,4 +415,46 @@ def forces_report(result) -> str:
                                              for dof in ("X", "Y", "N"))]
     for name, stats in rows:
         lines.append(f"{name:<18}" + "".join(f"  {cell(stats[dof])}" for dof in ("X", "Y", "N")))
+    return "\n".join(lines)
+
+
+def _finding_lines(k: int, finding) -> list[str]:
+    mark = "meaningful" if finding.meaningful else "not meaningful"
+    what = (", ".join(f"{c} read {d:+.2f} s later" for c, d in finding.delays.items())
+            if finding.delays else
+            "; ".join(f"{dof}: {', '.join(ts)}" for dof, ts in finding.terms.items() if ts))
+    shares = ", ".join(f"{dof} {finding.signal_by_dof[dof]:.0%}"
+                       + ("" if finding.significant[dof] else " (not significant)")
+                       for dof in DOF_NAMES)
+    return [f"  {k}. {finding.family}: explains {finding.explained_signal:.1%} of the error "
+            f"above the noise floor ({mark}; {shares})",
+            _fill(f"{what}. Usually: {finding.hint}.", indent="     ", subsequent="     ")]
+
+
+def discovery_report(discovery) -> str:
+    """Text report of :func:`sindyship.diagnose.discover`: the findings and what they mean."""
+    lines = [f"Not in the catalogue: searched the residual of {discovery.library.name} on "
+             f"{len(discovery.records)} records ({discovery.seconds:.1f} s)."]
+    floor = ", ".join(f"{dof} {share:.0%}" for dof, share in discovery.noise_floor.items())
+    lines.append(f"Noise floor (share of the leave-one-manoeuvre-out error): {floor}.")
+    if not discovery.findings:
+        lines.append("No candidate explains any of the error.")
+    for k, finding in enumerate(discovery.findings[:5], start=1):
+        lines += _finding_lines(k, finding)
+    for r, found in enumerate(discovery.rounds[1:], start=2):
+        added = ", ".join(f.family for f in discovery.accepted[: r - 1])
+        best = next((f for f in found if f.meaningful), found[0] if found else None)
+        if best is None:
+            lines.append(f"Round {r}, with {added} added: no candidate explains any error.")
+            continue
+        lines.append(f"Round {r}, with {added} added, the "
+                     + ("discovery:" if best.meaningful else "best candidate:"))
+        lines += _finding_lines(1, best)
+    if not discovery.accepted:
+        lines.append(f"Nothing explains {discovery.threshold:.0%} of the error above the noise "
+                     "floor: no missing effect was discovered.")
+    else:
+        found = " and ".join(f.family for f in discovery.accepted)
+        lines.append(f"Discovered: {found}. Write it with --out effect.toml and refit with "
+                     "--effects effect.toml to see the error fall.")
     return "\n".join(lines)

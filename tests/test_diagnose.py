@@ -414,7 +414,11 @@ def _rudder_sensor_late(record: Trajectory, seconds: float) -> Trajectory:
 def test_a_model_whose_flights_diverge_is_never_complete():
     ship = load_ship("kcs").with_rudder(gamma_R_stbd=0.415, gamma_R_port=0.415)
     runs = fly(MMGModel(ship), protocol_manoeuvres()["train"])
-    result = diagnose([_rudder_sensor_late(r, 4.0) for r in runs], ship, confirm=0)
+    late = [_rudder_sensor_late(r, 4.0) for r in runs]
+    searched = diagnose(late, ship, confirm=0)
+    assert not searched.complete and searched.verdict == "add-discovered"
+    assert searched.discovery.best.delays["delta"] == pytest.approx(4.0, abs=1.0)
+    result = diagnose(late, ship, confirm=0, search_beyond=False)
     assert not result.complete
     assert result.verdict == "unstable"
     assert len(result.diverged) == 8 and max(result.diverged.values()) < 600.0

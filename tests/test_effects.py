@@ -97,3 +97,23 @@ def test_quantise_keeps_significant_figures(kcs):
 def test_bad_effect_is_one_clear_error(bad):
     with pytest.raises(SindyshipInputError, match="effect"):
         parse_effects([bad])
+
+
+def test_a_lagging_rudder_sensor_records_the_angle_late_and_leaves_the_motion(kcs, calm):
+    lagged = run(kcs, ["rudder_lag=4"], TURN)
+    t = calm["turn"].t
+    assert np.array_equal(lagged["x"], calm["turn"]["x"])
+    assert np.array_equal(lagged["delta_c"], calm["turn"]["delta_c"])
+    np.testing.assert_allclose(lagged["delta"], np.interp(t - 4.0, t, calm["turn"]["delta"]))
+
+
+def test_a_stalling_rudder_turns_wider(kcs, calm):
+    stalled = run(kcs, ["rudder_stall=5"], TURN)
+    assert np.ptp(stalled["y"]) > 1.1 * np.ptp(calm["turn"]["y"])
+
+
+def test_a_bank_to_the_west_turns_the_bow_away_from_it(kcs, calm):
+    near = run(kcs, ["bank=0.005", "bank_distance=-3"])
+    assert near["y"][-1] > calm["straight"]["y"][-1] + 10.0
+    with pytest.raises(SindyshipInputError, match="within one ship length"):
+        parse_effects(["bank=0.005", "bank_distance=0.5"])

@@ -15,7 +15,18 @@ import threading
 
 from .. import __version__
 from ..errors import SindyshipInputError
-from . import captive, diagnose, effects, evaluate, export, fit, forces, reproduce, simulate
+from . import (
+    captive,
+    diagnose,
+    discover,
+    effects,
+    evaluate,
+    export,
+    fit,
+    forces,
+    reproduce,
+    simulate,
+)
 
 #: The verbs in the order ``sindyship --help`` lists them, each a module with
 #: ``add_parser(subparsers)`` and ``run(args) -> int``.
@@ -25,6 +36,7 @@ VERBS = {
     "evaluate": evaluate,
     "reproduce": reproduce,
     "diagnose": diagnose,
+    "discover": discover,
     "export": export,
     "effects": effects,
     "captive": captive,

@@ -174,9 +174,9 @@ def add_resample(p) -> None:
                    "machine's memory is refused (default: refuse irregular records)")
 
 
-def add_identification(p) -> None:
+def add_identification(p, *, optimizer: bool = True) -> None:
     """The options that say how a library is fitted: library, effects, optimizer, rudder,
-    derivative (shared by ``fit`` and ``diagnose``)."""
+    derivative (shared by ``fit``, ``diagnose`` and, without the optimizer, ``discover``)."""
     from ..optimizers import OPTIMIZERS
 
     p.add_argument("--library", default=DEFAULT_LIBRARY, metavar="NAME|FILE",
@@ -184,8 +184,9 @@ def add_identification(p) -> None:
     p.add_argument("--effects", default="", metavar="NAME,...",
                    help="comma-separated catalogue effects (or effect TOML files) whose terms "
                    "are added to the library (default: none)")
-    p.add_argument("--optimizer", default="ls", choices=sorted(OPTIMIZERS),
-                   help="regression method (default: ls, least squares)")
+    if optimizer:
+        p.add_argument("--optimizer", default="ls", choices=sorted(OPTIMIZERS),
+                       help="regression method (default: ls, least squares)")
     p.add_argument("--rudder-signal", default="actual", choices=["actual", "commanded"],
                    help="rudder angle used in the features: the actual (servo) angle or the "
                    "commanded one (default: actual, as the paper's protocol)")
@@ -272,12 +273,14 @@ def check_simulation_cost(ship, duration: float, dt: float | None = None) -> Non
         )
 
 
-def add_training_options(p, *, n_jobs_default: int | None) -> None:
-    """What every verb that fits a library on records takes (``fit``, ``diagnose``): the
-    records, the ship, how the library is fitted, smoothing, resampling, workers, JSON."""
+def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool = True,
+                         workers: bool = True) -> None:
+    """What every verb that fits a library on records takes (``fit``, ``diagnose``,
+    ``discover``): the records, the ship, how the library is fitted, smoothing, resampling,
+    workers, JSON."""
     p.add_argument("data", nargs="+", help="training measurement CSV files")
     add_ship(p)
-    add_identification(p)
+    add_identification(p, optimizer=optimizer)
     p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",
                    help="smooth noisy training records before differencing: a Savitzky-Golay "
                    "or a Kalman (RTS) smoother over W seconds, or 'auto' to choose the setting "
@@ -287,5 +290,6 @@ def add_training_options(p, *, n_jobs_default: int | None) -> None:
     from ._records import add_record_options
 
     add_record_options(p)
-    add_n_jobs(p, default=n_jobs_default)
+    if workers:
+        add_n_jobs(p, default=n_jobs_default)
     add_json(p)

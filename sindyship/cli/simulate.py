@@ -67,7 +67,10 @@ def add_parser(sub) -> None:
                    "wind_dir [deg, the direction the wind comes FROM], gust [fraction of wind], "
                    "wind_wander [deg], rps [fraction of the design revolutions, written as n], "
                    "rps_step [fraction of the design revolutions], rps_step_at [fraction of the "
-                   "record], rps_vary [fraction of the design revolutions]; ranges: " + ", ".join(
+                   "record], rps_vary [fraction of the design revolutions], rudder_lag [s the "
+                   "recorded rudder is late], rudder_stall [deg of angle of attack], bank "
+                   "[Prime II force at one length], bank_distance [ship lengths east, negative "
+                   "west]; ranges: " + ", ".join(
                        f"{name} {low:g} to {high:g}" for name, (low, high, _)
                        in EFFECT_RANGES.items() if name != "seed"))
     p.add_argument("--out", required=True, metavar="FILE|DIR",

@@ -23,6 +23,10 @@ Which effect is missing
     credited with error the library's own terms absorb once refitted.  The best candidates are
     then confirmed by refitting the library with them and re-flying the manoeuvres.  Effects
     whose channels the data lack are listed as not testable, with the channels to record.
+What no catalogue lists
+    :func:`discover` searches the residual for a channel that lags the force it causes and
+    for terms of pysindy feature libraries (:mod:`sindyship.diagnose.discovery`); the
+    diagnosis runs it when nothing catalogued is meaningful and the model is visibly wrong.
 Add it and watch the error fall
     :func:`before_after` refits with added effects and tabulates the error on every
     manoeuvre, training and held-out, before and after; :func:`diagnose_iteratively` repeats
@@ -62,6 +66,7 @@ from ._flights import fly_model
 from .before_after import BeforeAfter, before_after
 from .compare import ManoeuvreComparison, compare
 from .diagnosis import Diagnosis, diagnose
+from .discovery import Discovery, Finding, discover
 from .iteration import IterativeDiagnosis, Round, diagnose_iteratively
 from .phases import Phase, manoeuvre_phases
 from .residuals import STATE_BINS, Residuals, StateBins, force_residuals
@@ -73,7 +78,9 @@ __all__ = [
     "STATE_BINS",
     "BeforeAfter",
     "Diagnosis",
+    "Discovery",
     "EffectScore",
+    "Finding",
     "IterativeDiagnosis",
     "ManoeuvreComparison",
     "NotTestable",
@@ -85,6 +92,7 @@ __all__ = [
     "compare",
     "diagnose",
     "diagnose_iteratively",
+    "discover",
     "fly_model",
     "force_residuals",
     "manoeuvre_phases",

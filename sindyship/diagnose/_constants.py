@@ -7,6 +7,7 @@ from ..reports import DOF_NAMES, SETS
 __all__ = [
     "BOOTSTRAP",
     "NOISE_CAP",
+    "NOISE_VISIBLE",
     "SIGNIFICANCE",
     "COLLINEAR_VIF",
     "CONFIRMING_RATIO",
@@ -36,3 +37,6 @@ SIGNIFICANCE = 0.05
 #: Largest share of an equation's error taken for noise: the share above the noise floor is
 #: then at most 20 times the plain share, however noisy the records.
 NOISE_CAP = 0.95
+#: Noise-floor share of an equation's cross-validated error below which the rest of the
+#: error is visibly more than noise: the diagnosis then searches beyond the catalogue.
+NOISE_VISIBLE = 0.9

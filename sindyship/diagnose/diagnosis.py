@@ -27,10 +27,18 @@ from ..stability import Stability, straight_run_stability
 from ..terms import Term
 from ..trajectory import Trajectory
 from ..uncertainty import library_conditioning
-from ._constants import COLLINEAR_VIF, DOF_NAMES, MEANINGFUL_SHARE, NOISE_CAP, UNEXPLAINED_SHARE
+from ._constants import (
+    COLLINEAR_VIF,
+    DOF_NAMES,
+    MEANINGFUL_SHARE,
+    NOISE_CAP,
+    NOISE_VISIBLE,
+    UNEXPLAINED_SHARE,
+)
 from ._flights import _fly_many
 from .before_after import BeforeAfter, _change_rows, _fit
 from .compare import ManoeuvreComparison, compare
+from .discovery import Discovery, discover
 from .noise import channel_noise, noise_sse
 from .residuals import Residuals, _residuals
 from .scoring import EffectScore, NotTestable, _score, _untestable
@@ -63,6 +71,10 @@ class Diagnosis:
         the measured force (RMS over RMS).
     settings : dict
     seconds : float
+    discovery : Discovery or None
+        The search beyond the catalogue (:func:`sindyship.diagnose.discover`), run when no
+        catalogued effect is meaningful and the model is visibly wrong (a training flight
+        diverged, or a force's cross-validated error stands above its noise floor).
     """
 
     ship: Ship
@@ -81,6 +93,7 @@ class Diagnosis:
     collinear: dict[str, dict[str, float]] = field(default_factory=dict)
     noise_floor: dict[str, float] = field(default_factory=dict)
     noise_level: dict[str, float] = field(default_factory=dict)
+    discovery: Discovery | None = None
 
     @property
     def diverged(self) -> dict[str, float]:
@@ -103,11 +116,15 @@ class Diagnosis:
 
     @property
     def verdict(self) -> str:
-        """``"add-effect"`` (a meaningful effect is missing), ``"unstable"`` (training flights
-        diverged and no catalogued effect is meaningful), ``"unexplained"`` (most of a force
-        is unexplained and no catalogued effect is meaningful) or ``"complete"``."""
+        """``"add-effect"`` (a meaningful effect is missing), ``"add-discovered"`` (no
+        catalogued effect is meaningful but the search beyond the catalogue discovered one),
+        ``"unstable"`` (training flights diverged and no catalogued effect is meaningful),
+        ``"unexplained"`` (most of a force is unexplained and no catalogued effect is
+        meaningful) or ``"complete"``."""
         if self.top is not None:
             return "add-effect"
+        if self.discovery is not None and self.discovery.accepted:
+            return "add-discovered"
         if self.diverged:
             return "unstable"
         if self.unexplained:
@@ -203,6 +220,7 @@ class Diagnosis:
                 "collinear_terms": self.collinear,
                 "noise": {"floor_share_of_error": self.noise_floor, "level": self.noise_level},
                 "ranking": [score.to_json() for score in self.ranking],
+                "discovery": None if self.discovery is None else self.discovery.to_json(),
                 "not_testable": [item.to_json() for item in self.not_testable],
                 "in_library": list(self.in_library),
                 "warnings": self.warnings,
@@ -282,6 +300,7 @@ def diagnose(
     smoothing: SmoothingSetting | str | None = None,
     n_jobs: int = 1,
     progress: bool = False,
+    search_beyond: bool = True,
 ) -> Diagnosis:
     """Fit a library, show where it fails and rank the catalogued effects that are missing.
 
@@ -317,6 +336,10 @@ def diagnose(
         Parallel jobs: threads for scoring the effects, processes for the flights (joblib).
     progress : bool
         Progress bars on stderr.
+    search_beyond : bool
+        When no catalogued effect is meaningful and the model is visibly wrong, search beyond
+        the catalogue (:func:`sindyship.diagnose.discover`, the report's "Not in the
+        catalogue").
 
     Returns
     -------
@@ -333,16 +356,7 @@ def diagnose(
 
     start = time.perf_counter()
     records, test = list(records), list(test)
-    if len(records) < 2:
-        raise SindyshipInputError(
-            "diagnose needs at least two training records: effects are scored by "
-            "leave-one-manoeuvre-out cross-validation."
-        )
-    if not 0.0 < threshold < 1.0:
-        raise SindyshipInputError(f"the threshold must lie between 0 and 1, not {threshold}.")
-    names = [r.name for r in records + test]
-    if len(set(names)) != len(names):
-        raise SindyshipInputError("two records share a name; give each file a distinct name.")
+    _check_arguments(records, test, threshold)
     base = resolve_library(library)
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
     smoothing = _smoothing_setting(smoothing, records, ship, base, optimizer, rudder_signal, n_jobs)
@@ -457,7 +471,7 @@ def diagnose(
             model_before=model,
             model_after=models[j],
         )
-    return Diagnosis(
+    result = Diagnosis(
         ship=ship,
         library=base,
         model=model,
@@ -483,5 +497,36 @@ def diagnose(
         },
         seconds=time.perf_counter() - start,
     )
+    if search_beyond:
+        _search_beyond(result, fitted, settings)
+        result.seconds = time.perf_counter() - start
+    return result
+
+
+def _check_arguments(records: Sequence[Trajectory], test: Sequence[Trajectory],
+                     threshold: float) -> None:
+    """Refuse fewer than two training records, a threshold outside (0, 1) and records that
+    share a name."""
+    if len(records) < 2:
+        raise SindyshipInputError(
+            "diagnose needs at least two training records: effects are scored by "
+            "leave-one-manoeuvre-out cross-validation."
+        )
+    if not 0.0 < threshold < 1.0:
+        raise SindyshipInputError(f"the threshold must lie between 0 and 1, not {threshold}.")
+    names = [r.name for r in [*records, *test]]
+    if len(set(names)) != len(names):
+        raise SindyshipInputError("two records share a name; give each file a distinct name.")
+
+
+def _search_beyond(result: Diagnosis, fitted: Sequence[Trajectory], settings: Mapping) -> None:
+    """Run :func:`discover` into ``result.discovery`` when no catalogued effect is meaningful
+    and the model is visibly wrong (a training flight diverged, or an equation's error stands
+    clearly above its noise floor)."""
+    floor = result.noise_floor
+    visibly_wrong = bool(result.diverged) or any(floor[dof] < NOISE_VISIBLE for dof in DOFS)
+    if result.top is None and visibly_wrong:
+        result.discovery = discover(fitted, result.ship, library=result.library,
+                                    threshold=result.threshold, **settings)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
@@ -20,11 +21,51 @@ if TYPE_CHECKING:
 _NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 _CHANNEL_RE = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
 _MAX_FILE_BYTES = 1_000_000
-_LIBRARY_KEYS = {"name": True, "system": True, "description": False, "terms": True}
-_EFFECT_KEYS = {"name": True, "title": True, "physics": True, "channels": False, "terms": True}
+_LIBRARY_KEYS = {"name": True, "system": True, "description": False, "terms": True,
+                 "delays": False}
+_EFFECT_KEYS = {"name": True, "title": True, "physics": True, "channels": False, "terms": False,
+                "delays": False}
+#: Channels a library may not delay: time, the motion state and the positions it integrates.
+UNDELAYABLE = ("t", "u", "v", "r", "x", "y", "psi", "du")
+#: Largest delay of a channel [s].
+MAX_DELAY = 3600.0
 
 
 # ---------------------------------------------------------------------------- validation
+def _read_delays(raw: Any, source: str | Path | None) -> dict[str, float]:
+    """A ``[delays]`` table: recorded channel -> seconds by which it lags the physics.
+
+    Raises
+    ------
+    SindyshipInputError
+        For a table that is not channel = number, a channel of the motion state, time or
+        position, or a delay that is not finite, zero, or beyond :data:`MAX_DELAY`.
+    """
+    if raw is None:
+        return {}
+    if not isinstance(raw, Mapping):
+        raise SindyshipInputError(
+            f"{_where(source)}delays must be a table such as {{delta = 4.0}} (seconds)."
+        )
+    out = {}
+    for channel, value in raw.items():
+        if not isinstance(channel, str) or not _CHANNEL_RE.fullmatch(channel):
+            raise SindyshipInputError(f"{_where(source)}{channel!r} is not a channel name.")
+        if channel in UNDELAYABLE:
+            raise SindyshipInputError(
+                f'{_where(source)}the channel "{channel}" cannot be delayed: only input '
+                "channels such as delta, delta_c, n or wind_speed can."
+            )
+        if (isinstance(value, bool) or not isinstance(value, int | float)
+                or not math.isfinite(value) or value == 0 or abs(value) > MAX_DELAY):
+            raise SindyshipInputError(
+                f"{_where(source)}the delay of {channel} must be a non-zero number of seconds "
+                f"between -{MAX_DELAY:g} and {MAX_DELAY:g}, not {value!r}."
+            )
+        out[channel] = float(value)
+    return out
+
+
 def _where(source: str | Path | None, line: int | None = None) -> str:
     if source is None:
         return ""

@@ -18,6 +18,7 @@ from ._checks import (
     _NAME_RE,
     _check_keys,
     _name,
+    _read_delays,
     _read_terms,
     _text,
     _where,
@@ -138,14 +139,16 @@ def load_library(name_or_path: str | Path) -> TermLibrary:
         description=_text(data, "description", file).strip(),
         terms=_read_terms(data["terms"], file, raw, all_dofs=True),
         source=source,
+        delays=_read_delays(data.get("delays"), file),
     )
 
 
 def load_effect(name_or_path: str | Path) -> Effect:
     """Read an effect: a built-in one by name, or a TOML file by path.
 
-    The file has ``name``, ``title``, ``physics``, ``channels`` (optional, default none)
-    and a ``[terms]`` table with the degrees of freedom the effect touches.
+    The file has ``name``, ``title``, ``physics``, ``channels`` (optional, default none),
+    a ``[terms]`` table with the degrees of freedom the effect touches and a ``[delays]``
+    table of channels that lag the force (at least one of the two).
 
     Raises
     ------
@@ -163,6 +166,8 @@ def load_effect(name_or_path: str | Path) -> Effect:
         title=_text(data, "title", file).strip(),
         physics=_text(data, "physics", file).strip(),
         channels=tuple(channels),
-        terms=_read_terms(data["terms"], file, raw, all_dofs=False),
+        terms=(_read_terms(data["terms"], file, raw, all_dofs=False) if "terms" in data
+               else {}),
         source=Path(str(file)),
+        delays=_read_delays(data.get("delays"), file),
     )

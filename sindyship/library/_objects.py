@@ -17,6 +17,7 @@ from ._checks import (
     _check_keys,
     _frozen_terms,
     _name,
+    _read_delays,
     _read_terms,
     _text,
     _variables,
@@ -48,6 +49,10 @@ class TermLibrary:
         The file the library was read from.
     effects : tuple of str
         Names of the effects added by :meth:`extended`, in order.
+    delays : mapping of str to float
+        Recorded channels that lag the physics, and by how many seconds (a rudder-angle
+        sensor late by 4 s: ``{"delta": 4.0}``).  Every term reads such a channel at
+        ``t + delay`` (:meth:`aligned`); see docs/effects.md.
 
     Examples
     --------
@@ -70,15 +75,57 @@ class TermLibrary:
     terms: Mapping[str, tuple[Term, ...]]
     source: Path | None = field(default=None, compare=False)
     effects: tuple[str, ...] = ()
+    delays: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         label = self.source if self.source is not None else f'library "{self.name}"'
         frozen = _frozen_terms(self.terms, label, all_dofs=True)
         object.__setattr__(self, "terms", frozen)
         object.__setattr__(self, "effects", tuple(self.effects))
+        object.__setattr__(self, "delays", _read_delays(dict(self.delays), label))
 
     def __hash__(self) -> int:
-        return hash((self.name, self.system, self.description, *self.terms.items(), self.effects))
+        return hash((self.name, self.system, self.description, *self.terms.items(), self.effects,
+                     *sorted(self.delays.items())))
+
+    def aligned(self, record):
+        """The record with every delayed channel read ``delay`` seconds later.
+
+        A channel that lags the physics by ``tau`` (:attr:`delays`) is replaced by its value
+        at ``t + tau`` (linear interpolation, angles unwrapped first; held at the record's
+        first or last value beyond its ends).  Time, the motion and the positions are
+        untouched.  A record this library has already aligned is returned as it is.
+
+        Examples
+        --------
+        >>> import pandas as pd
+        >>> from sindyship.trajectory import Trajectory
+        >>> lib = TermLibrary("toy", "prime-I", "", {"X": ["du"], "Y": ["v"], "N": ["r"]},
+        ...                   delays={"delta": 2.0})
+        >>> frame = pd.DataFrame({"t": [0.0, 1.0, 2.0, 3.0], "delta": [0.0, 0.0, 0.1, 0.2]})
+        >>> lib.aligned(Trajectory(frame, name="run"))["delta"].tolist()
+        [0.1, 0.2, 0.2, 0.2]
+        """
+        import numpy as np
+
+        from sindyship.trajectory import Trajectory
+
+        done = record.meta.get("aligned", {})
+        if dict(done) == dict(self.delays):
+            return record
+        t = np.asarray(record.t, dtype=float)
+        data = record.data.copy()
+        for channel in sorted(set(self.delays) | set(done)):
+            shift = self.delays.get(channel, 0.0) - done.get(channel, 0.0)
+            if shift == 0.0 or channel not in data.columns:
+                continue
+            values = data[channel].to_numpy(dtype=float)
+            angle = channel in ("delta", "delta_c", "wind_dir", "phi")
+            base = np.unwrap(values) if angle and np.all(np.isfinite(values)) else values
+            moved = np.interp(t + shift, t, base)
+            data[channel] = np.mod(moved, 2 * np.pi) if channel == "wind_dir" else moved
+        return Trajectory(data, name=record.name,
+                          meta={**record.meta, "aligned": dict(self.delays)})
 
     @property
     def variables(self) -> frozenset[str]:
@@ -115,10 +162,17 @@ class TermLibrary:
         """
         terms = {dof: list(self.terms[dof]) for dof in DOFS}
         names = list(self.effects)
+        delays = dict(self.delays)
         for effect in effects:
             if effect.name in names:
                 continue
             names.append(effect.name)
+            for channel, delay in effect.delays.items():
+                if delays.setdefault(channel, delay) != delay:
+                    raise SindyshipInputError(
+                        f'effect "{effect.name}" delays {channel} by {delay:g} s but the library '
+                        f"already delays it by {delays[channel]:g} s; use one of them."
+                    )
             for dof in DOFS:
                 present = {t.canonical(scale=False) for t in terms[dof]}
                 terms[dof] += [
@@ -132,6 +186,7 @@ class TermLibrary:
             terms=terms,
             source=self.source,
             effects=tuple(names),
+            delays=delays,
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -144,13 +199,16 @@ class TermLibrary:
         >>> TermLibrary.from_dict(library.to_dict()) == library
         True
         """
-        return {
+        out = {
             "name": self.name,
             "system": self.system,
             "description": self.description,
             "effects": list(self.effects),
             "terms": {dof: [t.text for t in self.terms[dof]] for dof in DOFS},
         }
+        if self.delays:
+            out["delays"] = dict(self.delays)
+        return out
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], *, source: str | Path | None = None) -> TermLibrary:
@@ -177,6 +235,7 @@ class TermLibrary:
             terms=_read_terms(data["terms"], label, None, all_dofs=True),
             source=Path(source) if source is not None else None,
             effects=tuple(effects),
+            delays=_read_delays(data.get("delays"), label),
         )
 
 
@@ -200,6 +259,9 @@ class Effect:
         has an empty tuple.
     source : Path, optional
         The file the effect was read from.
+    delays : mapping of str to float
+        Recorded channels that lag the physics [s] (:attr:`TermLibrary.delays`); an effect
+        needs terms, delays or both.
 
     Examples
     --------
@@ -213,12 +275,15 @@ class Effect:
     channels: tuple[str, ...]
     terms: Mapping[str, tuple[Term, ...]]
     source: Path | None = field(default=None, compare=False)
+    delays: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         label = self.source if self.source is not None else f'effect "{self.name}"'
         frozen = _frozen_terms(self.terms, label, all_dofs=False)
-        if not any(frozen.values()):
-            raise SindyshipInputError(f"{_where(label)}the effect has no terms.")
+        delays = _read_delays(dict(self.delays), label)
+        if not any(frozen.values()) and not delays:
+            raise SindyshipInputError(f"{_where(label)}the effect has no terms and no delays.")
+        object.__setattr__(self, "delays", delays)
         channels = tuple(self.channels)
         for channel in channels:
             if not isinstance(channel, str) or not _CHANNEL_RE.fullmatch(channel):
@@ -237,7 +302,8 @@ class Effect:
         object.__setattr__(self, "channels", channels)
 
     def __hash__(self) -> int:
-        return hash((self.name, self.title, self.physics, self.channels, *self.terms.items()))
+        return hash((self.name, self.title, self.physics, self.channels, *self.terms.items(),
+                     *sorted(self.delays.items())))
 
     @property
     def variables(self) -> frozenset[str]:

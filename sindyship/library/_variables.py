@@ -154,13 +154,15 @@ def feature_matrix(terms: Sequence[Term | str], values: Mapping[str, np.ndarray]
 def record_variables(record: Trajectory, library: TermLibrary, L: float, U0: float,
                      rudder_signal: str = "actual") -> dict[str, np.ndarray]:
     """The non-dimensional variables a library's terms need from a record, with the rudder
-    angle the fit uses: the actual one (``delta``, else ``delta_c``) or the commanded one.
+    angle the fit uses: the actual one (``delta``, else ``delta_c``) or the commanded one,
+    and every channel the library delays read at ``t + delay`` (:meth:`TermLibrary.aligned`).
 
     Raises
     ------
     SindyshipInputError
         When the commanded rudder is asked for and the record has no ``delta_c``.
     """
+    record = library.aligned(record)
     rudder = None
     if rudder_signal == "commanded":
         if not record.has("delta_c"):

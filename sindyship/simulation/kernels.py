@@ -262,6 +262,8 @@ class _Integrator:
         self.switching = getattr(dynamics, "switching", None)
         # dynamics whose inputs vary in time (recorded channels) take the time and the members
         self.time_varying = bool(getattr(dynamics, "time_varying", False))
+        # dynamics with forces that depend on where the ship is take its position
+        self.uses_position = bool(getattr(dynamics, "uses_position", False))
         # A model identified on the commanded angle takes the command as its rudder input.
         self.rudder_input = getattr(dynamics, "rudder_input", "actual")
         self.commands = list(commands)
@@ -276,13 +278,15 @@ class _Integrator:
 
     def rhs(self, t, y, delta_c, members, branch):
         """Time derivative of the state columns ``y`` (7, k) for the given members."""
-        u, v, r, _x, _y, psi, delta = y
+        u, v, r, x, y_east, psi, delta = y
         rudder = delta_c if self.rudder_input == "commanded" else delta
+        extra = {"position": (x, y_east)} if self.uses_position else {}
         if self.time_varying:
             a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, rudder, psi, branch=branch, t=t,
-                                                        members=members)
+                                                        members=members, **extra)
         else:
-            a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, rudder, psi, branch=branch)
+            a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, rudder, psi, branch=branch,
+                                                        **extra)
         c, s = np.cos(psi), np.sin(psi)
         target = np.minimum(np.maximum(delta_c, -self.delta_max), self.delta_max)
         ddelta = np.minimum(np.maximum((target - delta) / self.T, -self.rate_max), self.rate_max)

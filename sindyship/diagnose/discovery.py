@@ -1,0 +1,498 @@
+"""Discovering a missing effect that no catalogue lists.
+
+:func:`discover` fits a library and searches for what its cross-validated force residual still
+holds, in two ways:
+
+Delays.
+    A channel the terms read (the rudder angle above all) may lag or lead the force it causes:
+    a slow or filtered angle sensor, a logging delay.  For every candidate delay tau on a grid
+    (steps of 0.05 L/U0 or one sample, over +-0.5 L/U0 and at least ten samples) the library is
+    refitted on the channel read at ``t + tau`` (:meth:`sindyship.library.TermLibrary.aligned`)
+    and judged by its leave-one-manoeuvre-out force error; the best grid point is refined by a
+    parabola through its neighbours.  A best delay shorter than the sample interval is not one
+    the records can resolve and is not reported.
+Terms.
+    The families of :mod:`sindyship.diagnose.candidates` (pysindy feature libraries over the
+    heading, the position, the rudder, the motion and every recorded channel).  In every
+    equation a family's terms are added one at a time to the library (forward selection), each
+    time the one whose joint least-squares refit has the least leave-one-manoeuvre-out error,
+    while that error falls by at least 1 % of the library's (sparse: at most
+    :data:`MAX_TERMS` terms).  Terms that duplicate the library's are left out, so a term
+    that only re-spends a library term's work gains nothing.
+
+Each finding is judged as a catalogued effect is (:mod:`sindyship.diagnose.scoring`): the share
+of the leave-one-manoeuvre-out force error above the noise floor it explains, counting only the
+equations where the gain holds when the manoeuvres are resampled; it is meaningful at 5 %, and
+only when its gain is significant in at least two equations (:data:`MIN_EQUATIONS`). The best
+meaningful finding becomes an effect file in the catalogue's format
+(:meth:`Discovery.effect_toml`) that ``fit --effects`` and ``diagnose --effects`` take.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._io import clean_json
+from ..identify import design, resolve_library
+from ..library import DOFS, Effect, TermLibrary
+from ..optimizers import GroupedProblem, one_blas_thread
+from ..ships import Ship
+from ..trajectory import Trajectory
+from ._constants import MEANINGFUL_SHARE
+from .candidates import Family, families, family_columns
+from .noise import noise_sse
+from .scoring import _dof_shares
+
+#: Most terms a family may add to one equation.
+MAX_TERMS = 4
+#: Equations in which a finding's gain must be significant: the search tries many more
+#: candidates than the catalogue holds, and a force missing from a hull acts on at least two
+#: of X, Y and N (a side force has a moment), while a chance fit of a slow drift in one
+#: equation does not.
+MIN_EQUATIONS = 2
+#: Least fall of the leave-one-manoeuvre-out error (share of the library's) for which the
+#: forward selection adds another term.
+MIN_STEP_GAIN = 0.01
+#: Half-width of the delay grid [L/U0] and its step [L/U0].
+DELAY_RANGE = 0.5
+DELAY_STEP = 0.05
+
+
+@dataclass
+class Finding:
+    """One candidate explanation of the residual: a delay of a channel, or a family's terms.
+
+    Attributes
+    ----------
+    family : str
+        ``delay:CHANNEL`` or a family of :mod:`sindyship.diagnose.candidates`.
+    terms : dict of str to list of str
+        Terms added per degree of freedom (empty for a delay).
+    delays : dict of str to float
+        Channel -> seconds by which the recorded channel lags the force (empty for terms).
+    explained_by_dof, signal_by_dof : dict of str to float
+        Share of the leave-one-manoeuvre-out error explained, and of its part above the noise
+        floor, per equation.
+    significant : dict of str to bool
+        Whether the gain in each equation holds when the manoeuvres are resampled.
+    explained, explained_signal : float
+        Means over X, Y and N (the signal share counting only significant equations).
+    meaningful : bool
+        ``explained_signal`` reaches the threshold, significant in :data:`MIN_EQUATIONS`
+        equations.
+    variables : list of str
+        The variables the finding involves.
+    hint : str
+        What such a finding usually means physically, from its variables.
+    curve : list of [float, float]
+        For a delay: (delay [s], leave-one-manoeuvre-out error relative to no delay).
+    """
+
+    family: str
+    terms: dict[str, list[str]]
+    delays: dict[str, float]
+    explained_by_dof: dict[str, float]
+    signal_by_dof: dict[str, float]
+    significant: dict[str, bool]
+    explained: float
+    explained_signal: float
+    meaningful: bool
+    variables: list[str]
+    hint: str
+    curve: list[list[float]] = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        return clean_json({
+            "family": self.family, "terms": self.terms, "delays": self.delays,
+            "explained": self.explained, "explained_signal": self.explained_signal,
+            "explained_by_dof": self.explained_by_dof, "signal_by_dof": self.signal_by_dof,
+            "significant": self.significant, "meaningful": self.meaningful,
+            "variables": self.variables, "hint": self.hint, "curve": self.curve,
+        })
+
+
+@dataclass
+class Discovery:
+    """What :func:`discover` found.
+
+    Attributes
+    ----------
+    library : TermLibrary
+        The library that was fitted.
+    records : list of str
+        Training record names.
+    rounds : list of list of Finding
+        Every candidate of every round, the most explaining first; round k searched with the
+        findings of the rounds before it added to the library.
+    accepted : list of Finding
+        The meaningful best finding of each round, in order (empty: nothing was discovered).
+    noise_floor : dict of str to float
+        Share of each equation's leave-one-manoeuvre-out error that is noise (first round).
+    threshold : float
+    seconds : float
+    """
+
+    library: TermLibrary
+    records: list[str]
+    rounds: list[list[Finding]]
+    accepted: list[Finding]
+    noise_floor: dict[str, float]
+    threshold: float
+    seconds: float
+
+    @property
+    def findings(self) -> list[Finding]:
+        """The first round's candidates, the most explaining first."""
+        return self.rounds[0] if self.rounds else []
+
+    @property
+    def best(self) -> Finding | None:
+        """The first accepted finding, or None."""
+        return self.accepted[0] if self.accepted else None
+
+    def effect(self, name: str | None = None) -> Effect:
+        """The accepted findings as one effect (raises when nothing was discovered)."""
+        from ..errors import SindyshipInputError
+
+        if not self.accepted:
+            raise SindyshipInputError(
+                "nothing meaningful was discovered, so there is no effect to write; the "
+                "report says what was tried."
+            )
+        families = [f.family.replace(":", "_") for f in self.accepted]
+        name = name or "discovered_" + "_".join(families)
+        delays = {c: d for f in self.accepted for c, d in f.delays.items()}
+        terms = {dof: [t for f in self.accepted for t in f.terms.get(dof, [])] for dof in DOFS}
+        variables = {v for f in self.accepted for v in f.variables}
+        channels = sorted(variables - {"du", "v", "r", "delta"} - set(delays))
+        title = "; ".join(_title(f) for f in self.accepted)
+        physics = " ".join(_physics(f, self.records) for f in self.accepted)
+        return Effect(name, title, physics, tuple(channels), terms, delays=delays)
+
+    def effect_toml(self, name: str | None = None) -> str:
+        """The best finding as an effect file in the catalogue's format (docs/effects.md)."""
+        effect = self.effect(name)
+        lines = ["# Discovered by sindyship discover.  Format: see docs/effects.md.",
+                 f"name = {json.dumps(effect.name)}", f"title = {json.dumps(effect.title)}",
+                 f"physics = {json.dumps(effect.physics)}",
+                 f"channels = {json.dumps(list(effect.channels))}"]
+        if effect.delays:
+            lines += ["", "[delays]  # seconds by which the recorded channel lags the force"]
+            lines += [f"{c} = {d:.2f}" for c, d in effect.delays.items()]
+        if any(effect.terms.values()):
+            lines += ["", "[terms]"]
+            lines += [f"{dof} = {json.dumps([t.text for t in effect.terms[dof]])}"
+                      for dof in DOFS if effect.terms[dof]]
+        return "\n".join(lines) + "\n"
+
+    def report(self) -> str:
+        from ..reports import discovery_report
+
+        return discovery_report(self)
+
+    def to_json(self) -> dict:
+        return clean_json({
+            "library": self.library.name, "records": self.records,
+            "noise_floor": self.noise_floor, "threshold": self.threshold,
+            "accepted": [f.to_json() for f in self.accepted],
+            "rounds": [[f.to_json() for f in found] for found in self.rounds],
+            "seconds": self.seconds,
+        })
+
+
+# ------------------------------------------------------------------------------- words
+_HINTS = {
+    "heading": "forces that follow the heading: a load fixed to the earth (an unlogged wind, "
+               "a current, a towline); log the wind and use the catalogued wind or environment",
+    "position": "forces that depend on where the ship is: a spatial field such as a bank, a "
+                "shallow patch or a current that varies in space (with sin or cos of psi, a "
+                "force fixed to the earth that grows toward one side)",
+    "rudder": "a rudder force that departs from the cubic at large angles: the rudder stalls "
+              "or saturates",
+    "motion": "hull forces beyond the third order in v and r: large drift angles or yaw rates "
+              "(cross-flow drag, vortex shedding)",
+}
+
+
+def _hint(family: str, delays: Mapping[str, float], terms: Mapping[str, Sequence[str]]) -> str:
+    if delays:
+        channel, tau = next(iter(delays.items()))
+        side = "lags" if tau > 0 else "leads"
+        return (f"the recorded {channel} {side} the force it causes by {abs(tau):.1f} s: a slow "
+                "or filtered sensor, or a logging delay between the channels")
+    if family.startswith("channel:"):
+        channel = family.split(":", 1)[1]
+        return f"the forces follow the recorded channel {channel}, which the library ignores"
+    if family == "rudder":
+        used = {t for dof in DOFS for t in terms.get(dof, [])}
+        if used and all("abs(" in t or "^4" in t or "^5" in t for t in used):
+            return _HINTS["rudder"] + " (only the large rudder angles carry it)"
+    return _HINTS.get(family, "")
+
+
+def _title(finding: Finding) -> str:
+    if finding.delays:
+        channel, tau = next(iter(finding.delays.items()))
+        return f"{channel} late by {tau:.1f} s (discovered)"
+    return f"Missing {finding.family} terms (discovered)"
+
+
+def _physics(finding: Finding, records: Sequence[str]) -> str:
+    shares = ", ".join(f"{dof} {finding.signal_by_dof[dof]:.0%}" for dof in DOFS
+                       if finding.significant.get(dof))
+    what = (", ".join(f"{c} read {d:+.2f} s later" for c, d in finding.delays.items())
+            if finding.delays else
+            "; ".join(f"{dof}: {', '.join(ts)}" for dof, ts in finding.terms.items() if ts))
+    return (f"Discovered by sindyship discover from {len(records)} records "
+            f"({', '.join(records)}); not in the catalogue. {what}. It explains "
+            f"{finding.explained_signal:.0%} of the cross-validated force error above the noise "
+            f"floor ({shares}). What it usually means: {finding.hint}. Check it with "
+            "sindyship diagnose --effects on records it was not found on.")
+
+
+# ------------------------------------------------------------------------------- search
+def _lomo(problem) -> np.ndarray:
+    """Leave-one-manoeuvre-out errors of a least-squares fit on all of a design's columns."""
+    grouped = GroupedProblem(problem.features, problem.target, problem.groups)
+    return grouped.lomo_errors(np.arange(problem.features.shape[1]))
+
+
+def _finding(family, terms, delays, e0, e1, noise, groups, threshold, variables, curve=()):
+    explained, signal, significant = {}, {}, {}
+    for dof in DOFS:
+        if e1.get(dof) is None or not float(e0[dof] @ e0[dof]) > 0:
+            explained[dof], signal[dof], significant[dof] = 0.0, 0.0, False
+            continue
+        explained[dof], signal[dof], significant[dof] = _dof_shares(e0[dof], e1[dof],
+                                                                    noise[dof], groups)
+    share = float(np.mean([explained[d] for d in DOFS]))
+    share_signal = float(np.mean([signal[d] if significant[d] else 0.0 for d in DOFS]))
+    meaningful = share_signal >= threshold and sum(significant.values()) >= MIN_EQUATIONS
+    return Finding(family, {d: list(terms.get(d, [])) for d in DOFS}, dict(delays), explained,
+                   signal, significant, share, share_signal, meaningful,
+                   sorted(variables), _hint(family, delays, terms),
+                   [list(map(float, p)) for p in curve])
+
+
+def _delay_grid(ship: Ship, dt: float) -> np.ndarray:
+    step = max(dt, DELAY_STEP * ship.time_scale)
+    reach = max(DELAY_RANGE * ship.time_scale, 10 * dt)
+    half = np.arange(step, reach + 0.5 * step, step)
+    return np.concatenate([-half[::-1], half])
+
+
+def _delay_errors(records, ship, library, channel, tau, settings):
+    delays = {**library.delays, channel: library.delays.get(channel, 0.0) + tau}
+    shifted = TermLibrary(library.name, library.system, library.description, library.terms,
+                          effects=library.effects, delays=delays)
+    problems = design(records, ship, shifted, **settings)
+    return {dof: _lomo(problems[dof]) for dof in DOFS}
+
+
+def _search_delay(records, ship, library, channel, e0, settings):
+    """The delay of ``channel`` with the least leave-one-manoeuvre-out error, its errors and
+    the error curve over the grid."""
+    sse0 = {dof: float(e0[dof] @ e0[dof]) or 1.0 for dof in DOFS}
+    dt = float(np.median([r.dt for r in records]))
+
+    def cost(errors):
+        return float(np.mean([errors[d] @ errors[d] / sse0[d] for d in DOFS]))
+
+    grid = _delay_grid(ship, dt)
+    tried = {0.0: (1.0, e0)}
+    for tau in grid:
+        errors = _delay_errors(records, ship, library, channel, float(tau), settings)
+        tried[float(tau)] = (cost(errors), errors)
+    taus = np.array(sorted(tried))
+    costs = np.array([tried[t][0] for t in taus])
+    k = int(np.argmin(costs))
+    if 0 < k < len(taus) - 1:  # a parabola through the best point and its neighbours
+        (a, b, c), (fa, fb, fc) = taus[k - 1:k + 2], costs[k - 1:k + 2]
+        denom = (a - b) * (a - c) * (b - c)
+        A = (c * (fb - fa) + b * (fa - fc) + a * (fc - fb)) / denom
+        B = (c * c * (fa - fb) + b * b * (fc - fa) + a * a * (fb - fc)) / denom
+        if A > 0:
+            vertex = float(np.clip(-B / (2 * A), a, c))
+            if vertex not in tried and abs(vertex) > 1e-9:
+                errors = _delay_errors(records, ship, library, channel, vertex, settings)
+                tried[vertex] = (cost(errors), errors)
+    best = min(tried, key=lambda t: tried[t][0])
+    curve = [(t, tried[t][0]) for t in sorted(tried)]
+    return best, tried[best][1], curve
+
+
+def _search_family(family: Family, records, ship, library, problems, e0, rudder_signal):
+    """Forward selection of a family's terms, refitted jointly with the library, by their
+    leave-one-manoeuvre-out error."""
+    columns = family_columns(family, records, library, ship, rudder_signal)
+    groups = problems["X"].groups
+    chosen, errors = {}, {}
+    for dof in DOFS:
+        block = columns[dof]
+        usable = np.all(np.isfinite(block), axis=0) & (np.ptp(block, axis=0) > 0)
+        if not usable.any():
+            continue
+        names = [t for t, ok in zip(family.terms[dof], usable, strict=True) if ok]
+        base = problems[dof].features.shape[1]
+        grouped = GroupedProblem(np.column_stack([problems[dof].features, block[:, usable]]),
+                                 problems[dof].target, groups)
+        sse0 = float(e0[dof] @ e0[dof])
+        selected, best_sse, best_errors = [], sse0, None
+        while len(selected) < MAX_TERMS:
+            trials = {}
+            for j in range(len(names)):
+                if j in selected:
+                    continue
+                cols = np.r_[np.arange(base), base + np.array(sorted([*selected, j]))]
+                err = grouped.lomo_errors(cols)
+                trials[j] = (float(err @ err), err)
+            if not trials:
+                break
+            j, (sse, err) = min(trials.items(), key=lambda item: item[1][0])
+            if sse > best_sse - MIN_STEP_GAIN * sse0:
+                break
+            selected.append(j)
+            best_sse, best_errors = sse, err
+        if selected:
+            chosen[dof] = [names[j] for j in sorted(selected)]
+            errors[dof] = best_errors
+    return chosen, errors
+
+
+@one_blas_thread
+def discover(
+    records: Sequence[Trajectory],
+    ship: Ship,
+    *,
+    library: str | TermLibrary = "abkowitz",
+    effects: Sequence[str | Effect] = (),
+    rudder_signal: str = "actual",
+    derivative: str = "five-point",
+    window: float = 21.0,
+    smoothing=None,
+    threshold: float = MEANINGFUL_SHARE,
+    max_rounds: int = 1,
+) -> Discovery:
+    """Search the force residual of a fitted library for an effect no catalogue lists.
+
+    Parameters
+    ----------
+    records : sequence of Trajectory
+        Training records (at least two manoeuvres: everything is judged leaving one out).
+    ship : Ship
+    library : str or TermLibrary
+        The library to extend (a name, a file, or an extended library).
+    effects : sequence of str or Effect
+        Effects already added to it (catalogued names, files or objects).
+    rudder_signal, derivative, window
+        As :func:`sindyship.identify.fit`.
+    smoothing : SmoothingSetting or str, optional
+        Smooth the records before differencing (as :func:`sindyship.diagnose.diagnose`).
+    threshold : float
+        Share of the error above the noise floor a finding must explain to be meaningful.
+    max_rounds : int
+        Search again with each meaningful finding added, up to this many rounds: an effect
+        can need a delay and terms (every accepted finding goes into the effect file).
+
+    Returns
+    -------
+    Discovery
+        ``.best``, ``.findings``, ``.report()``, ``.to_json()``, ``.effect_toml()``.
+
+    Examples
+    --------
+    >>> from sindyship import load_ship, parse_effects, simulate_with_effects, Manoeuvre
+    >>> ship = load_ship("kcs").with_rudder(gamma_R_stbd=0.415, gamma_R_port=0.415)
+    >>> plan = [Manoeuvre("turning-circle", rudder=35, duration=600),
+    ...         Manoeuvre("turning-circle", rudder=-35, duration=600),
+    ...         Manoeuvre("zigzag", rudder=20, check=20, duration=600),
+    ...         Manoeuvre("zigzag", rudder=10, check=10, duration=600)]
+    >>> runs = simulate_with_effects(ship, plan, parse_effects(["rudder_lag=4"]))
+    >>> found = discover(runs, ship)
+    >>> found.best.family, round(found.best.delays["delta"])
+    ('delay:delta', 4)
+    """
+    from ..errors import SindyshipInputError
+    from ..library import load_effect
+
+    start = time.perf_counter()
+    records = list(records)
+    if len(records) < 2:
+        raise SindyshipInputError(
+            "discover needs at least two training records: findings are judged leaving one "
+            "manoeuvre out."
+        )
+    base = resolve_library(library) if not isinstance(library, TermLibrary) else library
+    added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
+    base = base.extended(*added) if added else base
+    if smoothing is not None and smoothing != "none":
+        from ..smoothing import smooth_records
+
+        records = smooth_records(records, smoothing)
+    settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
+    rounds, accepted, library_now = [], [], base
+    for _ in range(max(int(max_rounds), 1)):
+        findings, floor = _search(records, ship, library_now, settings, threshold)
+        rounds.append(findings)
+        if len(rounds) == 1:
+            first_floor = floor
+        best = next((f for f in findings if f.meaningful), None)
+        if best is None:
+            break
+        accepted.append(best)
+        library_now = library_now.extended(_as_effect(best, len(accepted)))
+    return Discovery(base, [r.name for r in records], rounds, accepted, first_floor, threshold,
+                     time.perf_counter() - start)
+
+
+def _as_effect(finding: Finding, k: int) -> Effect:
+    """A finding as an in-memory effect (to search again with it in the library)."""
+    channels = sorted(set(finding.variables) - {"du", "v", "r", "delta"} - set(finding.delays))
+    return Effect(f"found{k}", finding.family, "", tuple(channels), finding.terms,
+                  delays=finding.delays)
+
+
+def _search(records, ship, library, settings, threshold) -> tuple[list[Finding], dict]:
+    """One round: every delay and family scored against ``library``'s residual."""
+    problems = design(records, ship, library, **settings)
+    groups = problems["X"].groups
+    e0 = {dof: _lomo(problems[dof]) for dof in DOFS}
+    window_samples = max(1, int(round(ship.time_scale / float(np.median([r.dt for r in records])))))
+    noise = {dof: noise_sse(e0[dof], groups, window_samples) for dof in DOFS}
+    findings = []
+    dt = float(np.median([r.dt for r in records]))
+    rudder_channel = "delta_c" if settings["rudder_signal"] == "commanded" else "delta"
+    delayable = [rudder_channel] + sorted(set(library.channels) - {"psi", "x", "y"})
+    for channel in delayable:
+        if channel in library.delays or not all(r.has(channel) for r in records):
+            continue  # a channel already delayed keeps its delay
+        tau, errors, curve = _search_delay(records, ship, library, channel, e0, settings)
+        if abs(tau) < dt:  # shorter than a sample: not a delay the records can resolve
+            continue
+        findings.append(_finding(f"delay:{channel}", {}, {channel: tau}, e0, errors, noise,
+                                 groups, threshold, [channel], curve))
+    for family in families(records, library, ship):
+        chosen, errors = _search_family(family, records, ship, library, problems, e0,
+                                        settings["rudder_signal"])
+        if not chosen:
+            continue
+        used = {v for ts in chosen.values() for t in ts for v in _variables_of(t)}
+        findings.append(_finding(family.name, chosen, {}, e0, errors, noise, groups,
+                                 threshold, used))
+    findings.sort(key=lambda f: (-f.explained_signal, -f.explained, f.family))
+    floor = {dof: min(noise[dof] / max(float(e0[dof] @ e0[dof]), 1e-300), 1.0) for dof in DOFS}
+    return findings, floor
+
+
+def _variables_of(text: str) -> frozenset[str]:
+    from ..terms import Term
+
+    return Term(text).variables
+
+
+__all__ = ["Discovery", "Finding", "discover"]

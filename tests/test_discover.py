@@ -1,0 +1,200 @@
+"""Discovering effects outside the catalogue: delays of channels, candidate families, effect
+files that fit and fly."""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sindyship.cli import main
+from sindyship.diagnose import discover
+from sindyship.diagnose.candidates import families
+from sindyship.effects import parse_effects, simulate_with_effects
+from sindyship.errors import SindyshipInputError
+from sindyship.evaluation import fly_like
+from sindyship.identify import fit
+from sindyship.library import Effect, TermLibrary, load_effect, load_library
+from sindyship.manoeuvres import Manoeuvre
+from sindyship.model import AbkowitzModel
+from sindyship.terms import Term
+from sindyship.trajectory import Trajectory
+
+PLAN = [Manoeuvre("turning-circle", rudder=35, duration=800),
+        Manoeuvre("turning-circle", rudder=-35, duration=800),
+        Manoeuvre("zigzag", rudder=20, check=20, duration=800),
+        Manoeuvre("zigzag", rudder=10, check=10, duration=800),
+        Manoeuvre("zigzag", rudder=15, check=15, first_sign=-1, duration=800)]
+HELD_OUT = [Manoeuvre("turning-circle", rudder=-20, duration=800),
+            Manoeuvre("zigzag", rudder=20, check=10, duration=800)]
+
+
+@pytest.fixture(scope="module")
+def symmetric(kcs):
+    return kcs.with_rudder(gamma_R_stbd=0.415, gamma_R_port=0.415)
+
+
+@pytest.fixture(scope="module")
+def lagged(symmetric):
+    effects = parse_effects(["rudder_lag=4"])
+    return (simulate_with_effects(symmetric, PLAN, effects),
+            simulate_with_effects(symmetric, HELD_OUT, effects))
+
+
+# ------------------------------------------------------------------------ delays in libraries
+def test_a_delayed_channel_is_read_later_and_only_once():
+    library = TermLibrary("toy", "prime-I", "", {"X": ["du"], "Y": ["v"], "N": ["r"]},
+                          delays={"delta": 2.0})
+    frame = pd.DataFrame({"t": np.arange(6.0), "delta": np.arange(6.0) / 10,
+                          "u": np.ones(6)})
+    once = library.aligned(Trajectory(frame, name="run"))
+    assert once["delta"].tolist() == pytest.approx([0.2, 0.3, 0.4, 0.5, 0.5, 0.5])
+    assert once["u"].tolist() == [1.0] * 6
+    assert library.aligned(once)["delta"].tolist() == once["delta"].tolist()
+
+
+@pytest.mark.parametrize(("delays", "message"), [
+    ({"v": 1.0}, "cannot be delayed"),
+    ({"delta": 0.0}, "non-zero number of seconds"),
+    ({"delta": float("nan")}, "non-zero number of seconds"),
+    ({"Delta": 1.0}, "not a channel name"),
+])
+def test_bad_delays_are_one_clear_error(delays, message):
+    with pytest.raises(SindyshipInputError, match=message):
+        TermLibrary("toy", "prime-I", "", {"X": ["du"], "Y": ["v"], "N": ["r"]}, delays=delays)
+
+
+def test_an_effect_of_delays_only_extends_a_library_and_conflicts_are_refused():
+    base = load_library("abkowitz")
+    late = Effect("late", "Late", "A lag.", (), {}, delays={"delta": 3.0})
+    extended = base.extended(late)
+    assert extended.delays == {"delta": 3.0}
+    assert TermLibrary.from_dict(extended.to_dict()) == extended
+    with pytest.raises(SindyshipInputError, match="already delays it by 3 s"):
+        extended.extended(Effect("later", "Later", "Another.", (), {}, delays={"delta": 5.0}))
+    with pytest.raises(SindyshipInputError, match="no terms and no delays"):
+        Effect("empty", "Empty", "Nothing.", (), {})
+
+
+def test_an_effect_file_with_delays_loads(tmp_path):
+    path = tmp_path / "late.toml"
+    path.write_text('name = "late"\ntitle = "Late"\nphysics = "A lag."\n\n[delays]\n'
+                    "delta = 4.5\n")
+    assert load_effect(path).delays == {"delta": 4.5}
+
+
+# ------------------------------------------------------------------------------ candidates
+def test_every_candidate_is_a_term_of_the_grammar_and_pysindy_computes_it(symmetric, lagged):
+    """The pysindy feature names rewritten into terms evaluate to pysindy's own columns."""
+    import pysindy as ps
+
+    train, _ = lagged
+    found = {f.name: f for f in families(train, load_library("abkowitz"), symmetric)}
+    assert {"heading", "position", "rudder", "motion"} <= set(found)
+    rng = np.random.default_rng(0)
+    x, y, psi = rng.uniform(-500, 500, 50), rng.uniform(-500, 500, 50), rng.uniform(-3, 3, 50)
+    earth = ps.TensoredLibrary([ps.PolynomialLibrary(degree=2, include_bias=False),
+                                ps.FourierLibrary(n_frequencies=1)],
+                               inputs_per_library=[[0, 1], [2]])
+    columns = np.asarray(earth.fit_transform(np.column_stack([x, y, psi])))
+    values = {"x": x, "y": y, "psi": psi}
+    for j, text in enumerate(found["position"].terms["Y"]):
+        np.testing.assert_allclose(Term(text).evaluate(values), columns[:, j], rtol=1e-12)
+    for family in found.values():
+        for terms in family.terms.values():
+            for text in terms:
+                assert Term(text).text == text
+
+
+# ------------------------------------------------------------------------------- discovery
+def test_a_lagging_rudder_sensor_is_discovered_and_its_effect_flies(symmetric, lagged):
+    train, test = lagged
+    found = discover(train, symmetric)
+    assert found.best.family == "delay:delta"
+    assert found.best.delays["delta"] == pytest.approx(4.0, abs=1.0)
+    assert found.best.explained_signal > 0.5
+    plain = fly_like(fit(train, symmetric), test)
+    assert all(f.meta.get("diverged_at") is not None for f in plain)
+    model = fit(train, symmetric, library=found.library.extended(found.effect()))
+    for flown, record in zip(fly_like(model, test), test, strict=True):
+        assert flown.meta.get("diverged_at") is None
+        distance = np.hypot(flown["x"] - record["x"], flown["y"] - record["y"]) / symmetric.L
+        assert distance.mean() < 0.2
+
+
+def test_nothing_is_discovered_in_records_flown_by_an_abkowitz_model(kcs):
+    from sindyship.manoeuvres import fly
+    from sindyship.model import paper_model
+
+    records = fly(paper_model(kcs).dynamics(), PLAN)
+    found = discover(records, kcs)
+    assert found.accepted == []
+    assert "no missing effect was discovered" in found.report()
+    with pytest.raises(SindyshipInputError, match="nothing meaningful was discovered"):
+        found.effect_toml()
+
+
+def test_discover_writes_an_effect_file_that_fit_and_evaluate_take(tmp_path, symmetric, lagged):
+    from sindyship.measurements import write_csv
+
+    train, test = lagged
+    paths = []
+    for record in train + test:
+        paths.append(tmp_path / f"{record.name}.csv")
+        write_csv(record, paths[-1])
+    effect, model = tmp_path / "lag.toml", tmp_path / "model.json"
+    train_paths = [str(p) for p in paths[: len(train)]]
+    assert main(["discover", *train_paths, "--out", str(effect)]) == 0
+    written = tomllib.loads(effect.read_text())
+    assert written["delays"]["delta"] == pytest.approx(4.0, abs=1.0)
+    assert "Discovered by sindyship discover" in written["physics"]
+    assert main(["fit", *train_paths, "--effects", str(effect), "--out", str(model),
+                 "--no-identifiability"]) == 0
+    saved = AbkowitzModel.load(model)
+    assert saved.library.delays["delta"] == pytest.approx(written["delays"]["delta"])
+    flown = fly_like(saved, test)
+    assert all(f.meta.get("diverged_at") is None for f in flown)
+
+
+def test_a_model_with_position_terms_flies_at_its_own_position(kcs):
+    """Terms in x and y read the flight's integrated position, never the record's."""
+    from sindyship.model import paper_model
+
+    plain = paper_model(kcs)
+    library = plain.library.extended(
+        Effect("field", "Field", "A field.", ("x", "y", "psi"), {"Y": ["y cos(psi)"]}))
+    coefficients = {dof: {t.text: plain.coefficients[dof].get(t.text, 0.0)
+                          for t in library.terms[dof]} for dof in "XYN"}
+    coefficients["Y"]["y cos(psi)"] = -1e-8  # a side force growing with y [m]
+    model = AbkowitzModel(kcs, library, coefficients)
+    dynamics = model.dynamics()
+    assert dynamics.uses_position and model.recorded_channels == []
+    here = dynamics.accelerations(kcs.U0, 0.0, 0.0, 0.0, 0.0, position=(0.0, 0.0))
+    there = dynamics.accelerations(kcs.U0, 0.0, 0.0, 0.0, 0.0, position=(0.0, 5000.0))
+    assert there[1] - here[1] < -1e-6  # the side force pushes to port at y = 5 km
+    (run,) = simulate_with_effects(kcs, [Manoeuvre("straight", duration=200)])
+    ends = {}
+    for east in (0.0, 5000.0):
+        frame = run.data.copy()
+        frame["y"] = frame["y"] + east  # the record starts there; the flight follows itself
+        (flown,) = fly_like(model, [Trajectory(frame, name="east")])
+        assert flown.meta.get("diverged_at") is None
+        ends[east] = float(flown["y"][-1] - flown["y"][0])
+    assert abs(ends[5000.0] - ends[0.0]) > 10.0  # the field moves the flight only out there
+
+
+def test_diagnose_searches_beyond_the_catalogue_and_never_says_complete(symmetric, lagged):
+    from sindyship.diagnose import diagnose
+
+    train, _ = lagged
+    result = diagnose(train, symmetric, effects=["asymmetry", "environment"], confirm=0,
+                      fly_training=False)  # on these short runs crossflow stands in for it
+    assert result.top is None
+    assert result.discovery is not None and result.discovery.best.family == "delay:delta"
+    assert result.verdict == "add-discovered" and not result.complete
+    text = result.report()
+    assert "Not in the catalogue" in text and "delta lags the force" in text
+    assert result.to_json()["discovery"]["accepted"][0]["delays"]["delta"] == pytest.approx(
+        4.0, abs=1.0)
