@@ -28,6 +28,7 @@ from sindyship.optimizers import (
     OPTIMIZERS,
     STLSQ,
     SVR,
+    ForwardSelection,
     GroupedProblem,
     LassoCV,
     LeastSquares,
@@ -124,6 +125,7 @@ SMALL = [
     LassoCV(alphas=8, selection="one_se"),
     SVR(Cs=[1.0, 100.0], epsilons=[0.0, 0.1]),
     SVR(Cs=[1.0], epsilons=[0.0, 0.1], solver="liblinear"),
+    ForwardSelection(n_fixed=1, max_terms=2),
 ]
 
 

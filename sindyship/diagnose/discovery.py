@@ -14,11 +14,11 @@ Delays.
 Terms.
     The families of :mod:`sindyship.diagnose.candidates` (pysindy feature libraries over the
     heading, the position, the rudder, the motion and every recorded channel).  In every
-    equation a family's terms are added one at a time to the library (forward selection), each
-    time the one whose joint least-squares refit has the least leave-one-manoeuvre-out error,
-    while that error falls by at least 1 % of the library's (sparse: at most
-    :data:`MAX_TERMS` terms).  Terms that duplicate the library's are left out, so a term
-    that only re-spends a library term's work gains nothing.
+    equation :class:`sindyship.optimizers.ForwardSelection` adds a family's terms to the
+    library one at a time, each time the one whose joint least-squares refit has the least
+    leave-one-manoeuvre-out error, while that error falls by at least 1 % of the library's
+    (sparse: at most :data:`MAX_TERMS` terms).  Terms that duplicate the library's are left
+    out, so a term that only re-spends a library term's work gains nothing.
 
 Each finding is judged as a catalogued effect is (:mod:`sindyship.diagnose.scoring`): the share
 of the leave-one-manoeuvre-out force error above the noise floor it explains, counting only the
@@ -40,7 +40,7 @@ import numpy as np
 from .._io import clean_json
 from ..identify import design, resolve_library
 from ..library import DOFS, Effect, TermLibrary
-from ..optimizers import GroupedProblem, one_blas_thread
+from ..optimizers import ForwardSelection, GroupedProblem, one_blas_thread
 from ..ships import Ship
 from ..trajectory import Trajectory
 from ._constants import MEANINGFUL_SHARE
@@ -326,9 +326,9 @@ def _search_delay(records, ship, library, channel, e0, settings):
     return best, tried[best][1], curve
 
 
-def _search_family(family: Family, records, ship, library, problems, e0, rudder_signal):
-    """Forward selection of a family's terms, refitted jointly with the library, by their
-    leave-one-manoeuvre-out error."""
+def _search_family(family: Family, records, ship, library, problems, rudder_signal):
+    """The family's terms :class:`ForwardSelection` adds to the library in each equation,
+    leaving one manoeuvre out, and the leave-one-manoeuvre-out errors of the joint refit."""
     columns = family_columns(family, records, library, ship, rudder_signal)
     groups = problems["X"].groups
     chosen, errors = {}, {}
@@ -339,28 +339,13 @@ def _search_family(family: Family, records, ship, library, problems, e0, rudder_
             continue
         names = [t for t, ok in zip(family.terms[dof], usable, strict=True) if ok]
         base = problems[dof].features.shape[1]
-        grouped = GroupedProblem(np.column_stack([problems[dof].features, block[:, usable]]),
-                                 problems[dof].target, groups)
-        sse0 = float(e0[dof] @ e0[dof])
-        selected, best_sse, best_errors = [], sse0, None
-        while len(selected) < MAX_TERMS:
-            trials = {}
-            for j in range(len(names)):
-                if j in selected:
-                    continue
-                cols = np.r_[np.arange(base), base + np.array(sorted([*selected, j]))]
-                err = grouped.lomo_errors(cols)
-                trials[j] = (float(err @ err), err)
-            if not trials:
-                break
-            j, (sse, err) = min(trials.items(), key=lambda item: item[1][0])
-            if sse > best_sse - MIN_STEP_GAIN * sse0:
-                break
-            selected.append(j)
-            best_sse, best_errors = sse, err
-        if selected:
-            chosen[dof] = [names[j] for j in sorted(selected)]
-            errors[dof] = best_errors
+        joint = np.column_stack([problems[dof].features, block[:, usable]])
+        search = ForwardSelection(n_fixed=base, max_terms=MAX_TERMS, min_gain=MIN_STEP_GAIN)
+        added = search.fit(joint, problems[dof].target, groups=groups).selected_[0]
+        if added:
+            chosen[dof] = [names[j - base] for j in added]
+            grouped = GroupedProblem(joint, problems[dof].target, groups)
+            errors[dof] = grouped.lomo_errors(np.r_[np.arange(base), added])
     return chosen, errors
 
 
@@ -477,7 +462,7 @@ def _search(records, ship, library, settings, threshold) -> tuple[list[Finding],
         findings.append(_finding(f"delay:{channel}", {}, {channel: tau}, e0, errors, noise,
                                  groups, threshold, [channel], curve))
     for family in families(records, library, ship):
-        chosen, errors = _search_family(family, records, ship, library, problems, e0,
+        chosen, errors = _search_family(family, records, ship, library, problems,
                                         settings["rudder_signal"])
         if not chosen:
             continue

@@ -80,6 +80,7 @@ from ._base import _LinearModel as _LinearModel
 from ._compressed import GroupedProblem
 from ._compressed import _qr as _qr
 from ._cv import LeaveOneTrajectoryOut
+from ._forward import ForwardSelection
 from ._lasso import LassoCV
 from ._lasso import _lasso_path_exact as _lasso_path_exact
 from ._least_squares import LeastSquares
@@ -96,6 +97,7 @@ from ._threads import one_blas_thread
 __all__ = [
     "OPTIMIZERS",
     "STLSQ",
+    "ForwardSelection",
     "SVR",
     "GroupedProblem",
     "LassoCV",
