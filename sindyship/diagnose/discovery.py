@@ -280,6 +280,8 @@ def _finding(family, terms, delays, e0, e1, noise, groups, threshold, variables,
 
 
 def _delay_grid(ship: Ship, dt: float) -> np.ndarray:
+    """Candidate delays [s]: steps of 0.05 L/U0 (at least one sample) out to 0.5 L/U0 (at
+    least ten samples) on either side of zero."""
     step = max(dt, DELAY_STEP * ship.time_scale)
     reach = max(DELAY_RANGE * ship.time_scale, 10 * dt)
     half = np.arange(step, reach + 0.5 * step, step)
@@ -287,7 +289,9 @@ def _delay_grid(ship: Ship, dt: float) -> np.ndarray:
 
 
 def _delay_errors(records, ship, library, channel, tau, settings):
-    delays = {**library.delays, channel: library.delays.get(channel, 0.0) + tau}
+    """Leave-one-manoeuvre-out errors of the library refitted with ``channel`` read ``tau``
+    seconds later."""
+    delays = {**library.delays, channel: tau}
     shifted = TermLibrary(library.name, library.system, library.description, library.terms,
                           effects=library.effects, delays=delays)
     problems = design(records, ship, shifted, **settings)
