@@ -198,3 +198,14 @@ def test_diagnose_searches_beyond_the_catalogue_and_never_says_complete(symmetri
     assert "Not in the catalogue" in text and "delta lags the force" in text
     assert result.to_json()["discovery"]["accepted"][0]["delays"]["delta"] == pytest.approx(
         4.0, abs=1.0)
+
+
+def test_discover_smooths_the_records_when_asked(symmetric, lagged):
+    from sindyship.smoothing import resolve_smoothing
+
+    train, _ = lagged
+    found = discover(train, symmetric, smoothing="savgol:21")
+    assert found.best.delays["delta"] == pytest.approx(4.0, abs=1.0)
+    assert resolve_smoothing("none", train, symmetric) is None
+    with pytest.raises(SindyshipInputError):
+        discover(train, symmetric, smoothing="median:5")

@@ -22,7 +22,7 @@ from ..library import (
 from ..model import AbkowitzModel
 from ..optimizers import GroupedProblem, one_blas_thread
 from ..ships import Ship
-from ..smoothing import SmoothingSetting, choose_smoothing, smooth_records
+from ..smoothing import SmoothingSetting, resolve_smoothing, smooth_records
 from ..stability import Stability, straight_run_stability
 from ..terms import Term
 from ..trajectory import Trajectory
@@ -256,21 +256,6 @@ def _collinear_terms(problems: Mapping[str, Design]) -> dict[str, dict[str, floa
     return out
 
 
-def _smoothing_setting(smoothing, records, ship, library, optimizer, rudder_signal, n_jobs
-                       ) -> SmoothingSetting | None:
-    """The smoothing to apply: None, the given setting, or the one ``"auto"`` chooses."""
-    if smoothing is None or smoothing == "none":
-        return None
-    if isinstance(smoothing, SmoothingSetting):
-        return None if smoothing.method == "none" else smoothing
-    if smoothing == "auto":
-        setting, _ = choose_smoothing(records, ship, optimizer=optimizer, library=library,
-                                      rudder_signal=rudder_signal, n_jobs=n_jobs)
-        return None if setting.method == "none" else setting
-    setting = SmoothingSetting.parse(smoothing)
-    return None if setting.method == "none" else setting
-
-
 def _catalogue(effects: Sequence[str | Effect] | None) -> list[Effect]:
     names = available_effects() if effects is None else effects
     out = [e if isinstance(e, Effect) else load_effect(e) for e in names]
@@ -359,7 +344,8 @@ def diagnose(
     _check_arguments(records, test, threshold)
     base = resolve_library(library)
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
-    smoothing = _smoothing_setting(smoothing, records, ship, base, optimizer, rudder_signal, n_jobs)
+    smoothing = resolve_smoothing(smoothing, records, ship, library=base, optimizer=optimizer,
+                                  rudder_signal=rudder_signal, n_jobs=n_jobs)
     fitted = records if smoothing is None else smooth_records(records, smoothing)
     candidates, not_testable, in_library = [], [], []
     for effect in _catalogue(effects):

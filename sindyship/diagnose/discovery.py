@@ -42,6 +42,7 @@ from ..identify import design, resolve_library
 from ..library import DOFS, Effect, TermLibrary
 from ..optimizers import ForwardSelection, GroupedProblem, one_blas_thread
 from ..ships import Ship
+from ..smoothing import resolve_smoothing, smooth_records
 from ..trajectory import Trajectory
 from ._constants import MEANINGFUL_SHARE
 from .candidates import Family, families, family_columns
@@ -381,7 +382,8 @@ def discover(
     rudder_signal, derivative, window
         As :func:`sindyship.identify.fit`.
     smoothing : SmoothingSetting or str, optional
-        Smooth the records before differencing (as :func:`sindyship.diagnose.diagnose`).
+        Smooth the records before differencing: ``"savgol:W"``, ``"rts:W"`` or ``"auto"``
+        (:func:`sindyship.smoothing.resolve_smoothing`).
     threshold : float
         Share of the error above the noise floor a finding must explain to be meaningful.
     max_rounds : int
@@ -419,10 +421,10 @@ def discover(
     base = resolve_library(library) if not isinstance(library, TermLibrary) else library
     added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
     base = base.extended(*added) if added else base
-    if smoothing is not None and smoothing != "none":
-        from ..smoothing import smooth_records
-
-        records = smooth_records(records, smoothing)
+    setting = resolve_smoothing(smoothing, records, ship, library=base,
+                                rudder_signal=rudder_signal)
+    if setting is not None:
+        records = smooth_records(records, setting)
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
     rounds, accepted, library_now = [], [], base
     for _ in range(max(int(max_rounds), 1)):

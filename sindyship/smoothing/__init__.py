@@ -70,7 +70,11 @@ True
 
 from __future__ import annotations
 
-from ._choice import _cv_scores, choose_smoothing  # noqa: F401  (_cv_scores for the tests)
+from ._choice import (  # noqa: F401  (_cv_scores for the tests)
+    _cv_scores,
+    choose_smoothing,
+    resolve_smoothing,
+)
 from ._filters import estimate_noise, smooth_record, smooth_records
 from ._settings import (
     DEFAULT_CANDIDATES,
@@ -91,6 +95,7 @@ __all__ = [
     "SmoothingSetting",
     "choose_smoothing",
     "default_candidates",
+    "resolve_smoothing",
     "estimate_noise",
     "smooth_record",
     "smooth_records",

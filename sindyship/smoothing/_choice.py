@@ -176,3 +176,29 @@ def choose_smoothing(records: Sequence[Trajectory], ship: Ship,
     table["chosen"] = False
     table.loc[best, "chosen"] = True
     return settings[best], table
+
+
+def resolve_smoothing(smoothing, records: Sequence[Trajectory], ship: Ship, *, library="abkowitz",
+                      optimizer: str = "ls", rudder_signal: str = "actual",
+                      n_jobs: int | None = None) -> SmoothingSetting | None:
+    """The smoothing to apply: None (for None or ``"none"``), the given setting (a
+    :class:`SmoothingSetting` or its text, ``"savgol:W"``, ``"rts:W"``), or the one
+    ``"auto"`` chooses with :func:`choose_smoothing` on ``records``.
+
+    Examples
+    --------
+    >>> resolve_smoothing("savgol:21", [], None).as_dict()["window_s"]
+    21.0
+    >>> resolve_smoothing("none", [], None) is None
+    True
+    """
+    if smoothing is None or smoothing == "none":
+        return None
+    if smoothing == "auto":
+        setting, _ = choose_smoothing(records, ship, optimizer=optimizer, library=library,
+                                      rudder_signal=rudder_signal, n_jobs=n_jobs)
+    elif isinstance(smoothing, SmoothingSetting):
+        setting = smoothing
+    else:
+        setting = SmoothingSetting.parse(smoothing)
+    return None if setting.method == "none" else setting
