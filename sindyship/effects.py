@@ -251,6 +251,19 @@ def parse_effects(items: Iterable[str] | Mapping[str, float]) -> Effects:
             f"effect bank_distance = {effects.bank_distance:g} puts the bank within one ship "
             "length of the start; give at least 1 (ship lengths east, negative for west)."
         )
+    for needs_wind in ("gust", "wind_wander"):
+        if getattr(effects, needs_wind) and not effects.wind:
+            raise SindyshipInputError(
+                f"effect {needs_wind} varies the wind, but there is none; add --effect wind=SPEED "
+                "(m/s)."
+            )
+    highest = effects.rps + max(effects.rps_step, 0.0) + 3.0 * effects.rps_vary
+    if highest > 1.5:
+        raise SindyshipInputError(
+            f"effects rps={effects.rps:g}, rps_step={effects.rps_step:g} and "
+            f"rps_vary={effects.rps_vary:g} take the revolutions up to {highest:.2g} of the "
+            "design value (rps + rps_step + 3 rps_vary); keep that at 1.5 or below."
+        )
     lowest = effects.rps + min(effects.rps_step, 0.0) - 3.0 * effects.rps_vary
     if lowest < 0.2:
         raise SindyshipInputError(

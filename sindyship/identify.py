@@ -69,6 +69,7 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
     if not records:
         raise SindyshipInputError("no records to fit; pass at least one measurement CSV.")
     check_channels(library, records)
+    check_delays(library, records, rudder_signal)
     n_total = sum(record.n_samples for record in records)
     # one column-major array per degree of freedom, filled column by column: no stacking
     # copies, and the layout LAPACK works in
@@ -91,6 +92,40 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
                     terms=tuple(t.text for t in library.terms[dof]))
         for dof in DOFS
     }
+
+
+def check_delays(library: TermLibrary, records: Sequence[Trajectory], rudder_signal: str
+                 ) -> None:
+    """Every channel the library delays must be one the fit reads, in every record.
+
+    Raises
+    ------
+    SindyshipInputError
+        Naming the channel, and the record that lacks it or the rudder signal the fit reads.
+    """
+    from .terms import describe_variable
+
+    read = {describe_variable(v).column for v in library.variables} - {"rudder"}
+    for channel in library.delays:
+        for record in records:
+            rudder = "delta_c" if rudder_signal == "commanded" or not record.has("delta") \
+                else "delta"
+            if channel in ("delta", "delta_c") and channel != rudder:
+                raise SindyshipInputError(
+                    f"the library delays {channel}, but the fit of record \"{record.name}\" "
+                    f"reads the rudder angle from {rudder}; delay {rudder} instead, or fit with "
+                    f"--rudder-signal {'actual' if channel == 'delta' else 'commanded'}."
+                )
+            if channel not in ("delta", "delta_c") and channel not in read:
+                raise SindyshipInputError(
+                    f"the library delays {channel}, which none of its terms uses; remove the "
+                    "delay or add terms in it."
+                )
+            if not record.has(channel):
+                raise SindyshipInputError(
+                    f"the library delays {channel}, which record \"{record.name}\" does not have; "
+                    "add the column to the data or remove the delay."
+                )
 
 
 def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:

@@ -431,10 +431,25 @@ def _finding_lines(k: int, finding) -> list[str]:
             _fill(f"{what}. Usually: {finding.hint}.", indent="     ", subsequent="     ")]
 
 
-def discovery_report(discovery) -> str:
-    """Text report of :func:`sindyship.diagnose.discover`: the findings and what they mean."""
+def discovery_report(discovery, effect_file: str | None = None) -> str:
+    """Text report of :func:`sindyship.diagnose.discover`: the findings and what they mean;
+    ``effect_file`` is where the discovery was written, if it was."""
+    smoothing = ("" if discovery.smoothing is None else
+                 f", records smoothed with {discovery.smoothing['method']} over "
+                 f"{discovery.smoothing.get('window_s')} s")
     lines = [f"Not in the catalogue: searched the residual of {discovery.library.name} on "
-             f"{len(discovery.records)} records ({discovery.seconds:.1f} s)."]
+             f"{len(discovery.records)} records ({discovery.seconds:.1f} s{smoothing})."]
+    named = ", ".join(f"{name} ({share:.0%})" for name, share in discovery.catalogue.items())
+    if discovery.catalogue and not discovery.accepted:
+        lines.append(_fill(
+            f"First add the catalogued effects that are meaningful here: {named}. Until they "
+            "are in the library (--effects), a family below can stand in for them, so a finding "
+            "is accepted only when it explains more than each of them.", indent="",
+            subsequent=""))
+    elif discovery.catalogue:
+        lines.append(_fill(
+            f"Catalogued effects meaningful here: {named}; the discovery below explains more "
+            "than any of them.", indent="", subsequent=""))
     floor = ", ".join(f"{dof} {share:.0%}" for dof, share in discovery.noise_floor.items())
     lines.append(f"Noise floor (share of the leave-one-manoeuvre-out error): {floor}.")
     if not discovery.findings:
@@ -450,11 +465,19 @@ def discovery_report(discovery) -> str:
         lines.append(f"Round {r}, with {added} added, the "
                      + ("discovery:" if best.meaningful else "best candidate:"))
         lines += _finding_lines(1, best)
-    if not discovery.accepted:
-        lines.append(f"Nothing explains {discovery.threshold:.0%} of the error above the noise "
-                     "floor: no missing effect was discovered.")
+    if discovery.catalogue and not discovery.accepted:
+        lines.append("Nothing was discovered: add the catalogued effects above and search "
+                     "again.")
+    elif not discovery.accepted:
+        lines.append(_fill(
+            f"No finding is meaningful (explaining {discovery.threshold:.0%} of the error above "
+            "the noise floor, with a gain significant in at least two of X, Y and N): no "
+            "missing effect was discovered.", indent="", subsequent=""))
     else:
         found = " and ".join(f.family for f in discovery.accepted)
-        lines.append(f"Discovered: {found}. Write it with --out effect.toml and refit with "
-                     "--effects effect.toml to see the error fall.")
+        target = effect_file or "effect.toml"
+        written = (f"Written to {effect_file}" if effect_file
+                   else "Write it with --out effect.toml")
+        lines.append(f"Discovered: {found}. {written}; refit with --effects {target} to see "
+                     "the error fall.")
     return "\n".join(lines)

@@ -209,3 +209,48 @@ def test_discover_smooths_the_records_when_asked(symmetric, lagged):
     assert resolve_smoothing("none", train, symmetric) is None
     with pytest.raises(SindyshipInputError):
         discover(train, symmetric, smoothing="median:5")
+
+
+def test_the_catalogue_comes_first(kcs):
+    """On the default KCS the missing asymmetry is catalogued: nothing is accepted until it
+    is added, and the report says which effect to add."""
+    records = simulate_with_effects(kcs, PLAN)
+    found = discover(records, kcs)
+    assert "asymmetry" in found.catalogue and found.accepted == []
+    assert "First add the catalogued effects" in found.report()
+
+
+def test_a_long_lag_is_found_beyond_a_false_minimum(symmetric):
+    """A 14 s lag is found although short runs show a false minimum near 4 s: the grid
+    reaches 28 s."""
+    effects = parse_effects(["rudder_lag=14"])
+    found = discover(simulate_with_effects(symmetric, PLAN, effects), symmetric,
+                     check_catalogue=False)
+    assert found.best.delays["delta"] == pytest.approx(14.0, abs=1.0)
+
+
+@pytest.mark.parametrize(("delays", "signal", "message"), [
+    ({"delta_c": 2.0}, "actual", "reads the rudder angle from delta; delay delta instead"),
+    ({"n": 2.0}, "actual", "which none of its terms uses"),
+])
+def test_a_delay_the_fit_does_not_read_is_refused(symmetric, lagged, delays, signal, message):
+    train, _ = lagged
+    library = load_library("abkowitz").extended(Effect("late", "Late", "A lag.", (), {},
+                                                       delays=delays))
+    with pytest.raises(SindyshipInputError, match=message):
+        fit(train, symmetric, library=library, rudder_signal=signal)
+
+
+@pytest.mark.parametrize(("spec", "message"), [
+    (["gust=0.2"], "add --effect wind=SPEED"),
+    (["rps=1.2", "rps_step=0.5"], "keep that at 1.5 or below"),
+])
+def test_simulated_conditions_that_cannot_hold_are_refused(spec, message):
+    with pytest.raises(SindyshipInputError, match=message):
+        parse_effects(spec)
+
+
+def test_an_effect_named_twice_is_refused(tmp_path, lagged):
+    train, _ = lagged
+    assert main(["fit", "x.csv", "--effects", "asymmetry,asymmetry", "--out",
+                 str(tmp_path / "m.json")]) == 2

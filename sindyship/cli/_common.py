@@ -144,8 +144,20 @@ def emit(document: dict) -> None:
 
 
 def split_names(text: str) -> list[str]:
-    """Comma-separated names, blanks dropped."""
-    return [name.strip() for name in text.split(",") if name.strip()]
+    """Comma-separated names, blanks dropped.
+
+    Raises
+    ------
+    SindyshipInputError
+        When a name is given twice.
+    """
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise SindyshipInputError(
+            f"{twice[0]!r} is given twice in {text!r}; name each effect once."
+        )
+    return names
 
 
 def add_ship(p, *, default: str | None = "kcs") -> None:

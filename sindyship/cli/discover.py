@@ -72,5 +72,5 @@ def run(args) -> int:
     if args.json:
         emit(document)
     else:
-        print(found.report())
+        print(found.report(args.out if found.accepted else None))
     return 0

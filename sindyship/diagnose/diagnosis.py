@@ -513,6 +513,7 @@ def _search_beyond(result: Diagnosis, fitted: Sequence[Trajectory], settings: Ma
     visibly_wrong = bool(result.diverged) or any(floor[dof] < NOISE_VISIBLE for dof in DOFS)
     if result.top is None and visibly_wrong:
         result.discovery = discover(fitted, result.ship, library=result.library,
-                                    threshold=result.threshold, **settings)
+                                    threshold=result.threshold, check_catalogue=False,
+                                    **settings)
 
 

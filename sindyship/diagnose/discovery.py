@@ -6,11 +6,12 @@ holds, in two ways:
 Delays.
     A channel the terms read (the rudder angle above all) may lag or lead the force it causes:
     a slow or filtered angle sensor, a logging delay.  For every candidate delay tau on a grid
-    (steps of 0.05 L/U0 or one sample, over +-0.5 L/U0 and at least ten samples) the library is
+    (steps of 0.05 L/U0 or one sample, over +-1.5 L/U0 and at least ten samples) the library is
     refitted on the channel read at ``t + tau`` (:meth:`sindyship.library.TermLibrary.aligned`)
     and judged by its leave-one-manoeuvre-out force error; the best grid point is refined by a
-    parabola through its neighbours.  A best delay shorter than the sample interval is not one
-    the records can resolve and is not reported.
+    parabola through its neighbours.  A best delay at the edge of the grid doubles the grid's
+    reach, up to 4 L/U0 (75 s for the KCS).  A best delay shorter than the sample interval is
+    not one the records can resolve and is not reported.
 Terms.
     The families of :mod:`sindyship.diagnose.candidates` (pysindy feature libraries over the
     heading, the position, the rudder, the motion and every recorded channel).  In every
@@ -59,9 +60,11 @@ MIN_EQUATIONS = 2
 #: Least fall of the leave-one-manoeuvre-out error (share of the library's) for which the
 #: forward selection adds another term.
 MIN_STEP_GAIN = 0.01
-#: Half-width of the delay grid [L/U0] and its step [L/U0].
-DELAY_RANGE = 0.5
+#: Half-width of the delay grid [L/U0] and its step [L/U0]; a best delay at the edge of the
+#: grid doubles its half-width, up to DELAY_MAX [L/U0].
+DELAY_RANGE = 1.5
 DELAY_STEP = 0.05
+DELAY_MAX = 4.0
 
 
 @dataclass
@@ -136,6 +139,12 @@ class Discovery:
         Share of each equation's leave-one-manoeuvre-out error that is noise (first round).
     threshold : float
     seconds : float
+    catalogue : dict of str to float
+        Catalogued effects that are meaningful on these records, with the share they explain:
+        a finding is accepted only when it explains more than every one of them (else a
+        family could be standing in for a catalogued effect that is missing).
+    smoothing : dict or None
+        The smoothing applied to the records (:meth:`SmoothingSetting.as_dict`).
     """
 
     library: TermLibrary
@@ -145,6 +154,8 @@ class Discovery:
     noise_floor: dict[str, float]
     threshold: float
     seconds: float
+    catalogue: dict[str, float] = field(default_factory=dict)
+    smoothing: dict | None = None
 
     @property
     def findings(self) -> list[Finding]:
@@ -163,7 +174,7 @@ class Discovery:
         if not self.accepted:
             raise SindyshipInputError(
                 "nothing meaningful was discovered, so there is no effect to write; the "
-                "report says what was tried."
+                "report says what was tried (and which catalogued effects to add first)."
             )
         families = [f.family.replace(":", "_") for f in self.accepted]
         name = name or "discovered_" + "_".join(families)
@@ -191,10 +202,11 @@ class Discovery:
                       for dof in DOFS if effect.terms[dof]]
         return "\n".join(lines) + "\n"
 
-    def report(self) -> str:
+    def report(self, effect_file: str | None = None) -> str:
+        """The findings as text (:func:`sindyship.reports.discovery_report`)."""
         from ..reports import discovery_report
 
-        return discovery_report(self)
+        return discovery_report(self, effect_file)
 
     def to_json(self) -> dict:
         return clean_json({
@@ -202,6 +214,7 @@ class Discovery:
             "noise_floor": self.noise_floor, "threshold": self.threshold,
             "accepted": [f.to_json() for f in self.accepted],
             "rounds": [[f.to_json() for f in found] for found in self.rounds],
+            "catalogue_meaningful": self.catalogue, "smoothing": self.smoothing,
             "seconds": self.seconds,
         })
 
@@ -220,12 +233,17 @@ _HINTS = {
 }
 
 
-def _hint(family: str, delays: Mapping[str, float], terms: Mapping[str, Sequence[str]]) -> str:
+def _hint(family: str, delays: Mapping[str, float], terms: Mapping[str, Sequence[str]],
+          logged_wind: bool = False) -> str:
     if delays:
         channel, tau = next(iter(delays.items()))
         side = "lags" if tau > 0 else "leads"
         return (f"the recorded {channel} {side} the force it causes by {abs(tau):.1f} s: a slow "
                 "or filtered sensor, or a logging delay between the channels")
+    if family == "heading" and logged_wind:
+        return ("forces that follow the heading although the records log the wind: a load "
+                "fixed to the earth that the wind channels do not carry (a current, a towline), "
+                "or a wind the catalogued wind effect models poorly")
     if family.startswith("channel:"):
         channel = family.split(":", 1)[1]
         return f"the forces follow the recorded channel {channel}, which the library ignores"
@@ -263,7 +281,8 @@ def _lomo(problem) -> np.ndarray:
     return grouped.lomo_errors(np.arange(problem.features.shape[1]))
 
 
-def _finding(family, terms, delays, e0, e1, noise, groups, threshold, variables, curve=()):
+def _finding(family, terms, delays, e0, e1, noise, groups, threshold, variables, curve=(),
+             logged_wind=False):
     explained, signal, significant = {}, {}, {}
     for dof in DOFS:
         if e1.get(dof) is None or not float(e0[dof] @ e0[dof]) > 0:
@@ -276,12 +295,12 @@ def _finding(family, terms, delays, e0, e1, noise, groups, threshold, variables,
     meaningful = share_signal >= threshold and sum(significant.values()) >= MIN_EQUATIONS
     return Finding(family, {d: list(terms.get(d, [])) for d in DOFS}, dict(delays), explained,
                    signal, significant, share, share_signal, meaningful,
-                   sorted(variables), _hint(family, delays, terms),
+                   sorted(variables), _hint(family, delays, terms, logged_wind),
                    [list(map(float, p)) for p in curve])
 
 
 def _delay_grid(ship: Ship, dt: float) -> np.ndarray:
-    """Candidate delays [s]: steps of 0.05 L/U0 (at least one sample) out to 0.5 L/U0 (at
+    """Candidate delays [s]: steps of 0.05 L/U0 (at least one sample) out to 1.5 L/U0 (at
     least ten samples) on either side of zero."""
     step = max(dt, DELAY_STEP * ship.time_scale)
     reach = max(DELAY_RANGE * ship.time_scale, 10 * dt)
@@ -308,14 +327,24 @@ def _search_delay(records, ship, library, channel, e0, settings):
     def cost(errors):
         return float(np.mean([errors[d] @ errors[d] / sse0[d] for d in DOFS]))
 
-    grid = _delay_grid(ship, dt)
     tried = {0.0: (1.0, e0)}
-    for tau in grid:
-        errors = _delay_errors(records, ship, library, channel, float(tau), settings)
-        tried[float(tau)] = (cost(errors), errors)
-    taus = np.array(sorted(tried))
-    costs = np.array([tried[t][0] for t in taus])
-    k = int(np.argmin(costs))
+    grid = _delay_grid(ship, dt)
+    reach = float(grid[-1])
+    while True:
+        for tau in grid:
+            if float(tau) not in tried:
+                errors = _delay_errors(records, ship, library, channel, float(tau), settings)
+                tried[float(tau)] = (cost(errors), errors)
+        taus = np.array(sorted(tried))
+        costs = np.array([tried[t][0] for t in taus])
+        k = int(np.argmin(costs))
+        at_edge = k in (0, len(taus) - 1)
+        if not at_edge or reach >= DELAY_MAX * ship.time_scale:
+            break  # the best delay lies inside the grid, or the grid is as wide as it goes
+        reach = min(2.0 * reach, DELAY_MAX * ship.time_scale)
+        step = float(grid[1] - grid[0])
+        half = np.arange(step, reach + 0.5 * step, step)
+        grid = np.concatenate([-half[::-1], half])
     if 0 < k < len(taus) - 1:  # a parabola through the best point and its neighbours
         (a, b, c), (fa, fb, fc) = taus[k - 1:k + 2], costs[k - 1:k + 2]
         denom = (a - b) * (a - c) * (b - c)
@@ -367,6 +396,7 @@ def discover(
     smoothing=None,
     threshold: float = MEANINGFUL_SHARE,
     max_rounds: int = 1,
+    check_catalogue: bool = True,
 ) -> Discovery:
     """Search the force residual of a fitted library for an effect no catalogue lists.
 
@@ -389,6 +419,11 @@ def discover(
     max_rounds : int
         Search again with each meaningful finding added, up to this many rounds: an effect
         can need a delay and terms (every accepted finding goes into the effect file).
+    check_catalogue : bool
+        Score the catalogue first: a finding is accepted only when it explains more than every
+        catalogued effect that is meaningful on the records (a family can stand in for a
+        missing catalogued effect: position terms for an asymmetry, say).
+        :func:`sindyship.diagnose.diagnose` searches only when none is meaningful.
 
     Returns
     -------
@@ -426,19 +461,33 @@ def discover(
     if setting is not None:
         records = smooth_records(records, setting)
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
+    catalogue = (_meaningful_catalogue(records, ship, base, threshold, settings)
+                 if check_catalogue else {})
     rounds, accepted, library_now = [], [], base
+    catalogued_best = max(catalogue.values(), default=0.0)
     for _ in range(max(int(max_rounds), 1)):
         findings, floor = _search(records, ship, library_now, settings, threshold)
         rounds.append(findings)
         if len(rounds) == 1:
             first_floor = floor
-        best = next((f for f in findings if f.meaningful), None)
+        best = next((f for f in findings if f.meaningful
+                     and f.explained_signal > catalogued_best), None)
         if best is None:
             break
         accepted.append(best)
         library_now = library_now.extended(_as_effect(best, len(accepted)))
     return Discovery(base, [r.name for r in records], rounds, accepted, first_floor, threshold,
-                     time.perf_counter() - start)
+                     time.perf_counter() - start, catalogue,
+                     None if setting is None else setting.as_dict())
+
+
+def _meaningful_catalogue(records, ship, library, threshold, settings) -> dict[str, float]:
+    """The catalogued effects meaningful on ``records`` (scored as the diagnosis does)."""
+    from .diagnosis import diagnose
+
+    scored = diagnose(records, ship, library=library, threshold=threshold, confirm=0,
+                      fly_training=False, search_beyond=False, **settings)
+    return {s.effect.name: s.explained_signal for s in scored.ranking if s.meaningful}
 
 
 def _as_effect(finding: Finding, k: int) -> Effect:
@@ -473,8 +522,9 @@ def _search(records, ship, library, settings, threshold) -> tuple[list[Finding],
         if not chosen:
             continue
         used = {v for ts in chosen.values() for t in ts for v in _variables_of(t)}
+        logged_wind = all(r.has("wind_speed") and r.has("wind_dir") for r in records)
         findings.append(_finding(family.name, chosen, {}, e0, errors, noise, groups,
-                                 threshold, used))
+                                 threshold, used, logged_wind=logged_wind))
     findings.sort(key=lambda f: (-f.explained_signal, -f.explained, f.family))
     floor = {dof: min(noise[dof] / max(float(e0[dof] @ e0[dof]), 1e-300), 1.0) for dof in DOFS}
     return findings, floor

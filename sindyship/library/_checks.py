@@ -50,7 +50,10 @@ def _read_delays(raw: Any, source: str | Path | None) -> dict[str, float]:
     out = {}
     for channel, value in raw.items():
         if not isinstance(channel, str) or not _CHANNEL_RE.fullmatch(channel):
-            raise SindyshipInputError(f"{_where(source)}{channel!r} is not a channel name.")
+            raise SindyshipInputError(
+                f"{_where(source)}{channel!r} is not a channel name: use lower-case letters, "
+                "digits and single underscores, as in the measurement CSV (e.g. delta)."
+            )
         if channel in UNDELAYABLE:
             raise SindyshipInputError(
                 f'{_where(source)}the channel "{channel}" cannot be delayed: only input '
