@@ -453,7 +453,7 @@ def discover(
             "discover needs at least two training records: findings are judged leaving one "
             "manoeuvre out."
         )
-    base = resolve_library(library) if not isinstance(library, TermLibrary) else library
+    base = resolve_library(library)
     added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
     base = base.extended(*added) if added else base
     setting = resolve_smoothing(smoothing, records, ship, library=base,
