@@ -40,15 +40,11 @@ from the configuration)::
     with joblib.parallel_config(backend="dask", n_jobs=-1):
         result = ensemble(records, ship, n_models=1000, seed=1)
 
-    import ray                                   # pip install "ray[default]"
-    from ray.util.joblib import register_ray
-
-    register_ray()
-    ray.init(address="auto")
-    with joblib.parallel_config(backend="ray", n_jobs=-1):
-        result = ensemble(records, ship, n_models=1000, seed=1)
-
-The same works for :func:`sindyship.smoothing.choose_smoothing`.  The training data travel to
+The same works for :func:`sindyship.smoothing.choose_smoothing`, the flights and scores of
+:func:`sindyship.diagnose.diagnose` and the delay grid of :func:`sindyship.diagnose.discover`
+(``tests/test_cluster.py`` runs all four on a two-process ``LocalCluster`` and finds the
+numbers of one process).  Ray's joblib backend (``ray.util.joblib.register_ray``) takes the
+same route but is not tested here.  The training data travel to
 every worker once per batch of members (``batch_size``); keep batches large when the network
 is slow.
 """

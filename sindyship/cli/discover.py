@@ -30,7 +30,7 @@ def add_parser(sub) -> None:
         "against the noise and chance; the discovered effect can be written as an effect file "
         "for fit --effects and diagnose --effects.",
     )
-    add_training_options(p, optimizer=False, workers=False)
+    add_training_options(p, optimizer=False)
     p.add_argument("--threshold", type=bounded_float(0, 1, "", high_open=True),
                    default=MEANINGFUL_SHARE,
                    help="share of the force error above the noise floor a finding must "
@@ -60,7 +60,7 @@ def run(args) -> int:
                      rudder_signal=args.rudder_signal, derivative=args.derivative,
                      window=args.window,
                      smoothing=None if args.smoothing == "none" else args.smoothing,
-                     threshold=args.threshold, max_rounds=args.rounds)
+                     threshold=args.threshold, max_rounds=args.rounds, n_jobs=args.n_jobs)
     document = found.to_json()
     if args.out is not None:
         if found.accepted:

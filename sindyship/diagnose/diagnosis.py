@@ -484,7 +484,7 @@ def diagnose(
         seconds=time.perf_counter() - start,
     )
     if search_beyond:
-        _search_beyond(result, fitted, settings)
+        _search_beyond(result, fitted, settings, n_jobs)
         result.seconds = time.perf_counter() - start
     return result
 
@@ -505,7 +505,8 @@ def _check_arguments(records: Sequence[Trajectory], test: Sequence[Trajectory],
         raise SindyshipInputError("two records share a name; give each file a distinct name.")
 
 
-def _search_beyond(result: Diagnosis, fitted: Sequence[Trajectory], settings: Mapping) -> None:
+def _search_beyond(result: Diagnosis, fitted: Sequence[Trajectory], settings: Mapping,
+                   n_jobs: int | None) -> None:
     """Run :func:`discover` into ``result.discovery`` when no catalogued effect is meaningful
     and the model is visibly wrong (a training flight diverged, or an equation's error stands
     clearly above its noise floor)."""
@@ -514,6 +515,6 @@ def _search_beyond(result: Diagnosis, fitted: Sequence[Trajectory], settings: Ma
     if result.top is None and visibly_wrong:
         result.discovery = discover(fitted, result.ship, library=result.library,
                                     threshold=result.threshold, check_catalogue=False,
-                                    **settings)
+                                    n_jobs=n_jobs, **settings)
 
 

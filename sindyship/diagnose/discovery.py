@@ -318,9 +318,11 @@ def _delay_errors(records, ship, library, channel, tau, settings):
     return {dof: _lomo(problems[dof]) for dof in DOFS}
 
 
-def _search_delay(records, ship, library, channel, e0, settings):
+def _search_delay(records, ship, library, channel, e0, settings, n_jobs=1):
     """The delay of ``channel`` with the least leave-one-manoeuvre-out error, its errors and
-    the error curve over the grid."""
+    the error curve over the grid (grid points refitted by ``n_jobs`` joblib workers)."""
+    from joblib import Parallel, delayed
+
     sse0 = {dof: float(e0[dof] @ e0[dof]) or 1.0 for dof in DOFS}
     dt = float(np.median([r.dt for r in records]))
 
@@ -331,10 +333,12 @@ def _search_delay(records, ship, library, channel, e0, settings):
     grid = _delay_grid(ship, dt)
     reach = float(grid[-1])
     while True:
-        for tau in grid:
-            if float(tau) not in tried:
-                errors = _delay_errors(records, ship, library, channel, float(tau), settings)
-                tried[float(tau)] = (cost(errors), errors)
+        todo = [float(tau) for tau in grid if float(tau) not in tried]
+        refits = Parallel(n_jobs=n_jobs)(
+            delayed(_delay_errors)(records, ship, library, channel, tau, settings)
+            for tau in todo)
+        for tau, errors in zip(todo, refits, strict=True):
+            tried[tau] = (cost(errors), errors)
         taus = np.array(sorted(tried))
         costs = np.array([tried[t][0] for t in taus])
         k = int(np.argmin(costs))
@@ -397,6 +401,7 @@ def discover(
     threshold: float = MEANINGFUL_SHARE,
     max_rounds: int = 1,
     check_catalogue: bool = True,
+    n_jobs: int | None = 1,
 ) -> Discovery:
     """Search the force residual of a fitted library for an effect no catalogue lists.
 
@@ -424,6 +429,9 @@ def discover(
         catalogued effect that is meaningful on the records (a family can stand in for a
         missing catalogued effect: position terms for an asymmetry, say).
         :func:`sindyship.diagnose.diagnose` searches only when none is meaningful.
+    n_jobs : int or None
+        joblib workers for the refits of the delay grid (``None``: from a
+        ``joblib.parallel_config`` block, e.g. a Dask cluster's; the result is the same).
 
     Returns
     -------
@@ -466,7 +474,7 @@ def discover(
     rounds, accepted, library_now = [], [], base
     catalogued_best = max(catalogue.values(), default=0.0)
     for _ in range(max(int(max_rounds), 1)):
-        findings, floor = _search(records, ship, library_now, settings, threshold)
+        findings, floor = _search(records, ship, library_now, settings, threshold, n_jobs)
         rounds.append(findings)
         if len(rounds) == 1:
             first_floor = floor
@@ -497,7 +505,8 @@ def _as_effect(finding: Finding, k: int) -> Effect:
                   delays=finding.delays)
 
 
-def _search(records, ship, library, settings, threshold) -> tuple[list[Finding], dict]:
+def _search(records, ship, library, settings, threshold, n_jobs=1
+            ) -> tuple[list[Finding], dict]:
     """One round: every delay and family scored against ``library``'s residual."""
     problems = design(records, ship, library, **settings)
     groups = problems["X"].groups
@@ -511,7 +520,8 @@ def _search(records, ship, library, settings, threshold) -> tuple[list[Finding],
     for channel in delayable:
         if channel in library.delays or not all(r.has(channel) for r in records):
             continue  # a channel already delayed keeps its delay
-        tau, errors, curve = _search_delay(records, ship, library, channel, e0, settings)
+        tau, errors, curve = _search_delay(records, ship, library, channel, e0, settings,
+                                           n_jobs)
         if abs(tau) < dt:  # shorter than a sample: not a delay the records can resolve
             continue
         findings.append(_finding(f"delay:{channel}", {}, {channel: tau}, e0, errors, noise,

@@ -1,0 +1,98 @@
+"""Ensembles, the smoothing choice, the diagnosis and discovery on a Dask cluster (a
+LocalCluster of two worker processes through joblib's dask backend): the work runs on the
+cluster and gives the same numbers as on one process."""
+
+from __future__ import annotations
+
+import joblib
+import numpy as np
+import pandas as pd
+import pytest
+
+from sindyship.diagnose import diagnose, discover
+from sindyship.effects import parse_effects, simulate_with_effects
+from sindyship.manoeuvres import Manoeuvre
+from sindyship.smoothing import choose_smoothing
+from sindyship.uncertainty import ensemble
+
+distributed = pytest.importorskip("distributed")
+
+PLAN = [Manoeuvre("turning-circle", rudder=35, duration=500),
+        Manoeuvre("turning-circle", rudder=-35, duration=500),
+        Manoeuvre("zigzag", rudder=20, check=20, duration=500),
+        Manoeuvre("zigzag", rudder=10, check=10, duration=500)]
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+    with distributed.Client(cluster) as connected:
+        yield connected
+    cluster.close()
+
+
+@pytest.fixture(scope="module")
+def lagged(kcs):
+    ship = kcs.with_rudder(gamma_R_stbd=0.415, gamma_R_port=0.415)
+    return ship, simulate_with_effects(ship, PLAN, parse_effects(["rudder_lag=4"]))
+
+
+def on_cluster(client, work):
+    """Run ``work()`` with joblib's dask backend; the result and the tasks the cluster ran."""
+    with distributed.get_task_stream(client) as stream, \
+            joblib.parallel_config(backend="dask", n_jobs=-1):
+        result = work()
+    return result, len(stream.data)
+
+
+def test_an_ensemble_on_the_cluster_equals_the_local_one(client, kcs, lagged):
+    _, runs = lagged
+    local = ensemble(runs, kcs, n_models=4, seed=3, n_jobs=1)
+    remote, tasks = on_cluster(client, lambda: ensemble(runs, kcs, n_models=4, seed=3))
+    assert tasks > 0
+    assert remote.members == local.members
+    for dof, values in local.coefficients.items():
+        np.testing.assert_array_equal(remote.coefficients[dof], values)
+
+
+def test_the_smoothing_choice_on_the_cluster_equals_the_local_one(client, kcs):
+    noisy = [simulate_with_effects(kcs, [m], parse_effects(["noise=0.01", f"seed={k + 1}"]))[0]
+             for k, m in enumerate(PLAN)]
+    candidates = ["none", "savgol:21", "rts:21"]
+    local, table = choose_smoothing(noisy, kcs, candidates, n_jobs=1)
+    (remote, remote_table), tasks = on_cluster(
+        client, lambda: choose_smoothing(noisy, kcs, candidates))
+    assert tasks > 0
+    assert remote == local
+    pd.testing.assert_frame_equal(remote_table, table)
+
+
+def test_a_diagnosis_and_a_discovery_on_the_cluster_equal_the_local_ones(client, lagged):
+    ship, runs = lagged
+    local = diagnose(runs, ship, effects=["asymmetry", "environment"], confirm=1, n_jobs=1)
+    remote, tasks = on_cluster(client, lambda: diagnose(
+        runs, ship, effects=["asymmetry", "environment"], confirm=1, n_jobs=2))
+    assert tasks > 0
+    assert remote.to_json()["errors"] == local.to_json()["errors"]
+    assert remote.discovery.to_json()["accepted"] == local.discovery.to_json()["accepted"]
+    found, tasks = on_cluster(client, lambda: discover(runs, ship, check_catalogue=False,
+                                                       n_jobs=None))
+    assert tasks > 0
+    assert found.best.delays == local.discovery.best.delays
+
+
+def test_the_readme_cluster_example_runs(tmp_path):
+    import os
+    import re
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    readme = (Path(__file__).parents[1] / "README.md").read_text()
+    (code,) = [block for block in re.findall(r"```python\n(.*?)```", readme, re.S)
+               if "parallel_config" in block]
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=600, env={**os.environ, "MPLBACKEND": "Agg"})
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.startswith("8 members;")
