@@ -105,7 +105,7 @@ def check_delays(library: TermLibrary, records: Sequence[Trajectory], rudder_sig
     """
     from .terms import describe_variable
 
-    read = {describe_variable(v).column for v in library.variables} - {"rudder"}
+    read = {describe_variable(v).column for v in library.variables} - {"rudder", "rudder_rate"}
     for channel in library.delays:
         for record in records:
             rudder = "delta_c" if rudder_signal == "commanded" or not record.has("delta") \
@@ -153,7 +153,7 @@ def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
             for term in library.terms[dof]:
                 for variable in sorted(term.variables):
                     column = describe_variable(variable).column
-                    if column == "rudder" or record.has(column):
+                    if column in ("rudder", "rudder_rate") or record.has(column):
                         continue
                     where = origin.get((dof, term.text),
                                        library.source or f'library "{library.name}"')

@@ -62,6 +62,12 @@ class AbkowitzDynamics:
         return self.series is not None
 
     @property
+    def uses_rudder_rate(self) -> bool:
+        """Whether terms use the rudder's rate (delta_rate): the integrator then passes the
+        rate the flight's servo moves at."""
+        return "delta_rate" in self.model.library.variables
+
+    @property
     def uses_position(self) -> bool:
         """Whether terms depend on where the ship is (x, y): the integrator then passes the
         flight's own position, never the recorded one."""
@@ -76,10 +82,11 @@ class AbkowitzDynamics:
         return "commanded" if self.model.rudder_signal == "commanded" else "actual"
 
     def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None,
-                      position=None):
+                      position=None, rudder_rate=None):
         """Accelerations (du/dt, dv/dt, dr/dt) in SI from SI state values; the recorded
-        channels at time ``t`` of the flights ``members`` when the dynamics has a series, and
-        the flight's ``position`` (x, y) [m] when terms use it."""
+        channels at time ``t`` of the flights ``members`` when the dynamics has a series, the
+        flight's ``position`` (x, y) [m] and ``rudder_rate`` [rad/s] when terms use them
+        (the origin and a still rudder when not given, as for a stability analysis)."""
         model = self.model
         ship = model.ship
         U0, L = ship.U0, ship.L
@@ -88,8 +95,11 @@ class AbkowitzDynamics:
         values.update(self.channels)
         if self.series is not None:
             values.update(self.series.at(t, members))
-        if position is not None:
-            values["x"], values["y"] = position
+        if self.uses_position:
+            values["x"], values["y"] = (0.0 * un, 0.0 * un) if position is None else position
+        if self.uses_rudder_rate:
+            rate = 0.0 * un if rudder_rate is None else rudder_rate
+            values["delta_rate"] = rate * L / U0
         forces = model.forces_from_values(values)
         X_C, Y_C, N_C = coriolis(ship, un, values["v"], values["r"])
         Minv = model.inverse_mass
@@ -209,8 +219,8 @@ class AbkowitzModel:
     @property
     def recorded_channels(self) -> list[str]:
         """The channels the library uses that a flight takes from the record (all but the
-        heading and the position, which the flight integrates)."""
-        return sorted(set(self.library.channels) - {"psi", "x", "y"})
+        heading, the position and the rudder rate, which the flight makes itself)."""
+        return sorted(set(self.library.channels) - {"psi", "x", "y", "delta_rate"})
 
     def dynamics(self, channels: Mapping[str, float] | None = None, *, records=None
                  ) -> AbkowitzDynamics:

@@ -254,3 +254,31 @@ def test_an_effect_named_twice_is_refused(tmp_path, lagged):
     train, _ = lagged
     assert main(["fit", "x.csv", "--effects", "asymmetry,asymmetry", "--out",
                  str(tmp_path / "m.json")]) == 2
+
+
+def test_the_rudder_rate_is_read_from_records_and_flown_from_the_servo(kcs, lagged):
+    """delta_rate is the rudder angle's rate times L/U0 in a record, and in a flight the rate
+    the servo moves at: a term in it changes a zig-zag and leaves a straight run alone."""
+    from sindyship.library import nondimensional_variables
+    from sindyship.model import paper_model
+
+    train, _ = lagged
+    record = train[2]
+    values = nondimensional_variables(record, kcs.L, kcs.U0, needed={"delta_rate"})
+    expected = np.gradient(record["delta"], record.t) * kcs.L / kcs.U0
+    np.testing.assert_allclose(values["delta_rate"], expected)
+    plain = paper_model(kcs)
+    library = plain.library.extended(
+        Effect("rate", "Rate", "A rate.", ("delta_rate",), {"Y": ["delta_rate"]}))
+    coefficients = {dof: {t.text: plain.coefficients[dof].get(t.text, 0.0)
+                          for t in library.terms[dof]} for dof in "XYN"}
+    coefficients["Y"]["delta_rate"] = 5e-4
+    model = AbkowitzModel(kcs, library, coefficients)
+    assert model.dynamics().uses_rudder_rate and model.recorded_channels == []
+    runs = simulate_with_effects(kcs, [Manoeuvre("zigzag", rudder=20, check=20, duration=300),
+                                       Manoeuvre("straight", duration=300)])
+    with_rate, without = fly_like(model, runs), fly_like(plain, runs)
+    assert np.abs(with_rate[0]["y"] - without[0]["y"]).max() > 1.0
+    np.testing.assert_allclose(with_rate[1]["y"], without[1]["y"], atol=1e-9)
+    assert any(f.family == "rate" for f in discover(train, kcs.with_rudder(
+        gamma_R_stbd=0.415, gamma_R_port=0.415), check_catalogue=False).findings)

@@ -17,6 +17,9 @@ effect file, parsed by the whitelist parser and flown:
     Rudder terms beyond the cubic: ``delta^5``, ``abs(delta) delta``, ``abs(delta)^3 delta``
     in sway and yaw, ``delta^4``, ``abs(delta)^3`` in surge (a rudder force that saturates or
     stalls at large angles).
+``rate``
+    The rudder rate ``delta_rate`` in sway and yaw (an angle signal that leads or lags the
+    force it causes; a flight takes the rate its servo moves at).
 ``motion``
     Fifth-order terms in v' and r' in sway and yaw, fourth-order ones in surge.
 ``channel:NAME``
@@ -121,6 +124,10 @@ def families(records: Sequence, library, ship) -> list[Family]:
     odd_rudder = _feature_names(odd, ["delta"], sample[:, :1])
     add("rudder", {"X": _feature_names(even, ["delta"], sample[:, :1]), "Y": odd_rudder,
                    "N": odd_rudder}, ["delta"])
+
+    rate = _feature_names(ps.PolynomialLibrary(degree=1, include_bias=False), ["delta_rate"],
+                          sample[:, :1])
+    add("rate", {"Y": rate, "N": rate}, ["delta_rate"])
 
     hull = [Term(t) for t in _feature_names(ps.PolynomialLibrary(degree=5, include_bias=False),
                                             ["v", "r"], sample[:, :2])]

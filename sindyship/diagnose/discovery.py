@@ -230,6 +230,8 @@ _HINTS = {
               "or saturates",
     "motion": "hull forces beyond the third order in v and r: large drift angles or yaw rates "
               "(cross-flow drag, vortex shedding)",
+    "rate": "a rudder force that follows the rudder's rate of change: the recorded angle leads "
+            "or lags the force it causes (the delay search says by how much)",
 }
 
 

@@ -352,10 +352,11 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     from ..errors import SindyshipInputError
     from ..simulation import default_step, integrator_for
 
-    if {"x", "y"} & set(model.library.variables):
+    if {"x", "y", "delta_rate"} & set(model.library.variables):
         raise SindyshipInputError(
-            "the model's terms use the position (x, y), which the generated simulator does not "
-            "pass to its forces; fly this model with sindyship evaluate instead."
+            "the model's terms use the position (x, y) or the rudder rate, which the generated "
+            "simulator does not pass to its forces; fly this model with sindyship evaluate "
+            "instead."
         )
     # channels without a default value must be given when the module flies (NaN until then)
     defaults = {name: math.nan for name in model.recorded_channels} | dict(channels or {})

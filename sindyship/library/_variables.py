@@ -37,8 +37,9 @@ def nondimensional_variables(
 
     With the ship length ``L`` and the design speed ``U0`` (constant, not the instantaneous
     speed): ``du = u/U0 - 1``, ``v = v/U0``, ``r = r L/U0``, ``delta`` the rudder angle
-    [rad], ``psi`` the heading [rad], ``n = n L/U0`` (n in rps), ``wind_speed`` over U0,
-    ``wind_dir`` [rad].  Any other channel is passed through as recorded (SI units).
+    [rad], ``delta_rate`` its rate by central differences times L/U0, ``psi`` the heading
+    [rad], ``n = n L/U0`` (n in rps), ``wind_speed`` over U0, ``wind_dir`` [rad].  Any other
+    channel is passed through as recorded (SI units).
 
     Parameters
     ----------
@@ -90,7 +91,11 @@ def nondimensional_variables(
     out: dict[str, np.ndarray] = {}
     for name in order:
         variable = describe_variable(name)
-        if variable.column == "rudder":
+        if variable.column == "rudder_rate":
+            angle = (np.asarray(rudder, dtype=float) if rudder is not None
+                     else trajectory.rudder)
+            column = np.gradient(angle, trajectory.t) if trajectory.n_samples > 1 else 0 * angle
+        elif variable.column == "rudder":
             if rudder is not None:
                 column = np.asarray(rudder, dtype=float)
                 if column.shape != (trajectory.n_samples,):

@@ -262,8 +262,10 @@ class _Integrator:
         self.switching = getattr(dynamics, "switching", None)
         # dynamics whose inputs vary in time (recorded channels) take the time and the members
         self.time_varying = bool(getattr(dynamics, "time_varying", False))
-        # dynamics with forces that depend on where the ship is take its position
+        # dynamics with forces that depend on where the ship is take its position, and those
+        # with forces in the rudder's rate of change take the rate the servo moves at
         self.uses_position = bool(getattr(dynamics, "uses_position", False))
+        self.uses_rudder_rate = bool(getattr(dynamics, "uses_rudder_rate", False))
         # A model identified on the commanded angle takes the command as its rudder input.
         self.rudder_input = getattr(dynamics, "rudder_input", "actual")
         self.commands = list(commands)
@@ -280,7 +282,15 @@ class _Integrator:
         """Time derivative of the state columns ``y`` (7, k) for the given members."""
         u, v, r, x, y_east, psi, delta = y
         rudder = delta_c if self.rudder_input == "commanded" else delta
+        target = np.minimum(np.maximum(delta_c, -self.delta_max), self.delta_max)
+        ddelta = np.minimum(np.maximum((target - delta) / self.T, -self.rate_max), self.rate_max)
+        if self.any_prescribed and self.prescribed[members].any():
+            for j, m in enumerate(members):
+                if self.prescribed[m]:
+                    ddelta[j] = self.commands[m].rate(t)
         extra = {"position": (x, y_east)} if self.uses_position else {}
+        if self.uses_rudder_rate:
+            extra["rudder_rate"] = ddelta
         if self.time_varying:
             a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, rudder, psi, branch=branch, t=t,
                                                         members=members, **extra)
@@ -288,12 +298,6 @@ class _Integrator:
             a_u, a_v, a_r = self.dynamics.accelerations(u, v, r, rudder, psi, branch=branch,
                                                         **extra)
         c, s = np.cos(psi), np.sin(psi)
-        target = np.minimum(np.maximum(delta_c, -self.delta_max), self.delta_max)
-        ddelta = np.minimum(np.maximum((target - delta) / self.T, -self.rate_max), self.rate_max)
-        if self.any_prescribed and self.prescribed[members].any():
-            for j, m in enumerate(members):
-                if self.prescribed[m]:
-                    ddelta[j] = self.commands[m].rate(t)
         out = np.empty_like(y)
         out[0] = a_u
         out[1] = a_v

@@ -48,7 +48,8 @@ class Variable:
         The name used in term text (``"du"``, ``"v"``, ``"psi"``, ...).
     column : str
         The trajectory channel it is computed from (``"rudder"`` means the actual rudder angle
-        if recorded, else the commanded one).
+        if recorded, else the commanded one; ``"rudder_rate"`` its rate of change, by central
+        differences in a record and from the servo in a flight).
     scaling : str
         Prime-I non-dimensionalisation (paper section 2.2) with the design speed U0 and
         length L: ``"surge"`` u/U0 - 1, ``"speed"`` value/U0, ``"rate"`` value L/U0,
@@ -83,6 +84,8 @@ VARIABLES: Mapping[str, Variable] = MappingProxyType(
             Variable("delta", "rudder", "none", r"\delta", "d", r"\delta", "rudder angle [rad]"),
             Variable("psi", "psi", "none", r"\psi", "psi", r"\psi", "heading [rad]"),
             Variable("n", "n", "rate", "n'", "n", "n", "propeller revolutions n L/U0"),
+            Variable("delta_rate", "rudder_rate", "rate", r"\dot{\delta}'", "ddot",
+                     r"\dot{\delta}", "rudder rate d(delta)/dt L/U0"),
             Variable(
                 "wind_speed",
                 "wind_speed",
