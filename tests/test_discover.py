@@ -147,6 +147,11 @@ def test_discover_writes_an_effect_file_that_fit_and_evaluate_take(tmp_path, sym
     effect, model = tmp_path / "lag.toml", tmp_path / "model.json"
     train_paths = [str(p) for p in paths[: len(train)]]
     assert main(["discover", *train_paths, "--out", str(effect)]) == 0
+    document = discover(train, symmetric).to_json()
+    assert document["meaningful"] is True and document["terms"] == {"X": [], "Y": [], "N": []}
+    assert document["delays"]["delta"] == pytest.approx(4.0, abs=1.0)
+    assert document["explained"] > 0.5 and set(document["explained_by_dof"]) == {"X", "Y", "N"}
+    assert document["variables"] == ["delta"] and "lags the force" in document["hints"][0]
     written = tomllib.loads(effect.read_text())
     assert written["delays"]["delta"] == pytest.approx(4.0, abs=1.0)
     assert "Discovered by sindyship discover" in written["physics"]

@@ -209,7 +209,19 @@ class Discovery:
         return discovery_report(self, effect_file)
 
     def to_json(self) -> dict:
+        """The JSON document of ``sindyship discover --json``: at the top, the discovery (the
+        accepted findings together, else the best candidate, with ``meaningful`` false), then
+        every finding of every round."""
+        shown = self.accepted or self.findings[:1]
         return clean_json({
+            "meaningful": bool(self.accepted),
+            "terms": {dof: [t for f in shown for t in f.terms.get(dof, [])] for dof in DOFS},
+            "delays": {c: d for f in shown for c, d in f.delays.items()},
+            "explained": shown[0].explained if shown else 0.0,
+            "explained_signal": shown[0].explained_signal if shown else 0.0,
+            "explained_by_dof": shown[0].explained_by_dof if shown else dict.fromkeys(DOFS, 0.0),
+            "variables": sorted({v for f in shown for v in f.variables}),
+            "hints": [f.hint for f in shown],
             "library": self.library.name, "records": self.records,
             "noise_floor": self.noise_floor, "threshold": self.threshold,
             "accepted": [f.to_json() for f in self.accepted],
