@@ -18,10 +18,12 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+import pandas as pd
 
 from .manoeuvres import result_to_trajectory
 from .simulation import (
     PrescribedRudder,
+    SimulationResult,
     StepCommand,
     ZigZagCommand,
     simulate_batch,
@@ -167,22 +169,61 @@ def fly_like(dynamics, records: Sequence[Trajectory], *, step: float | None = No
 
 def fly_like_batch(dynamics, records: Sequence[Trajectory], *, step: float | None = None
                    ) -> list[Trajectory]:
-    """As :func:`fly_like`, integrating records with identical sample times together."""
+    """As :func:`fly_like`, integrating records together whose sample times are one grid or
+    the start of it (records of one logger, of different lengths).
+
+    A shorter record's member flies on to the end of the longest with its last rudder and
+    channels held; its flight is cut at its own last sample, and a divergence after that
+    sample is not its own.  The states at the record's samples are those of a flight of the
+    record alone, up to the step splitting (the batch lands on the common sample times).
+    """
     records = _aligned(dynamics, records)
-    groups: dict[tuple, list[int]] = {}
-    for i, rec in enumerate(records):
-        t = rec.t
-        groups.setdefault((len(t), float(t[0]), float(t[-1])), []).append(i)
     out: list[Trajectory | None] = [None] * len(records)
-    for idx in groups.values():
-        t = records[idx[0]].t
+    for grid, idx in _common_grids(records):
         state0 = np.column_stack([records[i].state()[:, 0] for i in idx])
-        flier = _dynamics_for(dynamics, [records[i] for i in idx])
-        results = simulate_batch(flier, [command_for(records[i]) for i in idx], t, state0,
+        flier = _dynamics_for(dynamics, [_held_to(records[i], grid) for i in idx])
+        results = simulate_batch(flier, [command_for(records[i]) for i in idx], grid, state0,
                                  step=step)
         for i, res in zip(idx, results, strict=True):
-            out[i] = result_to_trajectory(res, records[i].name)
+            out[i] = result_to_trajectory(_cut(res, len(records[i].t)), records[i].name)
     return out  # type: ignore[return-value]
+
+
+def _common_grids(records: Sequence[Trajectory]) -> list[tuple[np.ndarray, list[int]]]:
+    """Records grouped by sample times: each group's times are the first samples of the
+    longest member's (to a millionth of the sample interval)."""
+    groups: list[tuple[np.ndarray, list[int]]] = []
+    for i in sorted(range(len(records)), key=lambda k: -len(records[k].t)):
+        t = np.asarray(records[i].t, dtype=float)
+        tol = 1e-6 * (float(np.min(np.diff(t))) if len(t) > 1 else 1.0)
+        for grid, idx in groups:
+            if len(t) <= len(grid) and np.allclose(grid[: len(t)], t, rtol=0.0, atol=tol):
+                idx.append(i)
+                break
+        else:
+            groups.append((t, [i]))
+    return [(grid, sorted(idx)) for grid, idx in groups]
+
+
+def _held_to(record: Trajectory, grid: np.ndarray) -> Trajectory:
+    """The record on a longer grid that starts with its samples, its last row held."""
+    n = len(record.t)
+    if n == len(grid):
+        return record
+    data = record.data
+    tail = data.iloc[np.full(len(grid) - n, n - 1)].copy()
+    tail["t"] = grid[n:]
+    held = pd.concat([data, tail], ignore_index=True)
+    return Trajectory(held, name=record.name, meta=record.meta)
+
+
+def _cut(result: SimulationResult, n: int) -> SimulationResult:
+    """A batch member's flight cut to its record's ``n`` samples."""
+    diverged_at = result.diverged_at
+    if diverged_at is not None and diverged_at > result.t[n - 1]:
+        diverged_at = None
+    return SimulationResult(t=result.t[:n], states=result.states[:, :n],
+                            delta_c=result.delta_c[:n], diverged_at=diverged_at)
 
 
 def _before_divergence(flown: Trajectory) -> np.ndarray:

@@ -15,6 +15,7 @@ import os
 import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +27,7 @@ from .library import TermLibrary, nondimensional_variables, record_variables
 from .ships import Ship, load_ship, ship_digest, ship_from_dict, ship_to_dict
 from .simulation.kernels import ChannelSeries
 from .targets import DOFS, abkowitz_mass_matrix, coriolis
-from .terms import evaluate_factor
+from .terms import Factor, evaluate_factor
 from .trajectory import Trajectory
 
 FORMAT_VERSION = 2
@@ -61,13 +62,13 @@ class AbkowitzDynamics:
         """Whether recorded channels vary in the flight (the integrator then passes the time)."""
         return self.series is not None
 
-    @property
+    @cached_property
     def uses_rudder_rate(self) -> bool:
         """Whether terms use the rudder's rate (delta_rate): the integrator then passes the
         rate the flight's servo moves at."""
         return "delta_rate" in self.model.library.variables
 
-    @property
+    @cached_property
     def uses_position(self) -> bool:
         """Whether terms depend on where the ship is (x, y): the integrator then passes the
         flight's own position, never the recorded one."""
@@ -159,23 +160,40 @@ class AbkowitzModel:
         self._compile()
 
     def _compile(self) -> None:
-        """Group the non-zero terms of all equations so each distinct factor and term is
-        evaluated once per call (the term-by-term path, without repeated work)."""
+        """Index the non-zero terms of all equations by their distinct factors, so a call of
+        :meth:`forces_from_values` evaluates each factor once and forms every term's column
+        and every force with a few whole-array products (no loop over terms)."""
         unique: dict[str, object] = {}
         for dof in DOFS:
             for term in self.library.terms[dof]:
                 if self.coefficients[dof][term.text] != 0.0:
                     unique.setdefault(term.canonical(scale=False) + "|" + term.text, term)
-        self._terms = list(unique.values())
-        index = {t.text: k for k, t in enumerate(self._terms)}
-        self._weights = {}
-        for dof in DOFS:
-            w = np.zeros(len(self._terms))
+        terms = list(unique.values())
+        factors = list(dict.fromkeys(f for term in terms for f in term.factors))
+        self._factors = factors
+        # the factors by base (a variable or a function of one): each base is evaluated once
+        # and raised to all its powers in one operation
+        bases: dict[Factor, tuple[list[int], list[int]]] = {}
+        for k, factor in enumerate(factors):
+            rows, powers = bases.setdefault(Factor(factor.function, factor.base, 1), ([], []))
+            rows.append(k)
+            powers.append(factor.power)
+        self._bases = [(base, np.array(rows), np.array(powers, dtype=float)[:, None])
+                       for base, (rows, powers) in bases.items()]
+        width = max((len(term.factors) for term in terms), default=0)
+        # factor indices of each term, padded with the index of a row of ones
+        slots = np.full((width, len(terms)), len(factors), dtype=np.intp)
+        for k, term in enumerate(terms):
+            slots[: len(term.factors), k] = [factors.index(f) for f in term.factors]
+        self._slots = slots
+        index = {t.text: k for k, t in enumerate(terms)}
+        weights = np.zeros((len(DOFS), len(terms)))
+        for row, dof in enumerate(DOFS):
             for term in self.library.terms[dof]:
                 c = self.coefficients[dof][term.text]
                 if c != 0.0:
-                    w[index[term.text]] += c
-            self._weights[dof] = w
+                    weights[row, index[term.text]] += c
+        self._weights = weights
 
     # ----------------------------------------------------------------------------------------
     def coefficient_vector(self, dof: str) -> np.ndarray:
@@ -188,24 +206,25 @@ class AbkowitzModel:
                 for dof in DOFS}
 
     def forces_from_values(self, values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Forces of eq. 15 (Prime I) from non-dimensional variables, term by term.
+        """Forces of eq. 15 (Prime I) from non-dimensional variables.
 
-        Each term's column comes from its factors (a factor shared by several terms is
-        computed once); the forces are the coefficient-weighted sums of the columns.
+        Each distinct factor of the active terms is evaluated once; every term's column is the
+        product of its factors' rows, and the forces are the coefficient-weighted sums of the
+        columns (one matrix product for the three equations).
         """
         base = np.asarray(values["du"], dtype=float)
-        if not self._terms:
+        if not self._factors:
             return {dof: 0.0 * base for dof in DOFS}
-        cache: dict[tuple, np.ndarray] = {}
-        columns = np.empty((len(self._terms), *base.shape))
-        for k, term in enumerate(self._terms):
-            column = 1.0
-            for factor in term.factors:
-                if factor not in cache:
-                    cache[factor] = evaluate_factor(factor, values)
-                column = column * cache[factor]
-            columns[k] = column
-        return {dof: np.tensordot(self._weights[dof], columns, axes=1) for dof in DOFS}
+        rows = np.ones((len(self._factors) + 1, base.size))
+        for factor, where, powers in self._bases:
+            column = np.ravel(evaluate_factor(factor, values))
+            rows[where] = column if len(where) == 1 and powers[0, 0] == 1.0 else column**powers
+        slots = self._slots
+        columns = rows[slots[0]]
+        for slot in slots[1:]:
+            columns *= rows[slot]
+        forces = self._weights @ columns
+        return {dof: forces[row].reshape(base.shape) for row, dof in enumerate(DOFS)}
 
     def variables(self, traj: Trajectory) -> dict[str, np.ndarray]:
         """The library's non-dimensional variables of a record (with this model's rudder)."""

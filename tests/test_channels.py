@@ -65,3 +65,36 @@ def test_channel_free_models_fly_exactly_as_before(kcs, protocol_runs):
     through = fly_like_batch(model, protocol_runs["test"])
     for a, b in zip(direct, through, strict=True):
         np.testing.assert_array_equal(a.state(), b.state())
+
+
+def _replayed(record: Trajectory, n: int, name: str) -> Trajectory:
+    """The record's first ``n`` samples without its command: flights replay its rudder."""
+    data = record.data.iloc[:n].drop(columns=["delta_c"]).reset_index(drop=True)
+    return Trajectory(data, name=name, meta=dict(record.meta))
+
+
+def test_records_of_different_lengths_fly_together_as_alone(kcs, depth_model):
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("random", rudder=20, duration=600, seed=3)])
+    run = _with_depth(run, np.linspace(0.0, 200.0, run.n_samples))
+    long, short = _replayed(run, 600, "long"), _replayed(run, 250, "short")
+    together = fly_like_batch(depth_model, [short, long])
+    alone = [fly_like_batch(depth_model, [r])[0] for r in (short, long)]
+    assert [len(f.t) for f in together] == [250, 600]
+    for a, b in zip(together, alone, strict=True):
+        np.testing.assert_allclose(a.state(), b.state(), rtol=1e-12, atol=1e-9)
+        assert a.meta["diverged_at"] is None
+
+
+def test_a_divergence_after_a_shorter_record_ends_is_not_its_own(kcs):
+    model = paper_model(kcs)
+    unstable = AbkowitzModel(kcs, model.library,
+                             {**model.coefficients, "N": {**model.coefficients["N"], "r": 0.01}})
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=20, duration=800)])
+    (alone,) = fly_like_batch(unstable, [_replayed(run, 800, "long")])
+    assert alone.meta["diverged_at"] is not None
+    cut = int(np.searchsorted(alone.t, alone.meta["diverged_at"])) - 5
+    short, long = (fly_like_batch(unstable, [_replayed(run, cut, "short"),
+                                             _replayed(run, 800, "long")]))
+    assert short.meta["diverged_at"] is None and len(short.t) == cut
+    assert long.meta["diverged_at"] == alone.meta["diverged_at"]
+    assert np.all(np.isfinite(short["x"]))

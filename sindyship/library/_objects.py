@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -127,9 +128,9 @@ class TermLibrary:
         return Trajectory(data, name=record.name,
                           meta={**record.meta, "aligned": dict(self.delays)})
 
-    @property
+    @cached_property
     def variables(self) -> frozenset[str]:
-        """All variables the terms use."""
+        """All variables the terms use (computed once: the library is immutable)."""
         return _variables(self.terms)
 
     @property

@@ -257,16 +257,14 @@ class _Integrator:
         self.T = max(float(time_constant), 1e-9)
         self.rate_max = float(rate_max)
         self.delta_max = float(delta_max)
-        cur = getattr(dynamics, "current", (0.0, 0.0))
-        self.current = (float(cur[0]), float(cur[1]))
+        self.current = tuple(float(c) for c in getattr(dynamics, "current", (0.0, 0.0)))
         self.switching = getattr(dynamics, "switching", None)
-        # dynamics whose inputs vary in time (recorded channels) take the time and the members
+        # what the dynamics take: the time and members (recorded channels), the position,
+        # the rate the servo moves at
         self.time_varying = bool(getattr(dynamics, "time_varying", False))
-        # dynamics with forces that depend on where the ship is take its position, and those
-        # with forces in the rudder's rate of change take the rate the servo moves at
         self.uses_position = bool(getattr(dynamics, "uses_position", False))
         self.uses_rudder_rate = bool(getattr(dynamics, "uses_rudder_rate", False))
-        # A model identified on the commanded angle takes the command as its rudder input.
+        # a model identified on the commanded angle takes the command as its rudder input
         self.rudder_input = getattr(dynamics, "rudder_input", "actual")
         self.commands = list(commands)
         self.prescribed = np.array([c.prescribed for c in self.commands])
@@ -299,9 +297,7 @@ class _Integrator:
                                                         **extra)
         c, s = np.cos(psi), np.sin(psi)
         out = np.empty_like(y)
-        out[0] = a_u
-        out[1] = a_v
-        out[2] = a_r
+        out[0], out[1], out[2] = a_u, a_v, a_r
         out[3] = u * c - v * s + self.current[0]
         out[4] = u * s + v * c + self.current[1]
         out[5] = r
@@ -360,19 +356,16 @@ def _advance(integ: _Integrator, commands, time, y, h, members, t_out, samples, 
     y[:, members] = y_end
     tol = 1e-9 * max(1.0, h)
     flipped = None if branch is None else integ.branch(y_end) != branch
-    split = []
+    is_split = np.zeros(len(members), dtype=bool) if flipped is None else flipped.copy()
     for idx, j in enumerate(members):
+        if is_split[idx]:
+            continue
         cmd = commands[j]
-        if flipped is not None and flipped[idx]:
-            split.append(idx)
-            continue
-        if cmd.next_change(time) < time + h - tol:
-            split.append(idx)
-            continue
         g_end = cmd.event(y_end[:, idx])
-        if g_end is not None and g_end >= 0.0:
-            split.append(idx)
-    smooth = np.setdiff1d(np.arange(len(members)), split)
+        is_split[idx] = (cmd.next_change(time) < time + h - tol
+                         or (g_end is not None and g_end >= 0.0))
+    split = np.flatnonzero(is_split)
+    smooth = np.flatnonzero(~is_split)
     if smooth.size:
         sub_branch = None if branch is None else branch[smooth]
         f_end = integ.rhs(time + h, y_end[:, smooth], delta_c[smooth], members[smooth],
@@ -516,6 +509,17 @@ def _crossing(g, y0, f0, y1, f1, h) -> float:
     return b
 
 
+def _common_change(commands, members, time: float, h: float) -> float:
+    """The step, shortened to end where replayed rudders all change at one time inside it
+    (records sharing their sample times step there together, not split one by one)."""
+    tol = 1e-9 * max(1.0, h)
+    inside = {commands[j].next_change(time) for j in members if commands[j].prescribed}
+    inside = [c for c in inside if time + tol < c < time + h - tol]
+    if inside and max(inside) - min(inside) <= tol:
+        return min(inside) - time
+    return h
+
+
 def integrate(integ: _Integrator, commands: Sequence[RudderCommand], t: np.ndarray,
               state0: np.ndarray, h_max: float, check_divergence: bool, L: float, U0: float
               ) -> list[SimulationResult]:
@@ -574,6 +578,7 @@ def integrate(integ: _Integrator, commands: Sequence[RudderCommand], t: np.ndarr
         while k_next < n_out and active.any():
             h = min(h_max, t_end - time)
             members = np.flatnonzero(active)
+            h = _common_change(commands, members, time, h)
             t_new = time + h
             k_stop = int(np.searchsorted(t, t_new + 1e-9 * max(1.0, h), side="right"))
             samples = range(k_next, k_stop)
