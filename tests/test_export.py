@@ -270,6 +270,8 @@ def test_generated_module_passes_ruff(model, kcs, tmp_path):
     sources = {
         "kcs_sim.py": generate_python(model, source_note='A note, "quoted", with a \\ in it.'),
         "exotic_sim.py": generate_python(exotic, channels={"wind_speed": 0.5, "wind_dir": 1.0}),
+        "kcs_fast.py": generate_python(model, compiled=True),
+        "exotic_fast.py": generate_python(exotic, compiled=True),
     }
     for name, source in sources.items():
         (tmp_path / name).write_text(source)

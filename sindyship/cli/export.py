@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from pathlib import Path
 
@@ -32,6 +33,10 @@ def add_parser(sub) -> None:
                    f"({OUT_NOTE})")
     p.add_argument("--python", default=None, metavar="FILE",
                    help=f"write a standalone simulator module (numpy only) ({OUT_NOTE})")
+    p.add_argument("--compile", action="store_true",
+                   help="with --python: the simulator also carries its right-hand side as "
+                   "loops that numba compiles where the module runs (pip install "
+                   "\"sindyship[fast]\"); without numba it warns once and runs with numpy")
     p.add_argument("--precision", type=bounded_int(1, MAX_PRECISION), default=4,
                    help=f"significant digits of printed numbers, 1 to {MAX_PRECISION} "
                    "(default 4)")
@@ -77,6 +82,8 @@ def _check(args) -> None:
         if target is not None:
             check_output(target, inputs=inputs, label=f"--{option} {target}")
     check_inputs(inputs)
+    if args.compile and not args.python:
+        raise SindyshipInputError("--compile applies to the simulator; give --python FILE too.")
     if args.latex and args.python and Path(args.latex).resolve() == Path(args.python).resolve():
         raise SindyshipInputError(
             f"--latex and --python both name {args.latex}; give two different files."
@@ -95,15 +102,19 @@ def run(args) -> int:
     channels = _parse_channels(args.channel)
     if args.python:
         code = generate_python(model, source_note=f"Exported from {Path(args.model).name}.",
-                               channels=channels)
+                               channels=channels, compiled=args.compile)
         _write(args.python, code)
-        progress(f"wrote {args.python}: simulator of {model!r}")
+        progress(f"wrote {args.python}: simulator of {model!r}"
+                 + (" (compiled by numba where it runs)" if args.compile else ""))
+        if args.compile and importlib.util.find_spec("numba") is None:
+            progress("numba is not installed here: the simulator will run its numpy path until "
+                     'it is (pip install "sindyship[fast]")')
     if args.latex:
         _write(args.latex, latex_document_part(model, args.precision))
         progress(f"wrote {args.latex}: equations and coefficient table")
     if args.json:
         emit({"model": str(args.model), "latex": args.latex, "python": args.python,
-              "active_terms": model.n_active()})
+              "compiled": bool(args.python and args.compile), "active_terms": model.n_active()})
     elif not (args.latex or args.python):
         print(equations_text(model, args.precision))
     return 0

@@ -14,7 +14,9 @@ printed equations, the LaTeX and the generated code say exactly what the model c
 * :func:`generate_python` writes a module that needs only numpy: named coefficients, the
   right-hand side of eq. 14 with the rudder servo of eq. 12-13 and the kinematics, and the
   same fixed-step RK4 integrator as :mod:`sindyship.simulation` (steps split at command
-  changes and zig-zag check angles), so that it flies a model as sindyship does.
+  changes and zig-zag check angles), so that it flies a model as sindyship does; with
+  ``compiled=True`` it also carries the right-hand side and the RK4 step as loops that numba
+  compiles where the module runs (:mod:`sindyship.export._compiled`; numba stays optional).
 * ``sindyship export`` is :mod:`sindyship.cli.export`.
 
 Examples

@@ -15,6 +15,7 @@ from sympy.printing.numpy import NumPyPrinter
 from .. import __version__
 from ..targets import DOFS, abkowitz_mass_matrix
 from ..terms import channel_scaling
+from . import _compiled
 from .symbolic import _active_terms, _coriolis_polynomials, coefficient_symbol, force_expressions
 
 if TYPE_CHECKING:
@@ -61,7 +62,14 @@ def _constant(value: float) -> str:
 
 
 def _forces_source(model: AbkowitzModel, channel_names: Mapping[str, str]) -> list[str]:
-    """Body of the generated ``forces`` function: sympy cse of eq. 15, library order."""
+    """Body of the generated ``forces`` function: the channels, then :func:`_forces_body`."""
+    return [f"    ch_{name} = {const} if channels is None else channels[{_literal(name)}]"
+            for name, const in channel_names.items()] + _forces_body(model, channel_names)
+
+
+def _forces_body(model: AbkowitzModel, channel_names: Mapping[str, str]) -> list[str]:
+    """Lines computing and returning ``X, Y, N`` of eq. 15 from ``du, v, r, delta, psi`` and
+    ``ch_<channel>``: sympy cse, terms in library order."""
     forces = force_expressions(model)
     rename = {sympy.Symbol(name, real=True): sympy.Symbol(f"ch_{name}", real=True)
               for name in channel_names}
@@ -69,8 +77,7 @@ def _forces_source(model: AbkowitzModel, channel_names: Mapping[str, str]) -> li
     replacements, reduced = sympy.cse(exprs, symbols=sympy.numbered_symbols("p"),
                                       optimizations="basic")
     printer = _Printer({"fully_qualified_modules": True})
-    lines = [f"    ch_{name} = {const} if channels is None else channels[{_literal(name)}]"
-             for name, const in channel_names.items()]
+    lines = []
     if replacements:
         lines.append("    # Products shared by the terms (sympy cse)")
     for symbol, expr in replacements:
@@ -118,6 +125,26 @@ def _coriolis_source(ship: Ship) -> tuple[list[str], list[str]]:
             parts.append(" * ".join([const, *factors]))
         lines.append(f"    {dof}_c = " + (" + ".join(parts) if parts else "0.0 * un"))
     return constants, lines
+
+
+def _accelerations_body(forces_call: str, coriolis_lines: list[str]) -> list[str]:
+    """Lines of eq. 14 from SI ``u, v, r``: the forces (``forces_call``), the Coriolis terms,
+    the inverse mass matrix, and the return of the SI accelerations."""
+    return [
+        "    un = u / U0",
+        "    vn = v / U0",
+        "    rn = r * L / U0",
+        f"    X, Y, N = {forces_call}",
+        "    # Coriolis terms, rigid body plus added mass (right-hand side of eq. 14)",
+        *coriolis_lines,
+        "    X = X + X_c",
+        "    Y = Y + Y_c",
+        "    N = N + N_c",
+        "    a_u = INV_UU * X",
+        "    a_v = INV_VV * Y + INV_VR * N",
+        "    a_r = INV_RV * Y + INV_RR * N",
+        "    return a_u * ACC_SCALE, a_v * ACC_SCALE, a_r * ACC_SCALE / L",
+    ]
 
 
 _RUNTIME = '''
@@ -310,7 +337,7 @@ def _kernel_source() -> str:
 
 
 def generate_python(model: AbkowitzModel, *, source_note: str = "",
-                    channels: Mapping[str, float] | None = None) -> str:
+                    channels: Mapping[str, float] | None = None, compiled: bool = False) -> str:
     """Source of a standalone simulator module for a model (imports numpy only).
 
     The module holds the coefficients as named constants and in ``COEFFICIENTS``
@@ -324,6 +351,12 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     changes and at zig-zag check-angle crossings, the protocol's divergence rule), so the
     module flies a model as sindyship does.
 
+    With ``compiled=True`` the module also holds the right-hand side and the RK4 step as
+    scalar loops over the batch, compiled by numba (``numba.njit``, cached beside the module
+    file) where numba can be imported when the module runs, and ``rhs``, ``simulate`` and
+    ``zigzag`` run them (module constant ``COMPILED``); where it cannot, the module warns
+    once and runs its numpy functions, which give the same numbers more slowly.
+
     Parameters
     ----------
     model : AbkowitzModel
@@ -332,6 +365,8 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     channels : dict, optional
         Constant values (library scaling) of extra channels the library uses besides the
         heading ``psi`` (e.g. ``n``), as for :meth:`AbkowitzModel.dynamics`.
+    compiled : bool
+        Add the numba-compiled right-hand side (numba stays optional where the module runs).
 
     Returns
     -------
@@ -396,8 +431,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "",
         "The state is [u, v, r, x, y, psi, delta] in SI units: body-fixed surge and sway [m/s]",
         "(v positive to starboard), yaw rate [rad/s], earth-fixed x north and y east [m],",
-        "heading [rad] and actual rudder angle [rad] (positive turns to starboard).  This",
-        "module needs only numpy; it does not import sindyship.",
+        *(_compiled.NEEDS_COMPILED if compiled else _compiled.NEEDS_PLAIN),
         "",
         "Examples",
         "--------",
@@ -412,10 +446,11 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     ]
 
     lines = [*doc, "", "from __future__ import annotations", "", "import math",
+             *(_compiled.STDLIB_IMPORTS if compiled else []),
              "from collections.abc import Callable, Mapping, Sequence",
              "from typing import NamedTuple",
              "",
-             "import numpy as np", ""]
+             "import numpy as np", *(_compiled.NUMBA_IMPORT if compiled else []), ""]
     lines += [
         "# ---------------------------------------------------------------------------------",
         "# Ship, rudder servo and integration",
@@ -501,20 +536,16 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "    mass, with the Munk moment), times the inverse mass matrix; ``delta`` is the rudder",
         "    angle the forces see.  Vectorised over numpy arrays.",
         '    """',
-        "    un = u / U0",
-        "    vn = v / U0",
-        "    rn = r * L / U0",
-        "    X, Y, N = forces(un - 1.0, vn, rn, delta, psi, channels)",
-        "    # Coriolis terms, rigid body plus added mass (right-hand side of eq. 14)",
-        *coriolis_lines,
-        "    X = X + X_c",
-        "    Y = Y + Y_c",
-        "    N = N + N_c",
-        "    a_u = INV_UU * X",
-        "    a_v = INV_VV * Y + INV_VR * N",
-        "    a_r = INV_RV * Y + INV_RR * N",
-        "    return a_u * ACC_SCALE, a_v * ACC_SCALE, a_r * ACC_SCALE / L",
+        *_accelerations_body("forces(un - 1.0, vn, rn, delta, psi, channels)", coriolis_lines),
     ]
+    runtime, tail = _RUNTIME.rstrip(), []
+    if compiled:
+        runtime = _compiled.compiled_runtime(runtime)
+        tail = _compiled.compiled_section(
+            channel_names, _forces_body(model, channel_names),
+            _accelerations_body(_compiled.forces_call(channel_names), coriolis_lines))
     # Exotic libraries (long channel names, many factors) can make a line long.
-    lines = [line if len(line) <= 99 else line + "  # noqa: E501" for line in lines]
-    return "\n".join(lines) + "\n" + _kernel_source() + _RUNTIME.rstrip() + "\n"
+    lines, tail = ([line if len(line) <= 99 else line + "  # noqa: E501" for line in part]
+                   for part in (lines, tail))
+    return ("\n".join(lines) + "\n" + _kernel_source() + runtime + "\n"
+            + "".join(line + "\n" for line in tail))
