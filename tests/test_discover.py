@@ -124,6 +124,25 @@ def test_a_lagging_rudder_sensor_is_discovered_and_its_effect_flies(symmetric, l
         assert distance.mean() < 0.2
 
 
+def test_a_delay_candidate_re_evaluates_only_the_delayed_columns_and_equals_a_full_design(
+        symmetric, lagged):
+    from sindyship.diagnose.discovery import _delay_errors, _lomo, _unshifted
+    from sindyship.identify import design
+
+    train, _ = lagged
+    library = load_library("abkowitz")
+    settings = {"rudder_signal": "actual", "derivative": "five-point", "window": 21.0}
+    problems = design(train, symmetric, library, **settings)
+    base = (problems, _unshifted(train, symmetric, library, settings))
+    fast = _delay_errors(train, symmetric, library, "delta", 3.7, settings, base)
+    delayed = TermLibrary(library.name, library.system, library.description, library.terms,
+                          delays={"delta": 3.7})
+    full = design(train, symmetric, delayed, **settings)
+    for dof in "XYN":
+        np.testing.assert_array_equal(fast[dof], _lomo(full[dof]))
+        assert not np.allclose(fast[dof], _lomo(problems[dof]))  # the delay moved the fit
+
+
 def test_nothing_is_discovered_in_records_flown_by_an_abkowitz_model(kcs):
     from sindyship.manoeuvres import fly
     from sindyship.model import paper_model

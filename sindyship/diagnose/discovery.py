@@ -34,13 +34,13 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .._io import clean_json
 from ..identify import design, resolve_library
-from ..library import DOFS, Effect, TermLibrary
+from ..library import DOFS, Effect, TermLibrary, record_variables
 from ..optimizers import ForwardSelection, GroupedProblem, one_blas_thread
 from ..ships import Ship
 from ..smoothing import resolve_smoothing, smooth_records
@@ -322,17 +322,39 @@ def _delay_grid(ship: Ship, dt: float) -> np.ndarray:
     return np.concatenate([-half[::-1], half])
 
 
-def _delay_errors(records, ship, library, channel, tau, settings):
+def _delay_errors(records, ship, library, channel, tau, settings, base):
     """Leave-one-manoeuvre-out errors of the library refitted with ``channel`` read ``tau``
-    seconds later."""
+    seconds later.
+
+    ``base`` is ``(problems, variables)``: the library's design and each record's variables.
+    Only the columns of terms in a variable the delay moves are evaluated again; the others
+    and the targets are the base design's (the design of the delayed library, unchanged).
+    """
+    problems, unshifted = base
     delays = {**library.delays, channel: tau}
     shifted = TermLibrary(library.name, library.system, library.description, library.terms,
                           effects=library.effects, delays=delays)
-    problems = design(records, ship, shifted, **settings)
-    return {dof: _lomo(problems[dof]) for dof in DOFS}
+    features = {dof: problems[dof].features.copy(order="F") for dof in DOFS}
+    start = 0
+    for record, before in zip(records, unshifted, strict=True):
+        stop = start + record.n_samples
+        after = record_variables(record, shifted, ship.L, ship.U0, settings["rudder_signal"])
+        moved = {name for name in after if not np.array_equal(after[name], before[name])}
+        for dof in DOFS:
+            for j, term in enumerate(library.terms[dof]):
+                if term.variables & moved:
+                    features[dof][start:stop, j] = term.evaluate(after)
+        start = stop
+    return {dof: _lomo(replace(problems[dof], features=features[dof])) for dof in DOFS}
 
 
-def _search_delay(records, ship, library, channel, e0, settings, n_jobs=1):
+def _unshifted(records, ship, library, settings) -> list[dict[str, np.ndarray]]:
+    """Each record's variables as the library reads them (the base of :func:`_delay_errors`)."""
+    return [record_variables(r, library, ship.L, ship.U0, settings["rudder_signal"])
+            for r in records]
+
+
+def _search_delay(records, ship, library, channel, e0, settings, problems, n_jobs=1):
     """The delay of ``channel`` with the least leave-one-manoeuvre-out error, its errors and
     the error curve over the grid (grid points refitted by ``n_jobs`` joblib workers)."""
     from joblib import Parallel, delayed
@@ -343,13 +365,14 @@ def _search_delay(records, ship, library, channel, e0, settings, n_jobs=1):
     def cost(errors):
         return float(np.mean([errors[d] @ errors[d] / sse0[d] for d in DOFS]))
 
+    base = (problems, _unshifted(records, ship, library, settings))
     tried = {0.0: (1.0, e0)}
     grid = _delay_grid(ship, dt)
     reach = float(grid[-1])
     while True:
         todo = [float(tau) for tau in grid if float(tau) not in tried]
         refits = Parallel(n_jobs=n_jobs)(
-            delayed(_delay_errors)(records, ship, library, channel, tau, settings)
+            delayed(_delay_errors)(records, ship, library, channel, tau, settings, base)
             for tau in todo)
         for tau, errors in zip(todo, refits, strict=True):
             tried[tau] = (cost(errors), errors)
@@ -371,7 +394,8 @@ def _search_delay(records, ship, library, channel, e0, settings, n_jobs=1):
         if A > 0:
             vertex = float(np.clip(-B / (2 * A), a, c))
             if vertex not in tried and abs(vertex) > 1e-9:
-                errors = _delay_errors(records, ship, library, channel, vertex, settings)
+                errors = _delay_errors(records, ship, library, channel, vertex, settings,
+                                       base)
                 tried[vertex] = (cost(errors), errors)
     best = min(tried, key=lambda t: tried[t][0])
     curve = [(t, tried[t][0]) for t in sorted(tried)]
@@ -535,7 +559,7 @@ def _search(records, ship, library, settings, threshold, n_jobs=1
         if channel in library.delays or not all(r.has(channel) for r in records):
             continue  # a channel already delayed keeps its delay
         tau, errors, curve = _search_delay(records, ship, library, channel, e0, settings,
-                                           n_jobs)
+                                           problems, n_jobs)
         if abs(tau) < dt:  # shorter than a sample: not a delay the records can resolve
             continue
         findings.append(_finding(f"delay:{channel}", {}, {channel: tau}, e0, errors, noise,
