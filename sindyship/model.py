@@ -9,6 +9,7 @@ simulator.  Saved models are JSON text (never pickle).
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import os
@@ -114,6 +115,35 @@ class AbkowitzDynamics:
         return a_u * scale, a_v * scale, a_r * scale / L
 
 
+def _compiled_forces():
+    """The compiled force loop (:mod:`sindyship._forces_compiled`), imported when first used."""
+    from ._forces_compiled import forces
+
+    return forces
+
+
+def _compiled_tables(bases, factors, slots):
+    """``(variable names, integer tables)`` for :mod:`sindyship._forces_compiled`, or None when
+    numba is not there, compiling is switched off (``SINDYSHIP_NO_COMPILE=1``) or a factor's
+    base is a number."""
+    if os.environ.get("SINDYSHIP_NO_COMPILE") == "1" or importlib.util.find_spec("numba") is None:
+        return None
+    if any(not isinstance(base.base, str) for base, _, _ in bases):
+        return None
+    from ._forces_compiled import FUNCTION_CODES
+
+    names = sorted({base.base for base, _, _ in bases})
+    base_variable = np.array([names.index(base.base) for base, _, _ in bases], dtype=np.int64)
+    base_function = np.array([FUNCTION_CODES[base.function] for base, _, _ in bases],
+                             dtype=np.int64)
+    factor_base = np.empty(len(factors), dtype=np.int64)
+    for k, (_, rows, _) in enumerate(bases):
+        factor_base[rows] = k
+    factor_power = np.array([f.power for f in factors], dtype=np.int64)
+    return names, (base_variable, base_function, factor_base, factor_power,
+                   slots.astype(np.int64))
+
+
 @dataclass
 class AbkowitzModel:
     """An identified Abkowitz model (paper eq. 14-15).
@@ -194,6 +224,7 @@ class AbkowitzModel:
                 if c != 0.0:
                     weights[row, index[term.text]] += c
         self._weights = weights
+        self._compiled = _compiled_tables(self._bases, factors, slots)
 
     # ----------------------------------------------------------------------------------------
     def coefficient_vector(self, dof: str) -> np.ndarray:
@@ -215,6 +246,13 @@ class AbkowitzModel:
         base = np.asarray(values["du"], dtype=float)
         if not self._factors:
             return {dof: 0.0 * base for dof in DOFS}
+        if self._compiled is not None and all(v in values for v in self._compiled[0]):
+            names, tables = self._compiled
+            stacked = np.empty((len(names), base.size))
+            for k, name in enumerate(names):
+                stacked[k] = np.ravel(values[name])
+            forces = _compiled_forces()(stacked, *tables, self._weights)
+            return {dof: forces[row].reshape(base.shape) for row, dof in enumerate(DOFS)}
         rows = np.ones((len(self._factors) + 1, base.size))
         for factor, where, powers in self._bases:
             column = np.ravel(evaluate_factor(factor, values))

@@ -1,0 +1,53 @@
+"""The compiled force loop of an identified model gives the numpy path's numbers."""
+
+from __future__ import annotations
+
+import importlib.util
+
+import numpy as np
+import pytest
+
+from sindyship.evaluation import fly_like_batch
+from sindyship.library import TermLibrary
+from sindyship.model import AbkowitzModel, paper_model
+
+pytestmark = pytest.mark.skipif(importlib.util.find_spec("numba") is None,
+                                reason="numba is not installed (pip install sindyship[fast])")
+
+TERMS = {"X": ["1", "du", "du^2", "v^2", "r^2", "delta^2", "v r", "abs(v) v", "cos(psi)"],
+         "Y": ["1", "v", "r", "delta", "v^3", "v^2 r", "abs(r) r", "sign(v) delta^2",
+               "sin(psi)"],
+         "N": ["1", "v", "r", "delta", "r^3", "v r^2", "abs(v) r", "sign(r) v^2", "du delta^3"]}
+
+
+def _model(kcs, seed=0):
+    rng = np.random.default_rng(seed)
+    library = TermLibrary("functions", "prime-I", "", TERMS)
+    coefficients = {dof: {t: float(rng.normal()) * 1e-3 for t in TERMS[dof]} for dof in "XYN"}
+    return AbkowitzModel(kcs, library, coefficients)
+
+
+def test_compiled_forces_equal_the_numpy_path(kcs, monkeypatch):
+    compiled = _model(kcs)
+    monkeypatch.setenv("SINDYSHIP_NO_COMPILE", "1")
+    plain = _model(kcs)
+    assert compiled._compiled is not None and plain._compiled is None
+    rng = np.random.default_rng(1)
+    values = {name: rng.normal(size=(4, 5)) * 0.3 for name in ("du", "v", "r", "delta", "psi")}
+    values["v"][0, 0] = 0.0  # sign(0) = 0 on both paths
+    a, b = compiled.forces_from_values(values), plain.forces_from_values(values)
+    for dof in "XYN":
+        assert a[dof].shape == (4, 5)
+        np.testing.assert_allclose(a[dof], b[dof], rtol=1e-13, atol=1e-18)
+    scalar = compiled.forces_from_values({k: 0.1 for k in values})
+    assert scalar["Y"].shape == ()
+
+
+def test_compiled_flights_equal_the_numpy_path(kcs, protocol_runs, monkeypatch):
+    compiled = fly_like_batch(paper_model(kcs), protocol_runs["test"])
+    monkeypatch.setenv("SINDYSHIP_NO_COMPILE", "1")
+    plain = fly_like_batch(paper_model(kcs), protocol_runs["test"])
+    for a, b in zip(compiled, plain, strict=True):
+        gap = np.hypot(a["x"] - b["x"], a["y"] - b["y"]) / kcs.L
+        assert np.nanmax(gap) < 1e-9
+        assert a.meta["diverged_at"] == b.meta["diverged_at"]
