@@ -1,7 +1,9 @@
 """The MMG manoeuvring model (paper section 2.1): hull, propeller, rudder and Coriolis forces.
 
 Every force is written once, in :func:`force_components`; the simulator's right-hand side
-(:class:`MMGModel`) and any force breakdown call that same function.  Inputs and outputs are
+(:class:`MMGModel`) and any force breakdown call that same function.  It is the reference of
+the compiled copy :mod:`sindyship._mmg_compiled` that the plain model's accelerations run
+where numba is installed (:class:`MMGModel`, Notes).  Inputs and outputs are
 non-dimensional in Prime II with the constant design speed U0 (u' = u / U0, v' = v / U0,
 r' = r L / U0); all functions accept numpy arrays (vectorised over samples or manoeuvres).
 
@@ -15,6 +17,8 @@ Two hull forms are supported:
 
 from __future__ import annotations
 
+import functools
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -228,6 +232,19 @@ class MMGModel:
         and ``wind_dir`` [rad, from] add the wind force
         (:func:`sindyship.conditions.wind_force`).
 
+    Notes
+    -----
+    With numba installed (``pip install "sindyship[fast]"``), :meth:`accelerations` and
+    :meth:`switching` of the plain model -- no ``extra_forces``, no ``conditions``, no
+    ``bank`` -- run a compiled copy of eq. 1-11 (:mod:`sindyship._mmg_compiled`): both hull
+    forms, speed references, Coriolis forms and wake models, ``rudder_offset``, ``stall``,
+    ``current`` and a given or free ``branch``, on float64 (or integer) numbers and numpy
+    arrays.  It agrees with the numpy functions of this module to rounding (below 1e-15 of
+    each acceleration's scale).  Other models and inputs (pandas, sympy, float32), and every
+    model built while the environment variable ``SINDYSHIP_NO_COMPILE`` is ``1``, run the
+    numpy functions.  numba is imported at the first compiled call, which also loads the
+    machine code from numba's cache or, once per installation, compiles it (about 1.5 s).
+
     Examples
     --------
     >>> from sindyship.ships import load_ship
@@ -256,9 +273,19 @@ class MMGModel:
         scale = np.array([[1.0], [1.0], [1.0 / ship.L]]) * ship.U0**2 / ship.L
         object.__setattr__(self, "_scaled_inverse_mass",
                            scale * np.linalg.inv(mass_matrix(ship)))
+        # the compiled accelerations (see Notes): their parameter vector, made at the first call
+        plain = not self.extra_forces and self.conditions is None and self.bank is None
+        refused = os.environ.get("SINDYSHIP_NO_COMPILE") == "1"
+        object.__setattr__(self, "_compile", plain and not refused)
+        object.__setattr__(self, "_compiled_parameters", None)
 
     def switching(self, state: np.ndarray) -> np.ndarray:
-        """beta_R at SI states (7, k): the sign selects gamma_R (see :func:`force_components`)."""
+        """beta_R at SI states (7, k): the sign selects gamma_R (see :func:`force_components`);
+        compiled for the plain model where numba is installed, as :meth:`accelerations`."""
+        if self._compile and (code := self._compiled_code()) is not None:
+            beta_R = code[0].switching(code[1], state)
+            if beta_R is not None:
+                return beta_R
         ship = self.ship
         return rudder_inflow_angle(ship, state[0] / ship.U0, state[1] / ship.U0,
                                    state[2] * ship.L / ship.U0)
@@ -305,7 +332,12 @@ class MMGModel:
                       position=None):
         """Accelerations (du/dt [m/s^2], dv/dt [m/s^2], dr/dt [rad/s^2]) at SI state values;
         with :attr:`conditions`, those at time ``t`` of the flights ``members``; with a bank,
-        at the ``position`` (x, y) [m]."""
+        at the ``position`` (x, y) [m].  The plain model runs compiled code where numba is
+        installed (see Notes of :class:`MMGModel`); the lines below are the reference."""
+        if self._compile and (code := self._compiled_code()) is not None:
+            acc = code[0].accelerations(code[1], u, v, r, delta, branch)
+            if acc is not None:
+                return acc
         now = self.conditions.at(t, members) if self.conditions is not None else None
         parts = self.forces(u, v, r, delta, psi, branch=branch, now=now, position=position)
         X = Y = N = 0.0
@@ -316,3 +348,25 @@ class MMGModel:
         # M^-1 (paper eq. 1) and the Prime II -> SI scaling folded into one matrix
         S = self._scaled_inverse_mass
         return S[0, 0] * X, S[1, 1] * Y + S[1, 2] * N, S[2, 1] * Y + S[2, 2] * N
+
+    def _compiled_code(self):
+        """``(sindyship._mmg_compiled, this model's parameter vector)``, or None where numba
+        cannot be imported."""
+        compiled = _compiled_module()
+        if compiled is None:
+            return None
+        p = self._compiled_parameters
+        if p is None:
+            p = compiled.parameters(self.ship, self._scaled_inverse_mass, self.rudder_offset,
+                                    self.stall)
+            object.__setattr__(self, "_compiled_parameters", p)
+        return compiled, p
+
+
+@functools.cache
+def _compiled_module():
+    """:mod:`sindyship._mmg_compiled` if numba can be imported, else None; imported at the
+    first compiled call, not with sindyship (numba takes longer to import than sindyship)."""
+    from . import _mmg_compiled
+
+    return _mmg_compiled if _mmg_compiled.COMPILED else None
