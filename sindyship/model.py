@@ -9,6 +9,7 @@ simulator.  Saved models are JSON text (never pickle).
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import json
 import math
@@ -32,6 +33,8 @@ from .terms import Factor, evaluate_factor
 from .trajectory import Trajectory
 
 FORMAT_VERSION = 2
+#: The variables a flight's state gives (the first rows of the compiled tables' variables).
+STATE_VARIABLES = ("du", "v", "r", "delta", "psi")
 
 
 def channel_series(records, names, L: float, U0: float) -> ChannelSeries:
@@ -92,6 +95,13 @@ class AbkowitzDynamics:
         model = self.model
         ship = model.ship
         U0, L = ship.U0, ship.L
+        if model._compiled is not None and _plain_states(u, v, r, delta, psi):
+            extra = self._extra_variables(u.shape[0], t, members, position, rudder_rate)
+            names, tables = model._compiled
+            a = _compiled()["accelerations"](u, v, r, delta, psi, extra, *tables,
+                                             model._weights, model._inertia,
+                                             model.inverse_mass, U0, L)
+            return a[0], a[1], a[2]
         un = u / U0
         values = {"du": un - 1.0, "v": v / U0, "r": r * L / U0, "delta": delta, "psi": psi}
         values.update(self.channels)
@@ -115,11 +125,40 @@ class AbkowitzDynamics:
         return a_u * scale, a_v * scale, a_r * scale / L
 
 
-def _compiled_forces():
-    """The compiled force loop (:mod:`sindyship._forces_compiled`), imported when first used."""
-    from ._forces_compiled import forces
+    def _extra_variables(self, n_states, t, members, position, rudder_rate) -> np.ndarray:
+        """The variables beyond the state's (library scaling), one row each in the compiled
+        tables' order (:func:`_compiled_tables`), as :meth:`accelerations` forms them."""
+        names = self.model._compiled[0][len(STATE_VARIABLES):]
+        extra = np.zeros((len(names), n_states))
+        if not names:
+            return extra
+        recorded = self.series.at(t, members) if self.series is not None else {}
+        L, U0 = self.model.ship.L, self.model.ship.U0
+        for k, name in enumerate(names):
+            if name in recorded:
+                extra[k] = recorded[name]
+            elif name in self.channels:
+                extra[k] = self.channels[name]
+            elif name in ("x", "y") and position is not None:
+                extra[k] = position[0 if name == "x" else 1]
+            elif name == "delta_rate" and rudder_rate is not None:
+                extra[k] = rudder_rate * L / U0
+        return extra
 
-    return forces
+
+def _plain_states(*arrays) -> bool:
+    """Whether the compiled accelerations take these state values: 1-D float64 arrays."""
+    return all(isinstance(a, np.ndarray) and a.ndim == 1 and a.dtype == np.float64
+               for a in arrays)
+
+
+@functools.cache
+def _compiled() -> dict:
+    """The compiled force and acceleration loops (:mod:`sindyship._forces_compiled`)."""
+    from . import _forces_compiled
+
+    return {"forces": _forces_compiled.forces,
+            "accelerations": _forces_compiled.accelerations}
 
 
 def _compiled_tables(bases, factors, slots):
@@ -132,7 +171,8 @@ def _compiled_tables(bases, factors, slots):
         return None
     from ._forces_compiled import FUNCTION_CODES
 
-    names = sorted({base.base for base, _, _ in bases})
+    used = {base.base for base, _, _ in bases}
+    names = list(STATE_VARIABLES) + sorted(used - set(STATE_VARIABLES))
     base_variable = np.array([names.index(base.base) for base, _, _ in bases], dtype=np.int64)
     base_function = np.array([FUNCTION_CODES[base.function] for base, _, _ in bases],
                              dtype=np.int64)
@@ -225,6 +265,11 @@ class AbkowitzModel:
                     weights[row, index[term.text]] += c
         self._weights = weights
         self._compiled = _compiled_tables(self._bases, factors, slots)
+        self._compiled_reads = {base.base for base, _, _ in self._bases}
+        inertia = self.ship.prime_i_inertia()
+        m, mxg = inertia["m"], inertia["m"] * inertia["x_G"]
+        self._inertia = np.array([m - inertia["Y_vdot"], mxg - inertia["Y_rdot"],
+                                  m - inertia["X_udot"], inertia["X_udot"] - inertia["Y_vdot"]])
 
     # ----------------------------------------------------------------------------------------
     def coefficient_vector(self, dof: str) -> np.ndarray:
@@ -246,12 +291,13 @@ class AbkowitzModel:
         base = np.asarray(values["du"], dtype=float)
         if not self._factors:
             return {dof: 0.0 * base for dof in DOFS}
-        if self._compiled is not None and all(v in values for v in self._compiled[0]):
+        if self._compiled is not None and all(v in values for v in self._compiled_reads):
             names, tables = self._compiled
-            stacked = np.empty((len(names), base.size))
+            stacked = np.zeros((len(names), base.size))
             for k, name in enumerate(names):
-                stacked[k] = np.ravel(values[name])
-            forces = _compiled_forces()(stacked, *tables, self._weights)
+                if name in values:
+                    stacked[k] = np.ravel(values[name])
+            forces = _compiled()["forces"](stacked, *tables, self._weights)
             return {dof: forces[row].reshape(base.shape) for row, dof in enumerate(DOFS)}
         rows = np.ones((len(self._factors) + 1, base.size))
         for factor, where, powers in self._bases:

@@ -51,3 +51,28 @@ def test_compiled_flights_equal_the_numpy_path(kcs, protocol_runs, monkeypatch):
         gap = np.hypot(a["x"] - b["x"], a["y"] - b["y"]) / kcs.L
         assert np.nanmax(gap) < 1e-9
         assert a.meta["diverged_at"] == b.meta["diverged_at"]
+
+
+def test_compiled_accelerations_take_channels_positions_and_the_rudder_rate(kcs, monkeypatch):
+    from sindyship.model import AbkowitzDynamics, ChannelSeries
+
+    terms = {dof: list(TERMS[dof]) for dof in "XYN"}
+    terms["Y"] += ["depth v", "x", "delta_rate"]
+    terms["N"] += ["y r", "delta_rate", "wind"]
+    library = TermLibrary("channels", "prime-I", "", terms)
+    rng = np.random.default_rng(2)
+    coefficients = {dof: {t: float(rng.normal()) * 1e-4 for t in terms[dof]} for dof in "XYN"}
+    series = ChannelSeries(np.array([0.0, 10.0]), {"depth": rng.normal(size=(3, 2))})
+    state = [rng.normal(size=3) * s for s in (0.5, 0.5, 0.01, 0.2, 1.0)]
+    state[0] += 7.0
+    position = (rng.normal(size=3) * 100, rng.normal(size=3) * 100)
+    got = []
+    for switch in ("0", "1"):
+        monkeypatch.setenv("SINDYSHIP_NO_COMPILE", switch)
+        model = AbkowitzModel(kcs, library, coefficients)
+        assert (model._compiled is None) == (switch == "1")
+        dynamics = AbkowitzDynamics(model, {"wind": 0.3}, series)
+        got.append(dynamics.accelerations(*state, t=4.0, members=np.array([2, 0, 1]),
+                                          position=position, rudder_rate=state[3] * 0.1))
+    for a, b in zip(*got, strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-15)
