@@ -177,16 +177,97 @@ def fly_like_batch(dynamics, records: Sequence[Trajectory], *, step: float | Non
     sample is not its own.  The states at the record's samples are those of a flight of the
     record alone, up to the step splitting (the batch lands on the common sample times).
     """
-    records = _aligned(dynamics, records)
-    out: list[Trajectory | None] = [None] * len(records)
-    for grid, idx in _common_grids(records):
-        state0 = np.column_stack([records[i].state()[:, 0] for i in idx])
-        flier = _dynamics_for(dynamics, [_held_to(records[i], grid) for i in idx])
-        results = simulate_batch(flier, [command_for(records[i]) for i in idx], grid, state0,
-                                 step=step)
-        for i, res in zip(idx, results, strict=True):
-            out[i] = result_to_trajectory(_cut(res, len(records[i].t)), records[i].name)
-    return out  # type: ignore[return-value]
+    return fly_jobs_like([(dynamics, records)], step=step)[0]
+
+
+def fly_jobs_like(jobs: Sequence[tuple[object, Sequence[Trajectory]]], *,
+                  step: float | None = None) -> list[list[Trajectory]]:
+    """Fly several ``(dynamics or fitted model, records)`` jobs as :func:`fly_like_batch`
+    flies one, in as few integrations as possible.
+
+    Records of one job that share a grid fly in one batch; fitted models of one ship and
+    rudder signal fly side by side in that batch too (their accelerations evaluated each on
+    its own members, :class:`_Stacked`), so the integrator's work per step is shared by
+    every model a diagnosis compares.  Each flight is that of its model alone.
+
+    Returns
+    -------
+    list of list of Trajectory
+        Per job, in the order of its records.
+    """
+    out: list[list] = [[None] * len(records) for _, records in jobs]
+    groups: dict[tuple, list] = {}
+    for i, (flier, records) in enumerate(jobs):
+        key = (("model", id(flier.ship), flier.rudder_signal) if _stackable(flier)
+               else ("own", i))
+        for k, record in enumerate(_aligned(flier, records)):
+            groups.setdefault(key, []).append((i, k, flier, record))
+    for members in groups.values():
+        for grid, idx in _common_grids([m[3] for m in members]):
+            batch = [members[j] for j in idx]
+            state0 = np.column_stack([m[3].state()[:, 0] for m in batch])
+            results = simulate_batch(_batch_dynamics(batch, grid),
+                                     [command_for(m[3]) for m in batch], grid, state0,
+                                     step=step)
+            for (i, k, _, record), res in zip(batch, results, strict=True):
+                out[i][k] = result_to_trajectory(_cut(res, len(record.t)), record.name)
+    return out
+
+
+def _stackable(flier) -> bool:
+    """Whether ``flier`` is a fitted model (it makes dynamics that fly beside others')."""
+    return all(hasattr(flier, name) for name in ("dynamics", "library", "rudder_signal"))
+
+
+def _batch_dynamics(batch, grid: np.ndarray):
+    """The dynamics of a batch of ``(job, index, flier, record)`` members ordered by job: the
+    flier's own with one flier, else its models' side by side."""
+    parts, start = [], 0
+    for stop in range(1, len(batch) + 1):
+        if stop == len(batch) or batch[stop][0] != batch[start][0]:
+            held = [_held_to(m[3], grid) for m in batch[start:stop]]
+            parts.append((_dynamics_for(batch[start][2], held), start, stop))
+            start = stop
+    return parts[0][0] if len(parts) == 1 else _Stacked(tuple(parts))
+
+
+class _Stacked:
+    """Several fitted models' dynamics flown in one batch, each on a contiguous range of its
+    members (same ship and rudder signal; simulator dynamics, see
+    :func:`sindyship.simulation.simulate_batch`)."""
+
+    time_varying = True  # the integrator then passes the members, which select the models
+
+    def __init__(self, parts: tuple):
+        self.parts = parts
+        first = parts[0][0]
+        self.ship = first.ship
+        self.rudder_input = first.rudder_input
+        self.uses_position = any(d.uses_position for d, _, _ in parts)
+        self.uses_rudder_rate = any(d.uses_rudder_rate for d, _, _ in parts)
+
+    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None,
+                      position=None, rudder_rate=None):
+        """Each model's accelerations on its members (``members`` ascending, as the
+        integrator passes them)."""
+        out = (np.empty_like(u), np.empty_like(u), np.empty_like(u))
+        for dynamics, start, stop in self.parts:
+            lo, hi = np.searchsorted(members, (start, stop))
+            if lo == hi:
+                continue
+            part = slice(lo, hi)
+            extra = {}
+            if dynamics.time_varying:
+                extra = {"t": t, "members": members[part] - start}
+            if position is not None:
+                extra["position"] = (position[0][part], position[1][part])
+            if rudder_rate is not None:
+                extra["rudder_rate"] = rudder_rate[part]
+            accelerations = dynamics.accelerations(u[part], v[part], r[part], delta[part],
+                                                   psi[part], **extra)
+            for whole, piece in zip(out, accelerations, strict=True):
+                whole[part] = piece
+        return out
 
 
 def _common_grids(records: Sequence[Trajectory]) -> list[tuple[np.ndarray, list[int]]]:

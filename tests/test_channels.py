@@ -98,3 +98,21 @@ def test_a_divergence_after_a_shorter_record_ends_is_not_its_own(kcs):
     assert short.meta["diverged_at"] is None and len(short.t) == cut
     assert long.meta["diverged_at"] == alone.meta["diverged_at"]
     assert np.all(np.isfinite(short["x"]))
+
+
+def test_models_flown_side_by_side_fly_as_alone(kcs, depth_model, protocol_runs):
+    from sindyship.evaluation import fly_jobs_like
+
+    model = paper_model(kcs)
+    unstable = AbkowitzModel(kcs, model.library,
+                             {**model.coefficients, "N": {**model.coefficients["N"], "r": 0.01}})
+    test = protocol_runs["test"]
+    deep = [_with_depth(r, np.linspace(0.0, 100.0, r.n_samples)) for r in test]
+    jobs = [(model, test), (unstable, test[:2]), (depth_model, deep), (model.dynamics(), test)]
+    together = fly_jobs_like(jobs)
+    assert [len(j) for j in together] == [3, 2, 3, 3]
+    assert any(f.meta["diverged_at"] is not None for f in together[1])
+    for flights, (flier, records) in zip(together, jobs, strict=True):
+        for a, b in zip(flights, fly_like_batch(flier, records), strict=True):
+            np.testing.assert_array_equal(a.state(), b.state())
+            assert a.meta["diverged_at"] == b.meta["diverged_at"]

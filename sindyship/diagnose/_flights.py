@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
-from ..evaluation import fly_like_batch
+from ..evaluation import fly_jobs_like, fly_like_batch
 from ..library import (
     DOFS,
     TermLibrary,
@@ -63,7 +63,8 @@ def _fly_many(
     progress: bool,
     what: str,
 ) -> list[list[Trajectory]]:
-    """Fly several (model, records) jobs, in parallel processes when ``n_jobs`` != 1."""
+    """Fly several (model, records) jobs: in one process side by side
+    (:func:`sindyship.evaluation.fly_jobs_like`), or in parallel processes when ``n_jobs`` != 1."""
     from tqdm.auto import tqdm
 
     jobs = [(model, list(records)) for model, records in jobs if records]
@@ -71,10 +72,8 @@ def _fly_many(
         return []
     bar = tqdm(total=len(jobs), desc=what, file=sys.stderr, disable=not progress, leave=False)
     if n_jobs == 1 or len(jobs) == 1:
-        out = []
-        for model, records in jobs:
-            out.append(fly_model(model, records))
-            bar.update()
+        out = fly_jobs_like(jobs)  # every model side by side in one integration per grid
+        bar.update(len(jobs))
     else:
         from joblib import Parallel, delayed
 
