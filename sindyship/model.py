@@ -124,7 +124,6 @@ class AbkowitzDynamics:
         scale = U0 * U0 / L
         return a_u * scale, a_v * scale, a_r * scale / L
 
-
     def _extra_variables(self, n_states, t, members, position, rudder_rate) -> np.ndarray:
         """The variables beyond the state's (library scaling), one row each in the compiled
         tables' order (:func:`_compiled_tables`), as :meth:`accelerations` forms them."""
@@ -139,10 +138,16 @@ class AbkowitzDynamics:
                 extra[k] = recorded[name]
             elif name in self.channels:
                 extra[k] = self.channels[name]
-            elif name in ("x", "y") and position is not None:
-                extra[k] = position[0 if name == "x" else 1]
-            elif name == "delta_rate" and rudder_rate is not None:
-                extra[k] = rudder_rate * L / U0
+            elif name in ("x", "y"):
+                if position is not None:
+                    extra[k] = position[0 if name == "x" else 1]
+            elif name == "delta_rate":
+                if rudder_rate is not None:
+                    extra[k] = rudder_rate * L / U0
+            else:
+                raise SindyshipInputError(
+                    f"the model needs the variable {name!r}, which the data do not provide."
+                )
         return extra
 
 

@@ -76,3 +76,20 @@ def test_compiled_accelerations_take_channels_positions_and_the_rudder_rate(kcs,
                                           position=position, rudder_rate=state[3] * 0.1))
     for a, b in zip(*got, strict=True):
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-15)
+
+
+def test_a_missing_channel_is_refused_on_both_paths(kcs, monkeypatch):
+    from sindyship.errors import SindyshipInputError
+    from sindyship.model import AbkowitzDynamics
+
+    library = TermLibrary("depth", "prime-I", "", {"X": ["du"], "Y": ["v", "depth v"],
+                                                   "N": ["r"]})
+    state = [np.array([7.0]), np.array([0.1]), np.array([0.001]), np.array([0.0]),
+             np.array([0.0])]
+    for switch in ("0", "1"):
+        monkeypatch.setenv("SINDYSHIP_NO_COMPILE", switch)
+        model = AbkowitzModel(kcs, library, {"X": {"du": -1e-3}, "Y": {"v": -1e-2,
+                                                                         "depth v": 1e-3},
+                                             "N": {"r": -1e-3}})
+        with pytest.raises(SindyshipInputError, match="variable 'depth'"):
+            AbkowitzDynamics(model).accelerations(*state)
