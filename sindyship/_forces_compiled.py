@@ -19,6 +19,8 @@ import math
 
 import numpy as np
 
+from .errors import SindyshipInputError
+
 try:  # optional: pip install "sindyship[fast]"
     import numba
 except ImportError:
@@ -84,9 +86,10 @@ def _forces(variables, base_variable, base_function, factor_base, factor_power, 
     return out
 
 
-#: The first rows of :func:`accelerations`' variables come from the state: du, v, r, delta and
-#: psi (:data:`sindyship.model.STATE_VARIABLES`); the model's other variables follow.
-N_STATE_VARIABLES = 5
+#: The first rows of :func:`accelerations`' variables come from the state; the model's other
+#: variables follow (:func:`tables`).
+STATE_VARIABLES = ("du", "v", "r", "delta", "psi")
+N_STATE_VARIABLES = len(STATE_VARIABLES)
 
 
 def _accelerations(u, v, r, delta, psi, extra, base_variable, base_function, factor_base,
@@ -128,3 +131,67 @@ if COMPILED:
     accelerations = numba.njit(cache=True, nogil=True)(_accelerations)
 else:
     forces, accelerations = _forces, _accelerations
+
+
+def tables(bases, factors, slots):
+    """``(variable names, integer tables)`` of a model's factor table for :func:`forces` and
+    :func:`accelerations`, or None when a factor's base is a number (the numpy path runs).
+
+    ``bases``, ``factors`` and ``slots`` are :class:`sindyship.model.AbkowitzModel`'s: each
+    factor base with the factors it gives and their powers, the distinct factors, and each
+    term's factors padded with ``len(factors)``.
+    """
+    if any(not isinstance(base.base, str) for base, _, _ in bases):
+        return None
+    used = {base.base for base, _, _ in bases}
+    names = list(STATE_VARIABLES) + sorted(used - set(STATE_VARIABLES))
+    base_variable = np.array([names.index(base.base) for base, _, _ in bases], dtype=np.int64)
+    base_function = np.array([FUNCTION_CODES[base.function] for base, _, _ in bases],
+                             dtype=np.int64)
+    factor_base = np.empty(len(factors), dtype=np.int64)
+    for k, (_, rows, _) in enumerate(bases):
+        factor_base[rows] = k
+    factor_power = np.array([f.power for f in factors], dtype=np.int64)
+    return names, (base_variable, base_function, factor_base, factor_power,
+                   slots.astype(np.int64))
+
+
+def run_accelerations(dynamics, u, v, r, delta, psi, t, members, position, rudder_rate):
+    """:meth:`sindyship.model.AbkowitzDynamics.accelerations` through :func:`accelerations`,
+    or None when the state values are not 1-D float64 arrays (the numpy path runs)."""
+    for a in (u, v, r, delta, psi):
+        if type(a) is not np.ndarray or a.ndim != 1 or a.dtype.char != "d":
+            return None
+    model = dynamics.model
+    names, integer_tables = model._compiled
+    extra = _extra_variables(dynamics, names[N_STATE_VARIABLES:], u.shape[0], t, members,
+                             position, rudder_rate)
+    a = accelerations(u, v, r, delta, psi, extra, *integer_tables, model._weights,
+                      model._inertia, model.inverse_mass, model.ship.U0, model.ship.L)
+    return a[0], a[1], a[2]
+
+
+def _extra_variables(dynamics, names, n_states, t, members, position, rudder_rate):
+    """The variables beyond the state's (library scaling), one row each, as
+    :meth:`sindyship.model.AbkowitzDynamics.accelerations` forms them."""
+    extra = np.zeros((len(names), n_states))
+    if not names:
+        return extra
+    recorded = dynamics.series.at(t, members) if dynamics.series is not None else {}
+    L, U0 = dynamics.model.ship.L, dynamics.model.ship.U0
+    for k, name in enumerate(names):
+        if name in recorded:
+            extra[k] = recorded[name]
+        elif name in dynamics.channels:
+            extra[k] = dynamics.channels[name]
+        elif name in ("x", "y"):
+            if position is not None:
+                extra[k] = position[0 if name == "x" else 1]
+        elif name == "delta_rate":
+            if rudder_rate is not None:
+                extra[k] = rudder_rate * L / U0
+        else:
+            raise SindyshipInputError(
+                f"the model needs the variable {name!r}, which the data do not provide."
+            )
+    return extra

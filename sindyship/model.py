@@ -9,7 +9,6 @@ simulator.  Saved models are JSON text (never pickle).
 
 from __future__ import annotations
 
-import functools
 import importlib.util
 import json
 import math
@@ -33,8 +32,6 @@ from .terms import Factor, evaluate_factor
 from .trajectory import Trajectory
 
 FORMAT_VERSION = 2
-#: The variables a flight's state gives (the first rows of the compiled tables' variables).
-STATE_VARIABLES = ("du", "v", "r", "delta", "psi")
 
 
 def channel_series(records, names, L: float, U0: float) -> ChannelSeries:
@@ -95,13 +92,11 @@ class AbkowitzDynamics:
         model = self.model
         ship = model.ship
         U0, L = ship.U0, ship.L
-        if model._compiled is not None and _plain_states(u, v, r, delta, psi):
-            extra = self._extra_variables(u.shape[0], t, members, position, rudder_rate)
-            names, tables = model._compiled
-            a = _compiled()["accelerations"](u, v, r, delta, psi, extra, *tables,
-                                             model._weights, model._inertia,
-                                             model.inverse_mass, U0, L)
-            return a[0], a[1], a[2]
+        if model._compiled is not None:
+            a = model._run_compiled(self, u, v, r, delta, psi, t, members, position,
+                                    rudder_rate)
+            if a is not None:
+                return a
         un = u / U0
         values = {"du": un - 1.0, "v": v / U0, "r": r * L / U0, "delta": delta, "psi": psi}
         values.update(self.channels)
@@ -124,69 +119,15 @@ class AbkowitzDynamics:
         scale = U0 * U0 / L
         return a_u * scale, a_v * scale, a_r * scale / L
 
-    def _extra_variables(self, n_states, t, members, position, rudder_rate) -> np.ndarray:
-        """The variables beyond the state's (library scaling), one row each in the compiled
-        tables' order (:func:`_compiled_tables`), as :meth:`accelerations` forms them."""
-        names = self.model._compiled[0][len(STATE_VARIABLES):]
-        extra = np.zeros((len(names), n_states))
-        if not names:
-            return extra
-        recorded = self.series.at(t, members) if self.series is not None else {}
-        L, U0 = self.model.ship.L, self.model.ship.U0
-        for k, name in enumerate(names):
-            if name in recorded:
-                extra[k] = recorded[name]
-            elif name in self.channels:
-                extra[k] = self.channels[name]
-            elif name in ("x", "y"):
-                if position is not None:
-                    extra[k] = position[0 if name == "x" else 1]
-            elif name == "delta_rate":
-                if rudder_rate is not None:
-                    extra[k] = rudder_rate * L / U0
-            else:
-                raise SindyshipInputError(
-                    f"the model needs the variable {name!r}, which the data do not provide."
-                )
-        return extra
-
-
-def _plain_states(*arrays) -> bool:
-    """Whether the compiled accelerations take these state values: 1-D float64 arrays."""
-    return all(isinstance(a, np.ndarray) and a.ndim == 1 and a.dtype == np.float64
-               for a in arrays)
-
-
-@functools.cache
-def _compiled() -> dict:
-    """The compiled force and acceleration loops (:mod:`sindyship._forces_compiled`)."""
-    from . import _forces_compiled
-
-    return {"forces": _forces_compiled.forces,
-            "accelerations": _forces_compiled.accelerations}
-
 
 def _compiled_tables(bases, factors, slots):
-    """``(variable names, integer tables)`` for :mod:`sindyship._forces_compiled`, or None when
-    numba is not there, compiling is switched off (``SINDYSHIP_NO_COMPILE=1``) or a factor's
-    base is a number."""
+    """The compiled path's tables (:func:`sindyship._forces_compiled.tables`), or None when
+    numba is not there or compiling is switched off (``SINDYSHIP_NO_COMPILE=1``)."""
     if os.environ.get("SINDYSHIP_NO_COMPILE") == "1" or importlib.util.find_spec("numba") is None:
         return None
-    if any(not isinstance(base.base, str) for base, _, _ in bases):
-        return None
-    from ._forces_compiled import FUNCTION_CODES
+    from ._forces_compiled import tables
 
-    used = {base.base for base, _, _ in bases}
-    names = list(STATE_VARIABLES) + sorted(used - set(STATE_VARIABLES))
-    base_variable = np.array([names.index(base.base) for base, _, _ in bases], dtype=np.int64)
-    base_function = np.array([FUNCTION_CODES[base.function] for base, _, _ in bases],
-                             dtype=np.int64)
-    factor_base = np.empty(len(factors), dtype=np.int64)
-    for k, (_, rows, _) in enumerate(bases):
-        factor_base[rows] = k
-    factor_power = np.array([f.power for f in factors], dtype=np.int64)
-    return names, (base_variable, base_function, factor_base, factor_power,
-                   slots.astype(np.int64))
+    return tables(bases, factors, slots)
 
 
 @dataclass
@@ -270,6 +211,10 @@ class AbkowitzModel:
                     weights[row, index[term.text]] += c
         self._weights = weights
         self._compiled = _compiled_tables(self._bases, factors, slots)
+        if self._compiled is not None:
+            from ._forces_compiled import run_accelerations
+
+            self._run_compiled = run_accelerations
         self._compiled_reads = {base.base for base, _, _ in self._bases}
         inertia = self.ship.prime_i_inertia()
         m, mxg = inertia["m"], inertia["m"] * inertia["x_G"]
@@ -302,7 +247,9 @@ class AbkowitzModel:
             for k, name in enumerate(names):
                 if name in values:
                     stacked[k] = np.ravel(values[name])
-            forces = _compiled()["forces"](stacked, *tables, self._weights)
+            from ._forces_compiled import forces as compiled_forces
+
+            forces = compiled_forces(stacked, *tables, self._weights)
             return {dof: forces[row].reshape(base.shape) for row, dof in enumerate(DOFS)}
         rows = np.ones((len(self._factors) + 1, base.size))
         for factor, where, powers in self._bases:
