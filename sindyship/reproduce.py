@@ -17,7 +17,7 @@ from pathlib import Path
 import pandas as pd
 
 from ._io import save_figure, write_text_atomic
-from .evaluation import distance_errors, fly_like_batch
+from .evaluation import distance_errors, fly_jobs_like, fly_like_batch
 from .identify import design, fit, resolve_library
 from .manoeuvres import fly, protocol_manoeuvres
 from .mmg import MMGModel
@@ -140,22 +140,23 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
     plan = protocol_manoeuvres()
     progress("simulating the 8 training and 3 held-out KCS manoeuvres (MMG)")
     mmg = MMGModel(ship)
-    train = fly(mmg, plan["train"])
-    test = fly(mmg, plan["test"])
+    flown = fly(mmg, plan["train"] + plan["test"])  # one batch: every manoeuvre is 3200 s
+    train, test = flown[: len(plan["train"])], flown[len(plan["train"]):]
     results, models, flights = _fit_and_fly(train, test, ship, methods, progress)
-    diagnosis, drawn = None, []
+    diagnosis, drawn, diagnosed = None, [], {}
     if diagnose_rounds:
         diagnosis, rows, diagnosed, iterative = _diagnosis_rounds(
             train, test, ship, diagnose_rounds, progress)
         results += rows
         models.update(diagnosed)
-        for key, model in diagnosed.items():
-            flights[key] = fly_like_batch(model.dynamics(), test)
         if figures:
             drawn.append(("diagnosis-rounds.png", iterative.figure()))
     agreement = ls_agreement(models["ls"].coefficients) if "ls" in models else None
     paper_ls = paper_model(ship, "LS")
-    paper_flown = fly_like_batch(paper_ls.dynamics(), test)
+    # the diagnosed models and the paper's side by side in one integration
+    *diagnosed_flown, paper_flown = fly_jobs_like(
+        [(model, test) for model in diagnosed.values()] + [(paper_ls, test)])
+    flights.update(zip(diagnosed, diagnosed_flown, strict=True))
     paper_errors = {rec.name: distance_errors(f, rec, ship.L)
                     for f, rec in zip(paper_flown, test, strict=True)}
     table = coefficient_table(models, ship)
