@@ -1,0 +1,39 @@
+"""The figures the benchmarks saved support what the README claims of speed and scale.
+
+The benchmarks time the code (``benchmarks/``); these tests only read what they saved, so a
+rerun that no longer meets a claim fails here instead of leaving the README wrong.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+
+
+def _load(name: str) -> dict:
+    return json.loads((RESULTS / name).read_text())
+
+
+@pytest.mark.parametrize("step", ["protocol_flights", "diagnose_protocol", "diagnose_10hz",
+                                  "reproduce"])
+def test_the_steps_users_wait_for_meet_their_targets_beside_the_previous_version(step):
+    entry = _load("speed.json")["steps"][step]
+    assert entry["now"]["seconds"] < entry["target_seconds"]
+    assert entry["before"]["seconds"] > entry["now"]["seconds"]  # measured in the same run
+
+
+def test_protocol_flights_stay_accurate_when_compiled():
+    result = _load("simulate.json")
+    assert result["max_position_change_when_step_halved_L"] < 1e-4
+    assert result["max_position_difference_compiled_vs_numpy_L"] < 1e-10
+
+
+def test_the_compiled_export_is_faster_than_the_library_and_flies_the_same():
+    result = _load("export.json")
+    assert result["ratio_to_sindyship"]["compiled"]["rhs_batch11"] > 1.0
+    assert result["rhs_max_abs_difference"]["compiled"] < 1e-12
+    assert result["zigzag_max_relative_difference"]["compiled"] < 1e-10
