@@ -200,24 +200,55 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
     if problems is None:
         problems = design(records, ship, lib, rudder_signal=rudder_signal,
                           derivative=derivative, window=window)
-    coefficients = {}
     fitted = {}
     for dof in DOFS:
         problem = problems[dof]
         estimator = make_optimizer(optimizer, **(params or {}))
         estimator.fit(problem.features, problem.target, groups=problem.groups)
-        coef = np.asarray(estimator.coef_, dtype=float).reshape(-1)
-        coefficients[dof] = dict(zip(problem.terms, coef.tolist(), strict=True))
         fitted[dof] = estimator
     info = {
         "training": [r.name for r in records],
         "n_samples": int(len(problems["X"].target)),
         "derivative": derivative,
         "window_s": window if derivative != "five-point" else None,
-        "selected": {dof: _selected(est) for dof, est in fitted.items()},
+        "selected": None,  # filled in by fitted_model
         "envelope": training_envelope(records, ship),
     }
-    model = AbkowitzModel(ship=ship, library=lib, coefficients=coefficients,
+    return fitted_model(ship, lib, fitted, {dof: problems[dof].terms for dof in DOFS},
+                        optimizer=optimizer, rudder_signal=rudder_signal, info=info)
+
+
+def fitted_model(ship: Ship, library: TermLibrary, fitted: dict, terms: dict[str, Sequence[str]],
+                 *, optimizer: str, rudder_signal: str, info: dict) -> AbkowitzModel:
+    """The model of fitted estimators, one per degree of freedom (eq. 17's coefficients).
+
+    Parameters
+    ----------
+    ship, library
+        What was fitted.
+    fitted : dict of str to estimator
+        The fitted optimizer of every degree of freedom (its ``coef_`` in the order of
+        ``terms``).
+    terms : dict of str to sequence of str
+        The term texts of every degree of freedom.
+    optimizer, rudder_signal
+        As given to :func:`fit`.
+    info : dict
+        What the model records of its training; the hyper-parameters the optimizers chose
+        are put in as ``"selected"`` (in its place, when ``info`` has the key).
+
+    Returns
+    -------
+    AbkowitzModel
+        With the estimators as ``estimators_``.
+    """
+    coefficients = {}
+    for dof in DOFS:
+        coef = np.asarray(fitted[dof].coef_, dtype=float).reshape(-1)
+        coefficients[dof] = dict(zip(terms[dof], coef.tolist(), strict=True))
+    info = dict(info)
+    info["selected"] = {dof: _selected(est) for dof, est in fitted.items()}
+    model = AbkowitzModel(ship=ship, library=library, coefficients=coefficients,
                           optimizer={"name": optimizer, "params": fitted["X"].get_params()},
                           rudder_signal=rudder_signal, info=info)
     model.estimators_ = fitted

@@ -18,6 +18,21 @@ def _load(name: str) -> dict:
     return json.loads((RESULTS / name).read_text())
 
 
+def test_the_streamed_fit_scales_linearly_in_bounded_memory_and_equals_the_in_memory_fit():
+    result = _load("stream.json")
+    sizes = {case["n_samples"]: case for case in result["cases"]}
+    assert {10**6, 10**7, 10**8} <= set(sizes)
+    for case in sizes.values():
+        assert case["time_per_sample_ratio"] <= 1.3  # within 1.3x of linear from 10^6
+        assert max(case["peak_rss_mb"], case["sum_of_process_hwm_mb"]) < 2048
+    compared = {k: v for k, v in result["compare_with_in_memory"].items() if isinstance(v, dict)}
+    assert {"ls", "stlsq", "lasso"} <= set(compared)
+    for optimizer, by_dof in compared.items():
+        for dof, difference in by_dof.items():
+            assert difference["max_abs_diff_over_max_coef"] < 1e-10, (optimizer, dof)
+            assert difference["same_zero_pattern"], (optimizer, dof)
+
+
 @pytest.mark.parametrize("step", ["protocol_flights", "diagnose_protocol", "diagnose_10hz",
                                   "reproduce"])
 def test_the_steps_users_wait_for_meet_their_targets_beside_the_previous_version(step):

@@ -290,7 +290,9 @@ def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool =
     """What every verb that fits a library on records takes (``fit``, ``diagnose``,
     ``discover``): the records, the ship, how the library is fitted, smoothing, resampling,
     workers, JSON."""
-    p.add_argument("data", nargs="+", help="training measurement CSV files")
+    p.add_argument("data", nargs="+",
+                   help="training records: measurement CSV or Parquet files (fit also takes "
+                   "quoted glob patterns, 'fleet/*.parquet')")
     add_ship(p)
     add_identification(p, optimizer=optimizer)
     p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",

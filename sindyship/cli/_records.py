@@ -1,5 +1,5 @@
-"""Reading the measurement CSVs a verb is given: each under a name of its own, checked for
-plausibility, and cut to the part under way.
+"""Reading the records a verb is given (measurement CSVs, or Parquet files with the same
+columns): each under a name of its own, checked for plausibility, and cut to the part under way.
 
 Results are keyed by record name.  A record is named after its file stem
 (:func:`sindyship.measurements.read_csv`); where two inputs share a stem they are told apart
@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import csv
 import os
-import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,16 +21,18 @@ __all__ = ["add_record_options", "read_record_sets", "read_records", "record_key
 
 
 def _refuse_repeats(paths: list[Path]) -> None:
-    for i, a in enumerate(paths):
-        for b in paths[:i]:
-            try:
-                same = os.path.samefile(a, b)
-            except OSError:
-                same = a.absolute() == b.absolute()
-            if same:
-                raise SindyshipInputError(
-                    f"{a}: is given twice (also as {b}); give each record once."
-                )
+    seen: dict[object, Path] = {}
+    for a in paths:
+        try:
+            status = os.stat(a)
+            key: object = (status.st_dev, status.st_ino)
+        except (OSError, ValueError):
+            key = a.absolute()
+        if key in seen:
+            raise SindyshipInputError(
+                f"{a}: is given twice (also as {seen[key]}); give each record once."
+            )
+        seen[key] = a
 
 
 def record_keys(paths) -> list[str]:
@@ -110,47 +111,31 @@ def reading(args, ship) -> dict:
 
 
 def _time_range(text: str) -> tuple[float, float] | str:
-    if text in ("auto", "all"):
-        return text
-    start, sep, stop = text.partition(":")
-    try:
-        window = (float(start), float(stop))
-    except ValueError:
-        window = None
-    if not sep or window is None or not window[0] < window[1]:
-        raise SindyshipInputError(
-            f"--time-range {text!r} is not auto, all or START:STOP in seconds with START < STOP "
-            "(e.g. 120:1800)."
-        )
-    return window
+    from ..streaming import time_window
+
+    return time_window(text)
 
 
 def _read_one(path: Path, resample, ship, skip, window, time_range):
-    """One record, checked, with its notes on stderr, cut to the time range."""
-    from ..measurements import PlausibilityNote, read_csv
-    from ..trials import trim, underway_window
+    """One record (a measurement CSV or a Parquet file), checked, with its notes on stderr,
+    cut to the time range."""
+    from ..streaming import read_record
 
-    if resample is not None:
+    if resample is not None and path.suffix.lower() not in (".parquet", ".pq"):
         _check_resample_memory(path, resample)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PlausibilityNote)  # printed below, one line each
-        record = read_csv(path, resample=resample, ship=ship, skip_checks=skip)
-    for note in record.meta.get("notes", ()):
-        progress(f"{path}: {note}")
-    if window == "auto" and ship is not None:
-        cut = underway_window(record, ship)
-        if cut.start > record.t[0] + 1e-9 or cut.stop < record.t[-1] - 1e-9:
-            progress(f"{path}: using {cut.start:g}-{cut.stop:g} s: {cut.reason} "
-                     "(--time-range to choose)")
-            record = trim(record, cut)
-    elif window not in ("auto", "all"):
-        record = trim(record, window)
-        if record.n_samples < 2:
-            raise SindyshipInputError(
-                f"{path}: --time-range {time_range} keeps fewer than two samples; choose "
-                "times within the record."
-            )
+    record, notes, cut = read_record(path, ship=ship, resample=resample, skip_checks=skip,
+                                     time_range=window)
+    report_reading(path, notes, cut)
     return record
+
+
+def report_reading(path, notes, cut) -> None:
+    """A record's plausibility notes and its automatic cut, one line each on stderr."""
+    for note in notes:
+        progress(f"{path}: {note}")
+    if cut is not None:
+        start, stop, reason = cut
+        progress(f"{path}: using {start:g}-{stop:g} s: {reason} (--time-range to choose)")
 
 
 def read_records(paths, resample=None, *, keys=None, ship=None, skip_checks=(),

@@ -13,13 +13,16 @@ from ._common import (
     split_names,
 )
 from ._records import read_records
+from ._streamed import add_stream_options, streamed_fit
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("fit", help="identify an Abkowitz model from records",
                        description="Identify an Abkowitz model (paper eq. 14-17) from "
-                       "measurement CSVs and save it as JSON.")
+                       "measurement CSVs (or Parquet files with the same columns; quoted glob "
+                       "patterns such as 'fleet/*.parquet' name many) and save it as JSON.")
     add_training_options(p, n_jobs_default=None)
+    add_stream_options(p)
     p.add_argument("--seed", type=SEED, default=0,
                    help="seed of randomised optimizers, a whole number >= 0 (default 0)")
     p.add_argument("--out", required=True, metavar="FILE",
@@ -55,10 +58,14 @@ def run(args) -> int:
     from .._io import check_output
     from ..identify import fit
     from ..ships import load_ship
+    from ..streaming import expand_paths
 
+    args.data = expand_paths(args.data)
     check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}")
     check_inputs(fit_inputs(args))
     ship = load_ship(args.ship)
+    if args.stream or args.scheduler:
+        return _run_streamed(args, ship)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
     effects = split_names(args.effects)
@@ -81,6 +88,23 @@ def run(args) -> int:
         emit({"model": str(args.out), "active_terms": model.n_active(),
               "library": model.library.name, "optimizer": model.optimizer["name"],
               "identifiability": None if report is None else report.to_dict()})
+    return 0
+
+
+def _run_streamed(args, ship) -> int:
+    """``fit --stream``: the model from per-record factors reduced on a Dask cluster."""
+    effects = split_names(args.effects)
+    params = {"random_state": args.seed} if args.optimizer == "svr" else {}
+    model, summary = streamed_fit(args, ship, effects, params)
+    model.save(args.out)
+    progress(f"wrote {args.out}: {model!r}")
+    if not args.no_identifiability:
+        progress("Identifiability: not reported for a streamed fit (it needs the samples); "
+                 "fit a subset in memory to see it.")
+    if args.json:
+        emit({"model": str(args.out), "active_terms": model.n_active(),
+              "library": model.library.name, "optimizer": model.optimizer["name"],
+              "identifiability": None, "streamed": summary})
     return 0
 
 

@@ -69,6 +69,9 @@ solver).  ``_base`` holds ``_LinearModel``, whose ``fit`` template validates the
 the folds and calls the estimator's ``_reduce`` hook (a new estimator subclasses it and
 implements the hook); ``_compressed`` the one QR-compression engine, also public as
 :class:`GroupedProblem` (least-squares refits of column subsets leaving one record out);
+``_factored`` the fit data of :meth:`_LinearModel.fit_factors`, which fits ``ls``, ``stlsq``
+and ``lasso`` from one :class:`RowFactor` per record instead of the rows (records reduced on
+the workers of a cluster, merged as a tree: :func:`merge_factors`, :func:`tree_factor`);
 ``_cv`` the cross-validation choices; ``_standardise`` the intercept and scaling conventions
 above; ``_threads`` the :func:`one_blas_thread` guard; ``_registry`` :func:`make_optimizer`.
 """
@@ -77,7 +80,7 @@ from __future__ import annotations
 
 # Private names are re-exported (``name as name``) for the modules and tests using them.
 from ._base import _LinearModel as _LinearModel
-from ._compressed import GroupedProblem
+from ._compressed import GroupedProblem, RowFactor, merge_factors, tree_factor
 from ._compressed import _qr as _qr
 from ._cv import LeaveOneTrajectoryOut
 from ._forward import ForwardSelection
@@ -100,9 +103,12 @@ __all__ = [
     "ForwardSelection",
     "SVR",
     "GroupedProblem",
+    "RowFactor",
     "LassoCV",
     "LeastSquares",
     "LeaveOneTrajectoryOut",
     "make_optimizer",
+    "merge_factors",
     "one_blas_thread",
+    "tree_factor",
 ]

@@ -3,21 +3,25 @@
 ``fit`` validates the input, resolves the cross-validation folds (when the estimator uses
 them) and hands a :class:`_FitData` to the estimator's hook ``_reduce``, which returns the
 physical coefficients.  The column roles and the compressed problem of :class:`_FitData` are
-computed on first use, so an estimator pays only for what it reads.
+computed on first use, so an estimator pays only for what it reads.  ``fit_factors`` hands the
+same hook the data of :mod:`._factored`, built from the factors of the records' rows.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from functools import cached_property
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from sklearn.base import BaseEstimator, MultiOutputMixin, RegressorMixin
+from sklearn.model_selection import LeaveOneGroupOut
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ._compressed import _Compressed, _Fold, _folds, _row_blocks
+from sindyship.errors import SindyshipInputError
+
+from ._compressed import RowFactor, _Compressed, _Fold, _folds, _row_blocks, _running_factor
 from ._cv import _check_groups, _resolve_cv, _splits
 from ._standardise import _column_roles, _Standardiser
 from ._threads import one_blas_thread
@@ -71,6 +75,36 @@ class _FitData:
         """The cross-validation folds of the compressed problem (:func:`_folds`)."""
         return _folds(self.compressed, self.splits, self._blocks[1], self.X, self.Y)
 
+    @property
+    def n_folds(self) -> int:
+        """Number of cross-validation folds."""
+        return len(self.splits)
+
+    def n_test(self, f: int) -> int:
+        """Number of held-out samples of fold ``f``."""
+        return len(self.splits[f][1])
+
+    @cached_property
+    def y_mean_square(self) -> NDArray:
+        """Mean square of every target, shape (n_targets,)."""
+        return np.mean(self.Y**2, axis=0)
+
+    def column_norms(self) -> NDArray:
+        """Euclidean norm of every column of ``X``."""
+        return np.linalg.norm(self.X, axis=0)
+
+    def scaled_problem(self, scale: NDArray) -> tuple[NDArray, NDArray]:
+        """A least-squares problem ``(A, B)`` with the solutions of ``X / scale ~ Y``:
+        the triangular factor of ``[X / scale | Y]`` when there are many more rows than
+        columns (the same solution and singular values, in time linear in the rows), else
+        the rows themselves."""
+        X, Y = self.X, self.Y
+        p = X.shape[1]
+        if self.n_samples > 2 * (p + Y.shape[1]):
+            R = _running_factor(X, Y, scale)
+            return R[:p, :p], R[:p, p:]
+        return X / scale, Y
+
 
 class _LinearModel(MultiOutputMixin, RegressorMixin, BaseEstimator):
     """``fit`` template, ``predict`` and ``complexity`` common to the estimators.
@@ -80,6 +114,10 @@ class _LinearModel(MultiOutputMixin, RegressorMixin, BaseEstimator):
     ``_uses_cv`` when it does not always cross-validate (then ``data.splits`` is None) and
     ``_check_grid`` to reject a bad grid before the folds are made.
     """
+
+    #: Whether the fit needs the samples themselves (not only the factors of their rows):
+    #: such an estimator cannot :meth:`fit_factors`.
+    _needs_rows: bool = False
 
     def _uses_cv(self) -> bool:
         """Whether this fit needs cross-validation folds (read from ``self.cv``)."""
@@ -119,6 +157,82 @@ class _LinearModel(MultiOutputMixin, RegressorMixin, BaseEstimator):
             self.cv_, split_groups = _resolve_cv(self.cv, groups)
             splits = _splits(self.cv_, X, Y, split_groups)
         self.coef_ = self._reduce(_FitData(X, Y, splits))
+        return self
+
+    @property
+    def cross_validates(self) -> bool:
+        """Whether a fit with these parameters uses cross-validation folds."""
+        return self._uses_cv()
+
+    def check_factor_fit(self, n_records: int) -> None:
+        """Refuse, before any work, what :meth:`fit_factors` cannot fit.
+
+        Raises
+        ------
+        SindyshipInputError
+            When the estimator needs the samples themselves (``svr``), when it is given a
+            ``cv`` other than the default, or when it cross-validates over fewer than two
+            records.
+        """
+        self._validate_params()
+        name = type(self).__name__
+        if self._needs_rows:
+            raise SindyshipInputError(
+                f"{name} needs every sample (its loss is not a least-squares one), so it cannot "
+                "be fitted from factors of the records; use ls, stlsq or lasso, or fit in memory "
+                "(without --stream)."
+            )
+        self._check_grid()
+        if self.cross_validates and getattr(self, "cv", None) is not None:
+            raise SindyshipInputError(
+                "a fit from factors of the records cross-validates leaving one record out; "
+                f"leave the cv of {name} unset."
+            )
+        if self.cross_validates and n_records < 2:
+            raise SindyshipInputError(
+                "leave-one-record-out cross-validation needs at least two records; pass more "
+                "records."
+            )
+
+    @one_blas_thread
+    def fit_factors(self, records: Sequence[RowFactor], whole: RowFactor | None = None) -> Any:
+        """Fit from the factors of the records' rows, without the rows.
+
+        The same coefficients as :meth:`fit` on the stacked rows with one group per record
+        (up to rounding): every estimator works on the triangular factor of ``[X | Y]``
+        (the least-squares problem of the paper's eq. 18), a leave-one-record-out fold on the
+        factor of all the other records.
+
+        Parameters
+        ----------
+        records : sequence of RowFactor
+            One factor per record (:meth:`RowFactor.of_rows` of its library columns and
+            targets), in record order.  Not read when the estimator does not cross-validate
+            and ``whole`` is given (an empty list will do).
+        whole : RowFactor, optional
+            The factor of all records (e.g. merged as a tree on a cluster); default
+            :func:`tree_factor` of ``records``.
+
+        Returns
+        -------
+        self
+            The fitted estimator; ``cv_`` is leave-one-group-out when it cross-validates.
+
+        Raises
+        ------
+        SindyshipInputError
+            As :meth:`check_factor_fit`.
+        """
+        from ._factored import _FactorData
+
+        self.check_factor_fit(len(records))
+        uses_cv = self.cross_validates
+        if uses_cv:
+            self.cv_ = LeaveOneGroupOut()
+        data = _FactorData(records, whole, cross_validate=uses_cv)
+        self.n_features_in_ = data.n_features
+        self._y_ndim = 1 if data.n_targets == 1 else 2
+        self.coef_ = self._reduce(data)
         return self
 
     def _validate_fit_input(

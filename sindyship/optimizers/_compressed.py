@@ -10,11 +10,16 @@ number of samples.
 cross-validation test set is a union of blocks, and :func:`_folds` serves the folds from it.
 :class:`GroupedProblem` is the public face of the same engine for least-squares refits of
 column subsets, one block set per record (leave-one-record-out predictions).
+:class:`RowFactor` carries one block's factor with the column ranges the roles need, so that
+records reduced elsewhere (on the workers of a cluster) can be combined as a tree (TSQR:
+:func:`merge_factors`) and fitted by the estimators without their rows
+(:meth:`_Compressed.from_factors`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
@@ -22,8 +27,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._cv import _check_groups
 from ._standardise import _CONSTANT_RTOL, _Standardiser
+from ._threads import one_blas_thread
 
-__all__ = ["GroupedProblem"]
+__all__ = ["GroupedProblem", "RowFactor", "merge_factors", "tree_factor"]
 
 #: Rows per block of the blocked QR (a block of ~24 columns fits in the CPU cache).
 _BLOCK_ROWS = 16384
@@ -65,6 +71,88 @@ def _qr(Xs: NDArray, Ys: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     Z = Q.T @ Ys
     rest = np.maximum(np.sum(Ys**2, axis=0) - np.sum(Z**2, axis=0), 0.0)
     return R, Z, rest
+
+
+def _stack(factors: Sequence[NDArray]) -> NDArray:
+    """The triangular factor of the union of row blocks given by their factors: the QR of
+    the stacked factors (one step of TSQR)."""
+    return np.linalg.qr(np.vstack(factors), mode="r")
+
+
+@dataclass(frozen=True)
+class RowFactor:
+    """The rows ``[X | Y]`` of a regression problem reduced to what a fit needs from them.
+
+    ``R`` is their triangular factor (``||Y - X W||^2 = ||R [W; -I]||^2`` for every ``W``: the
+    least-squares problem of the paper's eq. 18 on a few dozen rows), ``low`` and ``high``
+    the smallest and largest value of every column (which columns are constant), ``first``
+    the first row (the value of a constant column) and ``n`` the number of rows.  Factors of
+    disjoint row sets combine exactly (:func:`merge_factors`), in any grouping.
+
+    Attributes
+    ----------
+    R : ndarray, shape (min(n, n_columns), n_columns)
+    low, high, first : ndarray, shape (n_columns,)
+    n : int
+    n_targets : int
+        The last ``n_targets`` columns are the targets ``Y``.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> X, Y = rng.normal(size=(40, 3)), rng.normal(size=(40, 1))
+    >>> whole = RowFactor.of_rows(X, Y)
+    >>> halves = merge_factors(RowFactor.of_rows(X[:15], Y[:15]),
+    ...                        RowFactor.of_rows(X[15:], Y[15:]))
+    >>> bool(np.allclose(np.abs(halves.R), np.abs(whole.R))), halves.n
+    (True, 40)
+    """
+
+    R: NDArray
+    low: NDArray
+    high: NDArray
+    first: NDArray
+    n: int
+    n_targets: int
+
+    @classmethod
+    @one_blas_thread
+    def of_rows(cls, X: NDArray, Y: NDArray) -> RowFactor:
+        """The factor of the rows ``[X | Y]`` (reduced one block of rows at a time, on one
+        BLAS thread: :func:`~._threads.one_blas_thread`)."""
+        X = np.asarray(X, dtype=float)
+        Y = np.asarray(Y, dtype=float).reshape(X.shape[0], -1)
+        if X.shape[0] == 0:
+            raise ValueError("a row factor needs at least one row.")
+        R = _running_factor(X, Y, np.ones(X.shape[1]))
+        low = np.concatenate([X.min(axis=0), Y.min(axis=0)])
+        high = np.concatenate([X.max(axis=0), Y.max(axis=0)])
+        first = np.concatenate([X[0], Y[0]])
+        return cls(R, low, high, first, int(X.shape[0]), int(Y.shape[1]))
+
+    @property
+    def n_features(self) -> int:
+        """Number of columns of ``X``."""
+        return self.R.shape[1] - self.n_targets
+
+
+def merge_factors(a: RowFactor, b: RowFactor) -> RowFactor:
+    """The factor of the rows of ``a`` followed by those of ``b`` (one step of TSQR)."""
+    if a.R.shape[1] != b.R.shape[1] or a.n_targets != b.n_targets:
+        raise ValueError("row factors of different columns cannot be merged.")
+    return RowFactor(_stack([a.R, b.R]), np.minimum(a.low, b.low), np.maximum(a.high, b.high),
+                     a.first, a.n + b.n, a.n_targets)
+
+
+def tree_factor(factors: Sequence[RowFactor]) -> RowFactor:
+    """The factor of all rows, merged pairwise as a binary tree (TSQR)."""
+    level = list(factors)
+    if not level:
+        raise ValueError("no row factors to merge.")
+    while len(level) > 1:
+        pairs = [merge_factors(a, b) for a, b in zip(level[::2], level[1::2], strict=False)]
+        level = pairs + ([level[-1]] if len(level) % 2 else [])
+    return level[0]
 
 
 def _block_rows(rows: NDArray) -> list[NDArray]:
@@ -112,11 +200,39 @@ class _Compressed:
             magnitude = np.abs(A).max(axis=0, initial=0.0) if len(rows) else np.zeros(A.shape[1])
             self.blocks.append((R, magnitude, len(rows)))
 
+    @classmethod
+    def from_factors(
+        cls, factors: Sequence[RowFactor], free: NDArray, intercept: int | None
+    ) -> _Compressed:
+        """The engine on blocks given by their factors (one :class:`RowFactor` per block, of
+        the rows ``[X | Y]`` in library order) instead of their rows.
+
+        Each block's factor of ``[c | X_free | Y]`` is the QR of the columns of its factor in
+        that order (``A P = Q (R P)``), so this is the engine ``__init__`` builds from rows,
+        up to rounding.
+        """
+        self = cls.__new__(cls)
+        self.free, self.intercept = free, intercept
+        self.n_free = int(free.sum())
+        n_features = free.size
+        self.n_targets = factors[0].R.shape[1] - n_features
+        self.const_value = float(factors[0].first[intercept]) if intercept is not None else 1.0
+        head = [intercept] if intercept is not None else []
+        order = np.concatenate(
+            [head, np.flatnonzero(free), n_features + np.arange(self.n_targets)]
+        ).astype(int)
+        self.blocks = []
+        for factor in factors:
+            magnitude = np.maximum(np.abs(factor.low), np.abs(factor.high))[order]
+            R = np.linalg.qr(factor.R[:, order], mode="r")
+            self.blocks.append((R, magnitude, factor.n))
+        return self
+
     def factor(self, which: Iterable[int]) -> tuple[NDArray, NDArray, int]:
         """The triangular factor of ``A`` on the blocks ``which``, the largest absolute value
         of every column of ``A`` on them, and their number of rows."""
         parts = [self.blocks[b] for b in which]
-        R = np.linalg.qr(np.vstack([p[0] for p in parts]), mode="r")
+        R = _stack([p[0] for p in parts])
         magnitude = np.max([p[1] for p in parts], axis=0)
         return R, magnitude, sum(p[2] for p in parts)
 

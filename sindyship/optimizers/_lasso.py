@@ -320,7 +320,8 @@ class LassoCV(_LinearModel):
         mse = self._fold_errors(data, alphas, max_events)
         coef_path = self._full_path(data, alphas, max_events)
         chosen = np.array(
-            [self._choose(mse[t], alphas[t], data.Y[:, t]) for t in range(n_targets)], dtype=int
+            [self._choose(mse[t], alphas[t], data.y_mean_square[t]) for t in range(n_targets)],
+            dtype=int,
         )
         idx = np.arange(n_targets)
         self.alphas_ = alphas
@@ -331,9 +332,9 @@ class LassoCV(_LinearModel):
 
     def _fold_errors(self, data: _FitData, alphas: NDArray, max_events: int) -> NDArray:
         """Held-out mean squared error, shape (n_targets, n_alphas, n_folds)."""
-        mse = np.zeros((data.n_targets, alphas.shape[1], len(data.splits)))
+        mse = np.zeros((data.n_targets, alphas.shape[1], data.n_folds))
         for f, fold, Rf, Zf, error in data.folds():
-            n_train = data.n_samples - len(data.splits[f][1])
+            n_train = data.n_samples - data.n_test(f)
             for t in range(data.n_targets):
                 W = _lasso_path_exact(Rf, Zf[:, t], n_train * alphas[t], max_events)
                 zeros = np.zeros(W.shape[1])
@@ -349,10 +350,10 @@ class LassoCV(_LinearModel):
             coef_path[t] = full.physical(W, np.zeros(W.shape[1]), t, data.n_features)
         return coef_path
 
-    def _choose(self, mse: NDArray, alphas: NDArray, y: NDArray) -> int:
+    def _choose(self, mse: NDArray, alphas: NDArray, y_mean_square: float) -> int:
         """Grid index of the chosen penalty from the fold errors (n_alphas, n_folds)."""
         mean = mse.mean(axis=1)
-        best = _pick(mean, alphas, float(np.mean(y**2)))
+        best = _pick(mean, alphas, float(y_mean_square))
         if self.selection == "one_se" and mse.shape[1] > 1:
             se = mse[best].std(ddof=1) / np.sqrt(mse.shape[1])
             within = np.flatnonzero(mean <= mean[best] + se)

@@ -10,7 +10,6 @@ from numpy.typing import NDArray
 from sklearn.utils._param_validation import Interval
 
 from ._base import _FitData, _LinearModel
-from ._compressed import _running_factor
 
 
 class LeastSquares(_LinearModel):
@@ -73,19 +72,13 @@ class LeastSquares(_LinearModel):
 
     def _reduce(self, data: _FitData) -> NDArray:
         """Least squares on all samples (``groups`` unused)."""
-        X, Y = data.X, data.Y
-        scale = np.ones(X.shape[1])
+        scale = np.ones(data.n_features)
         if self.column_scaling:
-            norms = np.linalg.norm(X, axis=0)
+            norms = data.column_norms()
             scale[norms > 0] = norms[norms > 0]
-        n, p = X.shape
-        if n > 2 * (p + Y.shape[1]):
-            # compress [X | Y] to its triangular factor: the same solution (and singular
-            # values) as on the full matrix, in time linear in n
-            R = _running_factor(X, Y, scale)
-            A, B = R[:p, :p], R[:p, p:]
-        else:
-            A, B = X / scale, Y
+        # [X / scale | Y] compressed to its triangular factor when there are many rows: the
+        # same solution (and singular values) as on the full matrix, in time linear in n
+        A, B = data.scaled_problem(scale)
         W, _, rank, sv = scipy.linalg.lstsq(
             A, B, cond=self.cond, lapack_driver="gelsd", check_finite=False
         )

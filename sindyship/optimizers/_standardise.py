@@ -35,8 +35,19 @@ def _column_roles(X: NDArray) -> tuple[NDArray, int | None]:
     >>> print(free, intercept)
     [False False  True False] 1
     """
-    col_max = X.max(axis=0)
-    col_min = X.min(axis=0)
+    return _roles_from_range(X.min(axis=0), X.max(axis=0))
+
+
+def _roles_from_range(col_min: NDArray, col_max: NDArray) -> tuple[NDArray, int | None]:
+    """:func:`_column_roles` from the smallest and largest value of every column (so the
+    roles of a union of row blocks follow from the ranges of the blocks).
+
+    Examples
+    --------
+    >>> free, intercept = _roles_from_range(np.array([0.0, 2.0, 1.0]), np.array([0.0, 2.0, 3.0]))
+    >>> print(free, intercept)
+    [False False  True] 1
+    """
     magnitude = np.maximum(np.abs(col_max), np.abs(col_min))
     constant = (col_max - col_min) <= _CONSTANT_RTOL * magnitude
     nonzero = np.flatnonzero(constant & (magnitude > 0))

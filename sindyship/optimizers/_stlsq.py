@@ -189,7 +189,7 @@ class STLSQ(_LinearModel):
         Sets ``cv_results_`` and ``coef_path_``.
         """
         n_targets, n_features = data.n_targets, data.n_features
-        mse = np.zeros((n_targets, thresholds.shape[1], len(data.splits)))
+        mse = np.zeros((n_targets, thresholds.shape[1], data.n_folds))
         for f, fold, Rf, Zf, error in data.folds():
             for t in range(n_targets):
                 W = np.column_stack(
@@ -197,7 +197,7 @@ class STLSQ(_LinearModel):
                 )
                 mse[t, :, f] = error(fold.physical(W, np.zeros(W.shape[1]), t, n_features), t)
         mean_mse = mse.mean(axis=2)
-        y_ms = np.mean(data.Y**2, axis=0)
+        y_ms = data.y_mean_square
         self.cv_results_ = {
             "threshold": thresholds,
             "mean_mse": mean_mse,

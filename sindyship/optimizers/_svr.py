@@ -248,6 +248,8 @@ class SVR(_LinearModel):
     True
     """
 
+    _needs_rows = True  # the epsilon-insensitive loss is not a least-squares one
+
     _parameter_constraints: dict = {
         "Cs": [None, "array-like"],
         "epsilons": [None, "array-like"],

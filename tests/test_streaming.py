@@ -1,0 +1,219 @@
+"""Fits streamed from record files (one record at a time, reduced to triangular factors and
+merged as a tree) give the in-memory fit's coefficients: in this process, on a two-worker
+Dask LocalCluster, and through ``sindyship fit --stream`` with a glob of Parquet files."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sindyship.cli import main
+from sindyship.cli._records import read_records
+from sindyship.identify import design, fit, resolve_library
+from sindyship.manoeuvres import Manoeuvre, fly
+from sindyship.measurements import write_csv
+from sindyship.mmg import MMGModel
+from sindyship.model import AbkowitzModel
+from sindyship.optimizers import LeastSquares, RowFactor, tree_factor
+from sindyship.optimizers._base import _FitData
+from sindyship.optimizers._factored import _FactorData
+from sindyship.smoothing import smooth_records
+from sindyship.streaming import fit_files, reduce_files, stream_settings
+
+PLAN = [Manoeuvre("turning-circle", rudder=35, duration=500),
+        Manoeuvre("turning-circle", rudder=-35, duration=500),
+        Manoeuvre("zigzag", rudder=20, check=20, duration=500),
+        Manoeuvre("zigzag", rudder=10, check=10, duration=500)]
+
+#: The streamed coefficients equal the in-memory ones to this fraction of the largest
+#: coefficient of their equation.
+RTOL = 1e-10
+
+
+@pytest.fixture(scope="module")
+def files(kcs, tmp_path_factory):
+    """The plan's records as measurement CSVs and as Parquet files (with unit headers)."""
+    folder = tmp_path_factory.mktemp("fleet")
+    runs = fly(MMGModel(kcs), PLAN)
+    csv, parquet = [], []
+    for k, run in enumerate(runs):
+        csv.append(write_csv(run, folder / f"run{k}.csv"))
+        frame = run.data.copy()
+        frame["psi"] = np.degrees(frame["psi"])
+        frame["r"] = np.degrees(frame["r"])
+        frame = frame.rename(columns={"psi": "psi [deg]", "r": "r [deg/s]"})
+        path = folder / f"run{k}.parquet"
+        frame.to_parquet(path, index=False)
+        parquet.append(path)
+    return {"folder": folder, "csv": csv, "parquet": parquet}
+
+
+@pytest.fixture(scope="module")
+def records(files, kcs):
+    return read_records(files["csv"], ship=kcs)
+
+
+def gap(a, b) -> float:
+    """Largest coefficient difference over the largest coefficient, worst equation."""
+    out = 0.0
+    for dof in ("X", "Y", "N"):
+        x = np.array(list(a.coefficients[dof].values()))
+        y = np.array(list(b.coefficients[dof].values()))
+        assert np.array_equal(x == 0, y == 0)
+        out = max(out, float(np.max(np.abs(x - y)) / np.max(np.abs(x))))
+    return out
+
+
+@pytest.mark.parametrize("optimizer", ["ls", "stlsq", "lasso"])
+def test_streamed_coefficients_equal_the_in_memory_fit(files, records, kcs, optimizer):
+    direct = fit(records, kcs, optimizer=optimizer)
+    streamed = fit_files(files["csv"], kcs, optimizer=optimizer)
+    assert gap(direct, streamed) <= RTOL
+    saved, same = streamed.to_dict(), direct.to_dict()
+    for key in ("ship", "library", "optimizer", "rudder_signal", "nondim"):
+        assert saved[key] == same[key]
+    for key in ("training", "n_samples", "derivative", "envelope"):
+        assert saved["info"][key] == same["info"][key]
+    assert saved["info"]["streamed"]["records"] == len(records)
+
+
+def test_smoothing_effects_and_savgol_derivatives_stream_as_in_memory(files, records, kcs):
+    options = {"effects": ["asymmetry"], "derivative": "savgol", "window": 31.0}
+    smoothed = smooth_records(records, "rts:21")
+    direct = fit(smoothed, kcs, **options)
+    streamed = fit_files(files["csv"], kcs, smoothing="rts:21", **options)
+    assert gap(direct, streamed) <= RTOL
+    assert streamed.info["smoothing"] == {"method": "rts", "window_s": 21.0}
+
+
+def test_leave_one_record_out_folds_are_the_direct_fold_fits(records, kcs):
+    library = resolve_library("abkowitz")
+    problems = design(records, kcs, library)["N"]
+    per_record = [design([r], kcs, library)["N"] for r in records]
+    factors = [RowFactor.of_rows(p.features, p.target) for p in per_record]
+    X, Y = problems.features, problems.target.reshape(-1, 1)
+    splits = [(np.flatnonzero(problems.groups != k), np.flatnonzero(problems.groups == k))
+              for k in range(len(records))]
+    rows = _FitData(X, Y, splits)
+    streamed = _FactorData(factors, None, cross_validate=True)
+    assert len(list(streamed.folds())) == len(records)
+    for (f, fold, Rf, Zf, error), (_, fold_s, Rs, Zs, error_s) in zip(
+            rows.folds(), streamed.folds(), strict=True):
+        w = fold.physical(np.linalg.lstsq(Rf, Zf[:, 0], rcond=None)[0], 0.0, 0, X.shape[1])
+        w_s = fold_s.physical(np.linalg.lstsq(Rs, Zs[:, 0], rcond=None)[0], 0.0, 0, X.shape[1])
+        assert np.max(np.abs(w - w_s)) <= RTOL * np.max(np.abs(w))
+        held_out = error(w[:, None], 0)[0]
+        assert error_s(w[:, None], 0)[0] == pytest.approx(held_out, rel=1e-9)
+        # the fold is the fit on all the other records, read directly from their rows
+        train = splits[f][0]
+        direct = LeastSquares().fit(X[train], Y[train, 0]).coef_[0]
+        others = tree_factor([factors[k] for k in range(len(records)) if k != f])
+        assert np.max(np.abs(LeastSquares().fit_factors([], others).coef_[0] - direct)) <= (
+            RTOL * np.max(np.abs(direct)))
+
+
+def test_parquet_with_unit_headers_fits_as_the_csv(files, kcs):
+    from_csv = fit_files(files["csv"], kcs)
+    from_parquet = fit_files(files["parquet"], kcs)
+    assert gap(from_csv, from_parquet) <= RTOL
+
+
+def test_svr_and_the_automatic_smoothing_are_refused_before_any_work(files, kcs):
+    from sindyship.errors import SindyshipInputError
+
+    with pytest.raises(SindyshipInputError, match="needs every sample"):
+        fit_files(files["csv"], kcs, optimizer="svr")
+    with pytest.raises(SindyshipInputError, match="fixed setting"):
+        stream_settings(kcs, smoothing="auto")
+
+
+@pytest.fixture(scope="module")
+def client():
+    distributed = pytest.importorskip("distributed")
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                       dashboard_address=":0")
+    with distributed.Client(cluster) as connected:
+        yield connected
+    cluster.close()
+
+
+def test_the_cluster_reduces_the_records_as_this_process_does(files, kcs, client):
+    settings = stream_settings(kcs)
+    local, local_records = reduce_files(files["parquet"], settings, keep_records=True)
+    from distributed import get_task_stream
+
+    with get_task_stream(client) as stream:
+        remote, remote_records = reduce_files(files["parquet"], settings, client=client,
+                                              keep_records=True)
+    # one task per record file and a binary tree of three merges
+    assert len(stream.data) >= len(files["parquet"]) + 3
+    assert remote.names == local.names and remote.samples == local.samples
+    for dof in ("X", "Y", "N"):
+        np.testing.assert_allclose(np.abs(remote.factors[dof].R), np.abs(local.factors[dof].R),
+                                   rtol=1e-12, atol=1e-12 * np.abs(local.factors[dof].R).max())
+    assert [r.names for r in remote_records] == [r.names for r in local_records]
+
+
+def test_fit_stream_takes_a_glob_and_writes_the_in_memory_model(files, records, kcs, client,
+                                                                  tmp_path, capsys):
+    out = tmp_path / "model.json"
+    pattern = str(files["folder"] / "*.parquet")
+    code = main(["fit", pattern, "--stream", "--scheduler", client.scheduler.address,
+                 "--optimizer", "stlsq", "--out", str(out), "--json"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    document = json.loads(captured.out)
+    assert document["streamed"]["records"] == len(files["parquet"])
+    assert document["streamed"]["samples"] == sum(r.n_samples for r in records)
+    assert gap(fit(records, kcs, optimizer="stlsq"), AbkowitzModel.load(out)) <= RTOL
+
+
+def one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err and err[-1].startswith("sindyship fit: error: ")
+    assert "Traceback" not in "\n".join(err)
+    return err[-1]
+
+
+def test_bad_inputs_of_a_streamed_fit_are_one_line_errors(files, client, tmp_path, capsys,
+                                                          monkeypatch):
+    scheduler = ["--stream", "--scheduler", client.scheduler.address]
+    out = str(tmp_path / "model.json")
+    assert main(["fit", str(tmp_path / "nothing" / "*.parquet"), *scheduler, "--out", out]) == 2
+    assert "no files match" in one_line_error(capsys)
+
+    wrong = pd.read_parquet(files["parquet"][0])
+    wrong["delta"] = np.degrees(wrong["delta"])  # degrees under a radian header
+    bad = tmp_path / "bad.parquet"
+    wrong.to_parquet(bad, index=False)
+    assert main(["fit", str(files["parquet"][1]), str(bad), *scheduler, "--out", out]) == 2
+    line = one_line_error(capsys)
+    assert "bad.parquet" in line and "'delta'" in line and "degrees" in line
+
+    unknown = tmp_path / "unknown.csv"
+    unknown.write_text(files["csv"][0].read_text().replace("r,", "r [furlong/s],", 1))
+    assert main(["fit", str(unknown), str(files["csv"][1]), *scheduler, "--out", out]) == 2
+    assert "unknown.csv" in one_line_error(capsys)
+
+    assert main(["fit", str(files["csv"][0]), *scheduler, "--optimizer", "svr",
+                 "--out", out]) == 2
+    assert "needs every sample" in one_line_error(capsys)
+    assert not (tmp_path / "model.json").exists()
+
+    monkeypatch.setitem(sys.modules, "distributed", None)  # Dask not installed
+    assert main(["fit", str(files["csv"][0]), "--stream", "--out", out]) == 2
+    assert 'pip install "sindyship[cluster]"' in one_line_error(capsys)
+
+
+def test_fit_stream_without_a_scheduler_starts_a_local_cluster(files, records, kcs, tmp_path,
+                                                               capsys):
+    pytest.importorskip("distributed")
+    out = tmp_path / "model.json"
+    pattern = str(files["folder"] / "run*.csv")
+    assert main(["fit", pattern, "--stream", "--n-jobs", "1", "--out", str(out)]) == 0
+    assert "on 1 Dask workers (local cluster)" in capsys.readouterr().err
+    assert gap(fit(records, kcs), AbkowitzModel.load(out)) <= RTOL
