@@ -27,7 +27,7 @@ from .errors import SindyshipInputError
 from .library import TermLibrary, nondimensional_variables, record_variables
 from .ships import Ship, load_ship, ship_digest, ship_from_dict, ship_to_dict
 from .simulation.kernels import ChannelSeries
-from .targets import DOFS, abkowitz_mass_matrix, coriolis
+from .targets import DOFS, abkowitz_mass_matrix, coriolis, coriolis_factors
 from .terms import Factor, evaluate_factor
 from .trajectory import Trajectory
 
@@ -44,7 +44,7 @@ def channel_series(records, names, L: float, U0: float) -> ChannelSeries:
 
 @dataclass(frozen=True)
 class AbkowitzDynamics:
-    """Simulator dynamics of an identified model (paper eq. 14), evaluated term by term.
+    """Simulator dynamics of an identified model (paper eq. 14) from its forces of eq. 15.
 
     Parameters
     ----------
@@ -125,9 +125,9 @@ def _compiled_tables(bases, factors, slots):
     numba is not there or compiling is switched off (``SINDYSHIP_NO_COMPILE=1``)."""
     if os.environ.get("SINDYSHIP_NO_COMPILE") == "1" or importlib.util.find_spec("numba") is None:
         return None
-    from ._forces_compiled import tables
+    from ._forces_compiled import COMPILED, tables
 
-    return tables(bases, factors, slots)
+    return tables(bases, factors, slots) if COMPILED else None  # numba there but broken
 
 
 @dataclass
@@ -196,7 +196,7 @@ class AbkowitzModel:
             powers.append(factor.power)
         self._bases = [(base, np.array(rows), np.array(powers, dtype=float)[:, None])
                        for base, (rows, powers) in bases.items()]
-        width = max((len(term.factors) for term in terms), default=0)
+        width = max((len(term.factors) for term in terms), default=1) or 1  # "1" has none
         # factor indices of each term, padded with the index of a row of ones
         slots = np.full((width, len(terms)), len(factors), dtype=np.intp)
         for k, term in enumerate(terms):
@@ -216,10 +216,7 @@ class AbkowitzModel:
 
             self._run_compiled = run_accelerations
         self._compiled_reads = {base.base for base, _, _ in self._bases}
-        inertia = self.ship.prime_i_inertia()
-        m, mxg = inertia["m"], inertia["m"] * inertia["x_G"]
-        self._inertia = np.array([m - inertia["Y_vdot"], mxg - inertia["Y_rdot"],
-                                  m - inertia["X_udot"], inertia["X_udot"] - inertia["Y_vdot"]])
+        self._inertia = np.array(coriolis_factors(self.ship))
 
     # ----------------------------------------------------------------------------------------
     def coefficient_vector(self, dof: str) -> np.ndarray:
@@ -239,7 +236,7 @@ class AbkowitzModel:
         columns (one matrix product for the three equations).
         """
         base = np.asarray(values["du"], dtype=float)
-        if not self._factors:
+        if not self._slots.shape[1]:  # no active term
             return {dof: 0.0 * base for dof in DOFS}
         if self._compiled is not None and all(v in values for v in self._compiled_reads):
             names, tables = self._compiled

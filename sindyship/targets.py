@@ -50,12 +50,20 @@ def coriolis(ship: Ship, u, v, r) -> tuple:
     N'_C = -(m'x'_G - Y'_rdot) u' r' - (X'_udot - Y'_vdot) u' v'  (Fossen 2011, with the Munk
     moment), with u' the total surge speed over U0.
     """
+    c_vr, c_rr, c_ur, c_uv = coriolis_factors(ship)
+    X = c_vr * v * r + c_rr * r * r
+    Y = -c_ur * u * r
+    N = -c_rr * u * r - c_uv * u * v
+    return X, Y, N
+
+
+def coriolis_factors(ship: Ship) -> tuple[float, float, float, float]:
+    """The Prime I factors of :func:`coriolis`, ``(m' - Y'_vdot, m'x'_G - Y'_rdot,
+    m' - X'_udot, X'_udot - Y'_vdot)``; the compiled path (``sindyship._forces_compiled``)
+    takes the same numbers."""
     p = ship.prime_i_inertia()
     m, mxg = p["m"], p["m"] * p["x_G"]
-    X = (m - p["Y_vdot"]) * v * r + (mxg - p["Y_rdot"]) * r * r
-    Y = -(m - p["X_udot"]) * u * r
-    N = -(mxg - p["Y_rdot"]) * u * r - (p["X_udot"] - p["Y_vdot"]) * u * v
-    return X, Y, N
+    return (m - p["Y_vdot"], mxg - p["Y_rdot"], m - p["X_udot"], p["X_udot"] - p["Y_vdot"])
 
 
 def five_point_derivative(y: np.ndarray, dt: float) -> np.ndarray:

@@ -9,7 +9,7 @@ import pytest
 
 from sindyship.evaluation import fly_like_batch
 from sindyship.library import TermLibrary
-from sindyship.model import AbkowitzModel, paper_model
+from sindyship.model import AbkowitzDynamics, AbkowitzModel, paper_model
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("numba") is None,
                                 reason="numba is not installed (pip install sindyship[fast])")
@@ -93,3 +93,20 @@ def test_a_missing_channel_is_refused_on_both_paths(kcs, monkeypatch):
                                              "N": {"r": -1e-3}})
         with pytest.raises(SindyshipInputError, match="variable 'depth'"):
             AbkowitzDynamics(model).accelerations(*state)
+
+
+def test_a_model_of_constant_terms_only_gives_its_constants_on_both_paths(kcs, monkeypatch):
+    library = TermLibrary("constants", "prime-I", "", {"X": ["1", "du"], "Y": ["1", "v"],
+                                                       "N": ["1", "r"]})
+    coefficients = {"X": {"1": 1e-3}, "Y": {"1": -2e-3}, "N": {"1": 3e-4}}
+    values = {name: np.array([0.1, -0.2]) for name in ("du", "v", "r", "delta", "psi")}
+    for switch in ("0", "1"):
+        monkeypatch.setenv("SINDYSHIP_NO_COMPILE", switch)
+        model = AbkowitzModel(kcs, library, coefficients)
+        forces = model.forces_from_values(values)
+        np.testing.assert_allclose(forces["X"], [1e-3, 1e-3])
+        np.testing.assert_allclose(forces["Y"], [-2e-3, -2e-3])
+        acceleration = AbkowitzDynamics(model).accelerations(
+            np.array([kcs.U0]), np.array([0.0]), np.array([0.0]), np.array([0.0]),
+            np.array([0.0]))
+        assert acceleration[1][0] != 0.0  # the constant sway force accelerates the ship
