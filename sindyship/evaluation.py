@@ -207,11 +207,26 @@ def fly_jobs_like(jobs: Sequence[tuple[object, Sequence[Trajectory]]], *,
             batch = [members[j] for j in idx]
             state0 = np.column_stack([m[3].state()[:, 0] for m in batch])
             results = simulate_batch(_batch_dynamics(batch, grid),
-                                     [command_for(m[3]) for m in batch], grid, state0,
+                                     [_command_on(m[3], grid) for m in batch], grid, state0,
                                      step=step)
             for (i, k, _, record), res in zip(batch, results, strict=True):
                 out[i][k] = result_to_trajectory(_cut(res, len(record.t)), record.name)
     return out
+
+
+def _command_on(record: Trajectory, grid: np.ndarray):
+    """The record's command (:func:`command_for`); a replayed rudder is held on to the end of
+    the batch's grid, changing at its samples as the longer records' do, so that the batch
+    keeps stepping from sample to sample together (see :func:`_held_to`)."""
+    command = command_for(record)
+    n = len(record.t)
+    if command.prescribed and len(grid) > n:
+        angles = np.asarray(_held_to(record, grid)["delta"], dtype=float).copy()
+        # the first held sample continues the last slope: at the record's last sample the
+        # servo sees the rate it sees in a flight of the record alone
+        angles[n:] = angles[n - 1] + command.rate(command.times[-1]) * (grid[n] - grid[n - 1])
+        return PrescribedRudder(grid, angles)
+    return command
 
 
 def _stackable(flier) -> bool:

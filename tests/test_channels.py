@@ -116,3 +116,13 @@ def test_models_flown_side_by_side_fly_as_alone(kcs, depth_model, protocol_runs)
         for a, b in zip(flights, fly_like_batch(flier, records), strict=True):
             np.testing.assert_array_equal(a.state(), b.state())
             assert a.meta["diverged_at"] == b.meta["diverged_at"]
+
+
+def test_a_closed_loop_flight_does_not_depend_on_a_replayed_record_beside_it(kcs,
+                                                                             protocol_runs):
+    model = paper_model(kcs)
+    zigzag = protocol_runs["test"][2]
+    replayed = _replayed(protocol_runs["train"][0], zigzag.n_samples, "replayed")
+    (alone,) = fly_like_batch(model, [zigzag])
+    together = fly_like_batch(model, [zigzag, replayed])
+    np.testing.assert_array_equal(together[0].state(), alone.state())

@@ -510,14 +510,13 @@ def _crossing(g, y0, f0, y1, f1, h) -> float:
 
 
 def _common_change(commands, members, time: float, h: float) -> float:
-    """The step, shortened to end where replayed rudders all change at one time inside it
-    (records sharing their sample times step there together, not split one by one)."""
-    tol = 1e-9 * max(1.0, h)
-    inside = {commands[j].next_change(time) for j in members if commands[j].prescribed}
-    inside = [c for c in inside if time + tol < c < time + h - tol]
-    if inside and max(inside) - min(inside) <= tol:
-        return min(inside) - time
-    return h
+    """The step, cut where every member's replayed rudder changes if all change at one time
+    inside it (they step there together, not one by one; no flight depends on others)."""
+    if not all(commands[j].prescribed for j in members):
+        return h
+    tol, changes = 1e-9 * max(1.0, h), [commands[j].next_change(time) for j in members]
+    first, last = min(changes), max(changes)
+    return first - time if time + tol < first < time + h - tol and last - first <= tol else h
 
 
 def integrate(integ: _Integrator, commands: Sequence[RudderCommand], t: np.ndarray,
