@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -217,3 +218,33 @@ def test_fit_stream_without_a_scheduler_starts_a_local_cluster(files, records, k
     assert main(["fit", pattern, "--stream", "--n-jobs", "1", "--out", str(out)]) == 0
     assert "on 1 Dask workers (local cluster)" in capsys.readouterr().err
     assert gap(fit(records, kcs), AbkowitzModel.load(out)) <= RTOL
+
+
+def test_a_parquet_timestamp_column_is_read_as_seconds_from_the_first_sample(tmp_path, kcs):
+    pytest.importorskip("pyarrow")
+    from sindyship.streaming import read_record
+
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=20, duration=120)])
+    frame = run.data.copy()
+    frame["t"] = pd.Timestamp("2026-01-01 08:00") + pd.to_timedelta(frame["t"], unit="s")
+    frame.to_parquet(tmp_path / "logged.parquet")
+    record, _, _ = read_record(tmp_path / "logged.parquet", time_range="all")
+    np.testing.assert_allclose(record.t, run.t - run.t[0])
+    np.testing.assert_allclose(record["u"], run["u"])
+
+
+def test_a_streamed_fit_sends_the_workers_absolute_paths(files, kcs, monkeypatch):
+    import sindyship.streaming._cluster as cluster
+
+    seen = []
+
+    def reduce_record(path, name, settings):
+        seen.append(path)
+        return original(path, name, settings)
+
+    original = cluster.reduce_record
+    monkeypatch.setattr(cluster, "reduce_record", reduce_record)
+    first, second = (Path(f) for f in files["csv"][:2])
+    monkeypatch.chdir(first.parent)
+    reduce_files([first.name, second.name], stream_settings(kcs))
+    assert seen == [str(first.resolve()), str(second.resolve())]

@@ -114,11 +114,12 @@ def reduce_files(paths: Sequence[str | os.PathLike], settings: StreamSettings, *
     Raises
     ------
     SindyshipInputError
-        When there are no files, or the first bad record's message.
+        When there are no files, or a bad record's message (the first to fail).
     """
     from tqdm.auto import tqdm
 
-    paths = [os.fspath(p) for p in paths]
+    # absolute paths: a worker of a remote cluster does not share this process's folder
+    paths = [os.path.abspath(os.fspath(p)) for p in paths]
     if not paths:
         raise SindyshipInputError("no records to fit; give at least one record file.")
     names = [Path(p).stem for p in paths] if names is None else list(names)

@@ -48,10 +48,17 @@ def stream_settings(ship: Ship, *, library: str = "abkowitz", effects: Sequence[
         smoothing = SmoothingSetting.parse(smoothing)
     if smoothing is not None and smoothing.method == "none":
         smoothing = None
+    # a library or effect given as a file goes to the workers by its absolute path
+    library, effects = _absolute(library), tuple(_absolute(e) for e in effects)
     return StreamSettings(ship=ship, library=os.fspath(library), effects=tuple(effects),
                           rudder_signal=rudder_signal, derivative=derivative,
                           window=float(window), smoothing=smoothing, resample=resample,
                           skip_checks=tuple(skip_checks), time_range=time_range)
+
+
+def _absolute(name):
+    """A file's absolute path; a catalogue name as it is."""
+    return os.path.abspath(name) if os.path.isfile(name) else name
 
 
 def fit_reduction(whole: Reduction, settings: StreamSettings, *, optimizer: str = "ls",

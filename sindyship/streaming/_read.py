@@ -14,6 +14,8 @@ import warnings
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
+import pandas as pd
+
 from ..errors import SindyshipInputError
 from ..trajectory import Trajectory
 
@@ -23,7 +25,7 @@ __all__ = ["PARQUET_SUFFIXES", "expand_paths", "read_record", "time_window"]
 PARQUET_SUFFIXES = (".parquet", ".pq")
 
 #: How to install what reading Parquet needs.
-PARQUET_INSTALL = 'python3 -m pip install "sindyship[cluster]"'
+PARQUET_INSTALL = 'python3 -m pip install "sindyship[parquet]"'
 
 
 def expand_paths(patterns: Iterable[str | os.PathLike]) -> list[str]:
@@ -113,6 +115,12 @@ def _read_parquet(path: Path, name: str, **options) -> Trajectory:
             f"{source}: cannot be read as Parquet ({reason}); give a Parquet file with the "
             "columns of a measurement CSV."
         ) from None
+    time = next((c for c in frame.columns if str(c).split("[")[0].strip() == "t"), None)
+    if time is not None and pd.api.types.is_datetime64_any_dtype(frame[time]):
+        # a timestamp column: seconds from the record's first sample
+        stamps = frame[time]
+        frame = frame.drop(columns=[time]).assign(
+            t=(stamps - stamps.iloc[0]).dt.total_seconds().to_numpy())
     return trajectory_from_frame(frame, name, source=source, **options)
 
 
