@@ -25,7 +25,7 @@ The exported simulator's right-hand side is timed against the library's by
 Prints and saves ``benchmarks/results/speed.json``.  These machines are noisy: compare the two
 checkouts' figures of one run, not figures of different runs.
 
-    git worktree add /tmp/sindyship-before f0525f1
+    git worktree add /tmp/sindyship-before COMMIT     # the version to compare with
     python benchmarks/bench_speed.py --against /tmp/sindyship-before [--repeat 3]
 """
 

@@ -239,11 +239,11 @@ class MMGModel:
     ``bank`` -- run a compiled copy of eq. 1-11 (:mod:`sindyship._mmg_compiled`): both hull
     forms, speed references, Coriolis forms and wake models, ``rudder_offset``, ``stall``,
     ``current`` and a given or free ``branch``, on float64 (or integer) numbers and numpy
-    arrays.  It agrees with the numpy functions of this module to rounding (below 1e-15 of
-    each acceleration's scale).  Other models and inputs (pandas, sympy, float32), and every
+    arrays.  It agrees with the numpy functions of this module to rounding
+    (``tests/test_mmg_compiled.py``).  Other models and inputs (pandas, sympy, float32), and every
     model built while the environment variable ``SINDYSHIP_NO_COMPILE`` is ``1``, run the
     numpy functions.  numba is imported at the first compiled call, which also loads the
-    machine code from numba's cache or, once per installation, compiles it (about 1.5 s).
+    machine code from numba's cache or, once per installation, compiles it.
 
     Examples
     --------
