@@ -80,7 +80,7 @@ from __future__ import annotations
 
 # Private names are re-exported (``name as name``) for the modules and tests using them.
 from ._base import _LinearModel as _LinearModel
-from ._compressed import GroupedProblem, RowFactor, merge_factors, tree_factor
+from ._compressed import GroupedProblem, RowFactor, merge_factors, pairwise_tree, tree_factor
 from ._compressed import _qr as _qr
 from ._cv import LeaveOneTrajectoryOut
 from ._forward import ForwardSelection
@@ -110,5 +110,6 @@ __all__ = [
     "make_optimizer",
     "merge_factors",
     "one_blas_thread",
+    "pairwise_tree",
     "tree_factor",
 ]

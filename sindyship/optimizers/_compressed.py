@@ -29,7 +29,7 @@ from ._cv import _check_groups
 from ._standardise import _CONSTANT_RTOL, _Standardiser
 from ._threads import one_blas_thread
 
-__all__ = ["GroupedProblem", "RowFactor", "merge_factors", "tree_factor"]
+__all__ = ["GroupedProblem", "RowFactor", "merge_factors", "pairwise_tree", "tree_factor"]
 
 #: Rows per block of the blocked QR (a block of ~24 columns fits in the CPU cache).
 _BLOCK_ROWS = 16384
@@ -144,15 +144,21 @@ def merge_factors(a: RowFactor, b: RowFactor) -> RowFactor:
                      a.first, a.n + b.n, a.n_targets)
 
 
-def tree_factor(factors: Sequence[RowFactor]) -> RowFactor:
-    """The factor of all rows, merged pairwise as a binary tree (TSQR)."""
-    level = list(factors)
+def pairwise_tree(items: Sequence, merge: Callable):
+    """``items`` merged pairwise as a binary tree, in order: ``merge(a, b)`` of neighbours,
+    level by level, an odd last item carried up (the reduction of TSQR)."""
+    level = list(items)
     if not level:
-        raise ValueError("no row factors to merge.")
+        raise ValueError("nothing to merge.")
     while len(level) > 1:
-        pairs = [merge_factors(a, b) for a, b in zip(level[::2], level[1::2], strict=False)]
+        pairs = [merge(a, b) for a, b in zip(level[::2], level[1::2], strict=False)]
         level = pairs + ([level[-1]] if len(level) % 2 else [])
     return level[0]
+
+
+def tree_factor(factors: Sequence[RowFactor]) -> RowFactor:
+    """The factor of all rows, merged pairwise as a binary tree (TSQR)."""
+    return pairwise_tree(factors, merge_factors)
 
 
 def _block_rows(rows: NDArray) -> list[NDArray]:

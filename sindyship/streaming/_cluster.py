@@ -14,6 +14,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import SindyshipInputError
+from ..optimizers import pairwise_tree
 from ._reduce import Reduction, StreamSettings, merge_all, merge_reductions, reduce_record
 
 __all__ = ["DASK_INSTALL", "connect", "reduce_files"]
@@ -143,18 +144,18 @@ def _on_cluster(client, paths, names, settings, keep_records, bar):
     distributed = _distributed()
     futures = client.map(reduce_record, paths, names, settings=settings, pure=False)
     submitted = list(futures)
-    level = list(futures)
-    while len(level) > 1:
-        pairs = [client.submit(merge_reductions, a, b, pure=False)
-                 for a, b in zip(level[::2], level[1::2], strict=False)]
-        submitted += pairs
-        level = pairs + ([level[-1]] if len(level) % 2 else [])
+
+    def merge_on_cluster(a, b):
+        submitted.append(client.submit(merge_reductions, a, b, pure=False))
+        return submitted[-1]
+
+    whole_future = pairwise_tree(futures, merge_on_cluster)
     try:
         for done in distributed.as_completed(futures):
             if done.status == "error":
                 done.result()  # raises the worker's error here
             bar.update(1)
-        whole = level[0].result()
+        whole = whole_future.result()
         records = client.gather(futures) if keep_records else None
     finally:
         client.cancel(submitted)

@@ -15,7 +15,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from ..optimizers import RowFactor, merge_factors
+from ..optimizers import RowFactor, merge_factors, pairwise_tree
 from ..ships import Ship
 from ..smoothing import SmoothingSetting
 from ..targets import DOFS
@@ -150,8 +150,4 @@ def merge_reductions(a: Reduction, b: Reduction) -> Reduction:
 
 def merge_all(reductions: Sequence[Reduction]) -> Reduction:
     """All reductions merged pairwise as a binary tree, in order."""
-    level = list(reductions)
-    while len(level) > 1:
-        pairs = [merge_reductions(a, b) for a, b in zip(level[::2], level[1::2], strict=False)]
-        level = pairs + ([level[-1]] if len(level) % 2 else [])
-    return level[0]
+    return pairwise_tree(reductions, merge_reductions)
