@@ -175,7 +175,7 @@ def fly_like_batch(dynamics, records: Sequence[Trajectory], *, step: float | Non
     A shorter record's member flies on to the end of the longest with its last rudder and
     channels held; its flight is cut at its own last sample, and a divergence after that
     sample is not its own.  The states at the record's samples are those of a flight of the
-    record alone, up to the step splitting (the batch lands on the common sample times).
+    record alone (``tests/test_channels.py``).
     """
     return fly_jobs_like([(dynamics, records)], step=step)[0]
 
