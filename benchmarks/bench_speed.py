@@ -41,6 +41,10 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from sindyship.marin import default_marin_dir  # noqa: E402
+
 OUT = Path(__file__).parent / "results" / "speed.json"
 TARGETS = {"protocol_flights": 0.3, "diagnose_protocol": 4.0, "diagnose_10hz": 30.0,
            "reproduce": 15.0}
@@ -96,6 +100,9 @@ print(json.dumps({"times": best(lambda: diagnose(records, ship), int(sys.argv[1]
 def _run(checkout: Path, step: str, repeat: int) -> dict:
     """One step of ``checkout`` in a fresh process: its wall times [s] (and samples)."""
     env = {**os.environ, "PYTHONPATH": str(checkout), "MPLBACKEND": "Agg"}
+    marin = default_marin_dir()  # the same data for a checkout in another folder
+    if marin is not None:
+        env["SINDYSHIP_MARIN_DIR"] = str(marin)
     if step == "reproduce":
         times = []
         for _ in range(repeat):
