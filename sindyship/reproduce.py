@@ -17,7 +17,7 @@ from pathlib import Path
 import pandas as pd
 
 from ._io import save_figure, write_text_atomic
-from .evaluation import distance_errors, fly_jobs_like, fly_like_batch
+from .evaluation import distance_errors, fly_like_batch
 from .identify import design, fit, resolve_library
 from .manoeuvres import fly, protocol_manoeuvres
 from .mmg import MMGModel
@@ -86,6 +86,17 @@ def _diagnosis_rounds(train, test, ship, rounds, progress):
     return diagnosis, results, models, iterative
 
 
+def _held_out_flights(iterative, test) -> dict:
+    """The held-out flights of every diagnosed model (after the plain round), keyed as the
+    models of :func:`_diagnosis_rounds`, in the order of ``test``."""
+    out = {}
+    for rnd in iterative.rounds[1:]:
+        d = rnd.diagnosis
+        flown = {c.name: c.flown for c in d.comparisons if c.set == "held-out"}
+        out["ls+" + "+".join(d.library.effects)] = [flown[r.name] for r in test]
+    return out
+
+
 def _write_outputs(out: Path, output: dict, models: dict, flights: dict, test, ship,
                    table: pd.DataFrame, figures: list) -> None:
     """Models, equations, simulators, the coefficient table, figures and results.json."""
@@ -143,20 +154,19 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
     flown = fly(mmg, plan["train"] + plan["test"])  # one batch: every manoeuvre is 3200 s
     train, test = flown[: len(plan["train"])], flown[len(plan["train"]):]
     results, models, flights = _fit_and_fly(train, test, ship, methods, progress)
-    diagnosis, drawn, diagnosed = None, [], {}
+    diagnosis, drawn = None, []
     if diagnose_rounds:
         diagnosis, rows, diagnosed, iterative = _diagnosis_rounds(
             train, test, ship, diagnose_rounds, progress)
         results += rows
         models.update(diagnosed)
+        for key, round_flights in _held_out_flights(iterative, test).items():
+            flights[key] = round_flights  # flown by the diagnosis, not again
         if figures:
             drawn.append(("diagnosis-rounds.png", iterative.figure()))
     agreement = ls_agreement(models["ls"].coefficients) if "ls" in models else None
     paper_ls = paper_model(ship, "LS")
-    # the diagnosed models and the paper's side by side in one integration
-    *diagnosed_flown, paper_flown = fly_jobs_like(
-        [(model, test) for model in diagnosed.values()] + [(paper_ls, test)])
-    flights.update(zip(diagnosed, diagnosed_flown, strict=True))
+    paper_flown = fly_like_batch(paper_ls.dynamics(), test)
     paper_errors = {rec.name: distance_errors(f, rec, ship.L)
                     for f, rec in zip(paper_flown, test, strict=True)}
     table = coefficient_table(models, ship)
