@@ -39,6 +39,7 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from sindyship._io import write_text_atomic  # noqa: E402
 from sindyship.trajectory import Trajectory  # noqa: E402
 
 OUT = Path(__file__).parent / "results" / "scale.json"
@@ -196,10 +197,7 @@ def main() -> None:
         "verdict": verdict,
         "claim_holds": holds,
     }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(document, indent=2) + "\n")
-    tmp.replace(args.out)
+    write_text_atomic(args.out, json.dumps(document, indent=2) + "\n")
 
 
 if __name__ == "__main__":

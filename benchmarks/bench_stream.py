@@ -53,6 +53,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from sindyship._io import write_text_atomic  # noqa: E402
+
 OUT = Path(__file__).parent / "results" / "stream.json"
 COLUMNS = ("t", "u", "v", "r", "x", "y", "psi", "delta", "delta_c")
 RATIO_LIMIT = 1.3
@@ -390,10 +392,7 @@ def main() -> None:
         "limits": {"time_per_sample_ratio": RATIO_LIMIT, "memory_mb": MEMORY_LIMIT_MB},
         "verdict": verdict,
     }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(document, indent=2) + "\n")
-    tmp.replace(args.out)
+    write_text_atomic(args.out, json.dumps(document, indent=2) + "\n")
 
 
 if __name__ == "__main__":

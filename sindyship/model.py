@@ -13,7 +13,6 @@ import importlib.util
 import json
 import math
 import os
-import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -23,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from . import __version__
+from ._io import write_text_atomic
 from .errors import SindyshipInputError
 from .library import TermLibrary, nondimensional_variables, record_variables
 from .ships import Ship, load_ship, ship_digest, ship_from_dict, ship_to_dict
@@ -530,20 +530,6 @@ def _jsonable(value):
     if value is None or isinstance(value, str | int | float | bool):
         return value
     return str(value)
-
-
-def write_text_atomic(path: str | Path, text: str) -> None:
-    """Write text to ``path`` through a temporary file in the same folder and a rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def paper_model(ship: Ship, method: str = "LS", csv_path: str | Path | None = None
