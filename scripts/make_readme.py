@@ -32,7 +32,9 @@ NUMBERS = ROOT / "docs" / "readme-numbers.json"
 RESULTS = ROOT / "benchmarks" / "results"
 TEST_NAMES = ("tc15_port", "tc15_stbd", "zz10_10")
 METHOD_LABELS = {"ls": "least squares", "stlsq": "STLSQ", "lasso": "LASSO (CV)",
-                 "svr": "linear SVR (CV)"}
+                 "svr": "linear SVR (CV)", "prior": "least squares with the ship's prior"}
+CAPTIVE_LABELS = {"static-drift": "static drift", "rudder": "rudder", "pure-yaw": "pure yaw",
+                  "drift-yaw": "drift and yaw"}
 
 
 # ------------------------------------------------------------------------------- numbers
@@ -104,6 +106,7 @@ def compute() -> dict:
         "diagnosis": output["diagnosis"]["rounds"],
         "diagnosis_stopped": output["diagnosis"]["stopped"],
         "linear_derivatives": output["linear_derivatives"],
+        "captive": output["captive"],
         "kvlcc2_turns_yy": _kvlcc2_turns(),
         "marin": _marin(),
     }
@@ -112,8 +115,32 @@ def compute() -> dict:
     for name in ("noise", "significance"):
         path = RESULTS / f"{name}.json"
         numbers[name] = json.loads(path.read_text()) if path.exists() else None
+    numbers["captive_bench"] = _saved_captive_bench()
+    numbers["pysindy"] = _saved_pysindy()
     numbers["seconds"] = time.perf_counter() - start
     return numbers
+
+
+def _saved_captive_bench() -> dict | None:
+    """The zig-zag fits of benchmarks/results/captive.json (least squares and the default
+    prior)."""
+    path = RESULTS / "captive.json"
+    if not path.exists():
+        return None
+    result = json.loads(path.read_text())
+    default = f"prior {result['default_strength']:.0e}"
+    fits = result["sets"]["zigzags"]["fits"]
+    return {"default_strength": result["default_strength"],
+            "sets": {"zigzags": {"fits": {k: fits[k] for k in ("ls", default)}}}}
+
+
+def _saved_pysindy() -> dict | None:
+    """The held-out errors of every workflow of benchmarks/results/pysindy.json."""
+    path = RESULTS / "pysindy.json"
+    if not path.exists():
+        return None
+    workflows = json.loads(path.read_text())["workflows"]
+    return {"workflows": {k: {"errors": v["errors"]} for k, v in workflows.items()}}
 
 
 # ------------------------------------------------------------------------------- blocks
@@ -271,8 +298,61 @@ def _noise(n: dict) -> str:
     return " ".join(parts)
 
 
+def _correlations(by_test: dict) -> list[str]:
+    return [" / ".join(f"{by_test[t][f]['correlation']:+.2f}" for f in "XYN")
+            for t in CAPTIVE_LABELS]
+
+
+def _captive(n: dict) -> str:
+    captive = n["captive"]
+    diagnosed = [k for k in captive if k.startswith("ls+")][-1]
+    rows = {"least squares": captive["ls"], "`prior`": captive["prior"],
+            f"{diagnosed} (recommended)": captive[diagnosed]}
+    lines = ["| model | " + " | ".join(CAPTIVE_LABELS.values()) + " |",
+             "|---|" + "---|" * len(CAPTIVE_LABELS)]
+    lines += [f"| {label} | " + " | ".join(_correlations(row)) + " |"
+              for label, row in rows.items()]
+    bench = n.get("captive_bench")
+    if bench is not None:
+        zz = bench["sets"]["zigzags"]["fits"]
+        ls, prior = zz["ls"], zz[f"prior {bench['default_strength']:.0e}"]
+        sweeps = ("static-drift", "pure-yaw", "drift-yaw")
+
+        def low(row):
+            return min(row["captive"][t][f]["correlation"] for t in sweeps for f in "YN")
+
+        def flights(row):
+            return " / ".join(f"{e['mean_distance_L']:.3f}" for e in row["held_out"].values())
+
+        lines += ["", "Identified on the three zig-zags alone (`benchmarks/bench_captive.py`), "
+                  f"the lowest Y or N correlation over static drift, pure yaw and drift and yaw "
+                  f"is {low(ls):+.2f} for least squares and {low(prior):+.2f} for `prior`; "
+                  f"their held-out flights are {flights(ls)} and {flights(prior)} ship lengths."]
+    return "\n".join(lines)
+
+
+def _pysindy(n: dict) -> str:
+    result = n.get("pysindy")
+    if result is None:
+        return "(run benchmarks/bench_pysindy.py)"
+    work = result["workflows"]
+
+    def errors(key):
+        return " / ".join(f"{e['mean_distance_L']:.3f}" for e in work[key]["errors"].values())
+
+    names = list(work["pysindy"]["errors"])
+    wins = [name for name in names if work["sindyship_diagnosed"]["errors"][name][
+        "mean_distance_L"] < work["pysindy"]["errors"][name]["mean_distance_L"]]
+    return (f"Held-out mean distance ({' / '.join(names)}): pysindy {errors('pysindy')}, "
+            f"sindyship least squares {errors('sindyship_ls')}, sindyship diagnosed "
+            f"{errors('sindyship_diagnosed')} ship lengths; the diagnosed model is better on "
+            f"{len(wins)} of {len(names)} ({', '.join(wins)}).")
+
+
 BLOCKS = {
     "table10": _table10,
+    "captive": _captive,
+    "pysindy": _pysindy,
     "agreement": _agreement,
     "diagnosis": _diagnosis,
     "linear": _linear,

@@ -170,6 +170,9 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
         problems: dict[str, Design] | None = None) -> AbkowitzModel:
     """Identify an Abkowitz model from records.
 
+    The ``prior`` optimizer also requires a model that is stable in straight running: it
+    raises the prior's strength until the model is (:func:`straight_run_stable`).
+
     Parameters
     ----------
     records : sequence of Trajectory
@@ -180,8 +183,9 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
         Term library (default the paper's ``abkowitz``).
     effects : sequence of str
         Catalogue effects whose terms are added to the library.
-    optimizer : {"ls", "stlsq", "lasso", "svr"}
-        Regression method; ``params`` go to its constructor.
+    optimizer : {"ls", "stlsq", "lasso", "svr", "prior"}
+        Regression method; ``params`` go to its constructor.  ``prior`` is least squares
+        drawn toward the ship's semi-empirical derivatives (:mod:`sindyship.priors`).
     rudder_signal : {"actual", "commanded"}
         Rudder angle used in the features (the protocol uses the actual angle).
     derivative, window
@@ -194,18 +198,10 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
     -------
     AbkowitzModel
     """
-    from .optimizers import make_optimizer
-
     lib = resolve_library(library, effects)
     if problems is None:
         problems = design(records, ship, lib, rudder_signal=rudder_signal,
                           derivative=derivative, window=window)
-    fitted = {}
-    for dof in DOFS:
-        problem = problems[dof]
-        estimator = make_optimizer(optimizer, **(params or {}))
-        estimator.fit(problem.features, problem.target, groups=problem.groups)
-        fitted[dof] = estimator
     info = {
         "training": [r.name for r in records],
         "n_samples": int(len(problems["X"].target)),
@@ -214,8 +210,86 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
         "selected": None,  # filled in by fitted_model
         "envelope": training_envelope(records, ship),
     }
-    return fitted_model(ship, lib, fitted, {dof: problems[dof].terms for dof in DOFS},
-                        optimizer=optimizer, rudder_signal=rudder_signal, info=info)
+    terms = {dof: problems[dof].terms for dof in DOFS}
+
+    def fitted_with(strength: float | None) -> AbkowitzModel:
+        chosen = dict(params or {}) if strength is None else {**(params or {}),
+                                                             "strength": strength}
+        return fitted_model(ship, lib, _fit_each(problems, optimizer, chosen, ship), terms,
+                            optimizer=optimizer, rudder_signal=rudder_signal, info=info)
+
+    model = fitted_with(None)
+    if optimizer == "prior":
+        model = straight_run_stable(model, fitted_with)
+    return model
+
+
+def _fit_each(problems: dict[str, Design], optimizer: str, params: dict | None,
+              ship: Ship) -> dict:
+    """One fitted estimator per degree of freedom."""
+    from .optimizers import make_optimizer
+
+    fitted = {}
+    for dof in DOFS:
+        problem = problems[dof]
+        estimator = make_optimizer(optimizer, **dof_params(optimizer, params, ship, dof,
+                                                            problem.terms))
+        fitted[dof] = estimator.fit(problem.features, problem.target, groups=problem.groups)
+    return fitted
+
+
+#: How often the ``prior`` fit raises its strength tenfold to reach a straight-run-stable
+#: model (:func:`straight_run_stable`).
+STABILITY_RAISES = 3
+
+
+def straight_run_stable(model: AbkowitzModel, refit) -> AbkowitzModel:
+    """The ``prior`` fit's straight-run stability requirement.
+
+    A model that is unstable in straight running
+    (:func:`sindyship.stability.straight_run_stability`) is refitted with the prior's
+    strength raised tenfold, at most :data:`STABILITY_RAISES` times, so that the prior's
+    (stable) linear derivatives weigh more; the model records the strength it ends with and
+    whether it is stable (``info["straight_run"]``).
+
+    Parameters
+    ----------
+    model : AbkowitzModel
+        The ``prior`` fit.
+    refit : callable
+        ``refit(strength) -> AbkowitzModel``: the same fit with another strength.
+    """
+    from .stability import straight_run_stability
+
+    strength = float(model.optimizer["params"]["strength"])
+    stable = straight_run_stability(model).stable
+    raises = 0
+    while not stable and raises < STABILITY_RAISES:
+        raises += 1
+        model = refit(strength * 10.0**raises)
+        stable = straight_run_stability(model).stable
+    model.info["straight_run"] = {"stable": stable,
+                                  "strength": float(model.optimizer["params"]["strength"]),
+                                  "raised": raises}
+    return model
+
+
+#: The parameters of the ``prior`` optimizer that :mod:`sindyship.priors` fills in per degree
+#: of freedom (a saved model keeps them in ``info["prior"]``, not in its optimizer's params).
+PRIOR_ARRAYS = ("mean", "scale", "relations")
+
+
+def dof_params(optimizer: str, params: dict | None, ship: Ship, dof: str,
+                terms: Sequence[str]) -> dict:
+    """The optimizer's parameters for one degree of freedom: the ship's prior for ``prior``
+    (:func:`sindyship.priors.prior_parameters`) unless given."""
+    out = dict(params or {})
+    if optimizer == "prior":
+        from .priors import prior_parameters
+
+        for key, value in prior_parameters(ship, dof, terms).items():
+            out.setdefault(key, value)
+    return out
 
 
 def fitted_model(ship: Ship, library: TermLibrary, fitted: dict, terms: dict[str, Sequence[str]],
@@ -248,8 +322,12 @@ def fitted_model(ship: Ship, library: TermLibrary, fitted: dict, terms: dict[str
         coefficients[dof] = dict(zip(terms[dof], coef.tolist(), strict=True))
     info = dict(info)
     info["selected"] = {dof: _selected(est) for dof, est in fitted.items()}
+    saved = {k: v for k, v in fitted["X"].get_params().items() if k not in PRIOR_ARRAYS}
+    if optimizer == "prior":
+        info["prior"] = {dof: {key: fitted[dof].get_params()[key] for key in PRIOR_ARRAYS}
+                         for dof in DOFS}
     model = AbkowitzModel(ship=ship, library=library, coefficients=coefficients,
-                          optimizer={"name": optimizer, "params": fitted["X"].get_params()},
+                          optimizer={"name": optimizer, "params": saved},
                           rudder_signal=rudder_signal, info=info)
     model.estimators_ = fitted
     return model

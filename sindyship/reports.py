@@ -382,6 +382,10 @@ def reproduce_report(output: dict) -> str:
             f"{agreement['median_rel_dev']:.3f}, "
             f"same sign {100 * agreement['sign_agreement']:.1f} %"
             f" ({agreement['n_coefficients']} non-zero coefficients)")
+    captive = output.get("captive")
+    if captive:
+        lines.append("")
+        lines.extend(_captive_lines(captive))
     linear = output.get("linear_derivatives")
     if linear:
         lines.append("")
@@ -397,6 +401,21 @@ def reproduce_report(output: dict) -> str:
         lines.append("(all coefficients: coefficients.csv in the output folder)")
     lines.append(f"Finished in {output['seconds']:.1f} s.")
     return "\n".join(lines)
+
+
+def _captive_lines(captive: dict) -> list[str]:
+    """Correlation of X, Y, N with the MMG's captive forces, per model and test."""
+    tests = list(next(iter(captive.values())))
+    lines = ["Forces against the MMG's virtual captive tests: correlation of X Y N (1 is "
+             "perfect; a negative value is a force of the wrong sign)",
+             f"{'model':30s}" + "".join(f"{t:>20s}" for t in tests)]
+    for key, by_test in captive.items():
+        cells = []
+        for test in tests:
+            values = [by_test[test][f]["correlation"] for f in "XYN"]
+            cells.append(" ".join("  n/a" if v is None else f"{v:+.2f}" for v in values))
+        lines.append(f"{key:30s}" + "".join(f"{c:>20s}" for c in cells))
+    return lines
 
 
 def forces_report(result) -> str:

@@ -26,7 +26,9 @@ from .paper import TABLE_10, ls_agreement, paper_coefficients
 from .reports import reproduce_report
 from .ships import load_ship
 
-METHODS = ("ls", "stlsq", "lasso", "svr")
+METHODS = ("ls", "stlsq", "lasso", "svr", "prior")
+#: The captive tests the models' forces are compared with (:func:`captive_agreement`).
+CAPTIVE_TESTS = ("static-drift", "rudder", "pure-yaw", "drift-yaw")
 TEST_NAMES = ("tc15_port", "tc15_stbd", "zz10_10")
 
 
@@ -170,9 +172,11 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
     paper_errors = {rec.name: distance_errors(f, rec, ship.L)
                     for f, rec in zip(paper_flown, test, strict=True)}
     table = coefficient_table(models, ship)
+    progress("comparing every model's forces with the MMG's virtual captive tests")
     output = {
         "linear_derivatives": _linear_derivatives(table, models),
         "results": results,
+        "captive": captive_agreement(models, ship),
         "diagnosis": diagnosis,
         "paper_ls_agreement": agreement,
         "paper_ls_flown": paper_errors,
@@ -185,6 +189,28 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
         _write_outputs(Path(out_dir), output, models, flights, test, ship, table, drawn)
     output["seconds"] = time.perf_counter() - start
     return output
+
+
+def captive_agreement(models: dict, ship) -> dict:
+    """Every model's forces against the MMG's virtual captive tests of the ship.
+
+    Returns
+    -------
+    dict
+        ``{model: {test: {"X": {"correlation", "relative_rms"}, "Y": ..., "N": ...}}}`` for
+        the tests of :data:`CAPTIVE_TESTS` (:func:`sindyship.forces.compare_forces`).
+    """
+    from .captive import captive_tests
+    from .forces import compare_forces
+
+    captive = captive_tests(ship, "all")
+    out = {}
+    for key, model in models.items():
+        by_test = compare_forces(model, captive).to_dict()["by_test"]
+        out[key] = {test: {dof: {k: by_test[test][dof][k]
+                                 for k in ("correlation", "relative_rms")} for dof in "XYN"}
+                    for test in CAPTIVE_TESTS}
+    return out
 
 
 def _linear_derivatives(table: pd.DataFrame, models: dict) -> list[dict]:

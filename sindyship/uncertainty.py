@@ -60,7 +60,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import SindyshipInputError
-from .identify import Design, design, resolve_library
+from .identify import Design, design, dof_params, resolve_library
 from .ships import Ship
 from .targets import DOFS
 from .trajectory import Trajectory
@@ -215,8 +215,10 @@ def _member_random_state(child: np.random.SeedSequence) -> int:
 
 def _fit_members(problems: Mapping[str, Design], jobs: Sequence[tuple[int, Any, Any]],
                  optimizer: str, params: Mapping[str, Any] | None, scheme: str,
-                 block: int) -> list[dict[str, np.ndarray]]:
-    """Fit a batch of members; ``jobs`` holds (index, SeedSequence, left-out group)."""
+                 block: int, ship: Ship) -> list[dict[str, np.ndarray]]:
+    """Fit a batch of members; ``jobs`` holds (index, SeedSequence, left-out group).  Every
+    equation gets its own parameters (:func:`sindyship.identify.dof_params`: the ship's prior
+    for ``prior``)."""
     from sklearn.base import clone
     from threadpoolctl import threadpool_limits
 
@@ -238,7 +240,9 @@ def _fit_members(problems: Mapping[str, Design], jobs: Sequence[tuple[int, Any, 
             coef = {}
             for dof in DOFS:
                 problem = problems[dof]
-                est = clone(estimator)
+                est = clone(estimator).set_params(**{
+                    k: v for k, v in dof_params(optimizer, {}, ship, dof, problem.terms).items()
+                    if k not in member_params})
                 est.fit(problem.features[rows], problem.target[rows],
                         groups=problem.groups[rows])
                 coef[dof] = np.asarray(est.coef_, dtype=float).reshape(-1)
@@ -349,7 +353,8 @@ def ensemble(records: Sequence[Trajectory], ship: Ship, optimizer: str = "ls",
         workers = max(int(effective_n_jobs(n_jobs)), 1)
         batch_size = max(1, math.ceil(len(jobs) / (4 * workers)))
     batches = [jobs[i:i + batch_size] for i in range(0, len(jobs), batch_size)]
-    fitted = parallel(delayed(_fit_members)(problems, batch, optimizer, params, scheme, block)
+    fitted = parallel(delayed(_fit_members)(problems, batch, optimizer, params, scheme, block,
+                                             ship)
                       for batch in batches)
     flat = [coef for batch in fitted for coef in batch]
     coefficients = {dof: np.vstack([c[dof] for c in flat]) for dof in DOFS}

@@ -1,4 +1,5 @@
-"""The figures the benchmarks saved support what the README claims of speed and scale.
+"""The figures the benchmarks saved support what the README claims of speed, scale and
+coefficients.
 
 The benchmarks time the code (``benchmarks/``); these tests only read what they saved, so a
 rerun that no longer meets a claim fails here instead of leaving the README wrong.
@@ -54,3 +55,21 @@ def test_the_compiled_export_is_faster_than_the_library_and_flies_the_same():
     assert result["ratio_to_sindyship"]["compiled"]["rhs_batch11"] > 1.0
     assert result["rhs_max_abs_difference"]["compiled"] < 1e-12
     assert result["zigzag_max_relative_difference"]["compiled"] < 1e-10
+
+
+def _lowest(row: dict, tests, forces="YN") -> float:
+    return min(row["captive"][t][f]["correlation"] for t in tests for f in forces)
+
+
+def test_the_prior_keeps_sway_and_yaw_forces_that_least_squares_loses():
+    result = _load("captive.json")
+    default = f"prior {result['default_strength']:.0e}"
+    sweeps = ("static-drift", "pure-yaw", "drift-yaw")
+    zigzags = result["sets"]["zigzags"]["fits"]
+    assert _lowest(zigzags[default], sweeps) >= 0.9
+    assert _lowest(zigzags["ls"], sweeps) < 0.9
+    protocol = result["sets"]["protocol"]["fits"]
+    assert _lowest(protocol[default], result["tests"]) >= 0.95
+    assert _lowest(protocol["ls"], result["tests"]) < 0.0
+    for fits in (zigzags, protocol):
+        assert all(row["straight_run"]["stable"] for key, row in fits.items() if key != "ls")

@@ -171,6 +171,7 @@ FAST = {
     "stlsq": {"n_thresholds": 8},
     "lasso": {"alphas": 20},
     "svr": {"Cs": [1.0, 1e4], "epsilons": [0.0, 0.05]},
+    "prior": {"strength": 1e-9},
 }
 
 
@@ -565,7 +566,8 @@ def test_pysindy_plug_in(name):
     x_dot[:, 1] += 0.01
     model = ps.SINDy(
         feature_library=ps.PolynomialLibrary(degree=3),
-        optimizer=make_optimizer(name, **FAST[name], **({} if name == "ls" else {"cv": 5})),
+        optimizer=make_optimizer(name, **FAST[name],
+                                 **({} if name in ("ls", "prior") else {"cv": 5})),
     )
     model.fit(x, t=t, x_dot=x_dot)
     assert model.coefficients().shape == (2, 10)

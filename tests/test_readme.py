@@ -64,7 +64,7 @@ def _row(method: str, effects=()):
                 if r["method"] == method and r["effects"] == list(effects))
 
 
-@pytest.mark.parametrize("method", ["ls", "stlsq", "lasso", "svr"])
+@pytest.mark.parametrize("method", ["ls", "stlsq", "lasso", "svr", "prior"])
 def test_table_10_rows_are_pinned(method, kcs, protocol_runs):
     from sindyship.evaluation import evaluate
     from sindyship.identify import fit
@@ -87,6 +87,23 @@ def test_the_diagnosed_rows_are_pinned(kcs, protocol_runs):
         for name, saved in _row("ls", effects)["errors"].items():
             assert errors[name]["mean_distance_L"] == pytest.approx(saved["mean_distance_L"],
                                                                     rel=1e-6), (effects, name)
+
+
+def test_the_captive_correlations_are_pinned(kcs, protocol_runs):
+    from sindyship.identify import fit
+    from sindyship.reproduce import captive_agreement
+
+    models = {"ls": fit(protocol_runs["train"], kcs),
+              "prior": fit(protocol_runs["train"], kcs, optimizer="prior"),
+              "ls+asymmetry+higher_order": fit(protocol_runs["train"], kcs,
+                                               effects=["asymmetry", "higher_order"])}
+    fresh = captive_agreement(models, kcs)
+    for key, by_test in fresh.items():
+        for test, forces in by_test.items():
+            for dof, stats in forces.items():
+                saved = NUMBERS["captive"][key][test][dof]
+                assert stats["correlation"] == pytest.approx(saved["correlation"], abs=1e-6)
+                assert stats["relative_rms"] == pytest.approx(saved["relative_rms"], rel=1e-6)
 
 
 def test_the_paper_agreement_is_pinned(kcs, protocol_runs):

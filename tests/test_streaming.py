@@ -69,7 +69,7 @@ def gap(a, b) -> float:
     return out
 
 
-@pytest.mark.parametrize("optimizer", ["ls", "stlsq", "lasso"])
+@pytest.mark.parametrize("optimizer", ["ls", "stlsq", "lasso", "prior"])
 def test_streamed_coefficients_equal_the_in_memory_fit(files, records, kcs, optimizer):
     direct = fit(records, kcs, optimizer=optimizer)
     streamed = fit_files(files["csv"], kcs, optimizer=optimizer)
@@ -80,6 +80,9 @@ def test_streamed_coefficients_equal_the_in_memory_fit(files, records, kcs, opti
     for key in ("training", "n_samples", "derivative", "envelope"):
         assert saved["info"][key] == same["info"][key]
     assert saved["info"]["streamed"]["records"] == len(records)
+    if optimizer == "prior":
+        assert saved["info"]["prior"] == same["info"]["prior"]
+        assert saved["info"]["straight_run"] == same["info"]["straight_run"]
 
 
 def test_smoothing_effects_and_savgol_derivatives_stream_as_in_memory(files, records, kcs):

@@ -1,7 +1,7 @@
 """Regression back-ends that identify the Abkowitz coefficients (paper sections 3.3-3.5).
 
 One regression per degree of freedom: a library matrix ``X`` (one column per term, e.g. the 22
-sway terms of eq. 17b) and a force target ``y`` (the right-hand side of eq. 16).  The four
+sway terms of eq. 17b) and a force target ``y`` (the right-hand side of eq. 16).  The five
 estimators below are plain scikit-learn regressors, usable directly and as
 ``pysindy.SINDy(optimizer=...)``:
 
@@ -12,11 +12,13 @@ name               estimator                                       paper
 ``"stlsq"``        :class:`STLSQ` (Brunton et al. 2016)            (SINDy's default)
 ``"lasso"``        :class:`LassoCV`                                section 3.4, eq. 20
 ``"svr"``          :class:`SVR` (linear epsilon-SVR)               section 3.5, eq. 22-24
+``"prior"``        :class:`PriorRidge` (least squares with a       (physics-consistent
+                   Gaussian prior on the coefficients)             identification)
 =================  ==============================================  ===========================
 
 :func:`make_optimizer` builds one by name; :data:`OPTIMIZERS` maps the names to the classes.
 
-Conventions shared by all four
+Conventions shared by all five
 ------------------------------
 No separate intercept.
     The library may contain a constant column (the term ``"1"``); its coefficient plays the
@@ -26,6 +28,8 @@ No separate intercept.
     centre the other columns and the target, fit, and map the intercept back to that column's
     coefficient.  Further constant columns (duplicates, all-zero columns) get coefficient 0.
     Without a constant column nothing is centred: the model goes through the origin.
+    :class:`PriorRidge` centres nothing either: every column, the constant one included, has
+    its prior (the weak one unless told otherwise, which is scaled like a standardised column).
 Standardised columns.
     The penalised estimators work on columns divided by their standard deviation (their root
     mean square when there is no constant column) and on the target divided by its own, so
@@ -65,7 +69,8 @@ Layout
 One algorithm per private module, the public names re-exported here:
 ``_least_squares`` (:class:`LeastSquares`), ``_stlsq`` (:class:`STLSQ`), ``_lasso``
 (:class:`LassoCV` and its exact homotopy path), ``_svr`` (:class:`SVR` and its Newton
-solver).  ``_base`` holds ``_LinearModel``, whose ``fit`` template validates the input, makes
+solver), ``_prior`` (:class:`PriorRidge`; :mod:`sindyship.priors` gives it a ship's prior).
+``_base`` holds ``_LinearModel``, whose ``fit`` template validates the input, makes
 the folds and calls the estimator's ``_reduce`` hook (a new estimator subclasses it and
 implements the hook); ``_compressed`` the one QR-compression engine, also public as
 :class:`GroupedProblem` (least-squares refits of column subsets leaving one record out);
@@ -87,6 +92,7 @@ from ._forward import ForwardSelection
 from ._lasso import LassoCV
 from ._lasso import _lasso_path_exact as _lasso_path_exact
 from ._least_squares import LeastSquares
+from ._prior import PriorRidge
 from ._registry import OPTIMIZERS, make_optimizer
 from ._standardise import _column_roles as _column_roles
 from ._standardise import _Standardiser as _Standardiser
@@ -107,6 +113,7 @@ __all__ = [
     "LassoCV",
     "LeastSquares",
     "LeaveOneTrajectoryOut",
+    "PriorRidge",
     "make_optimizer",
     "merge_factors",
     "one_blas_thread",

@@ -9,6 +9,7 @@ from sindyship.errors import SindyshipInputError
 from ._base import _LinearModel
 from ._lasso import LassoCV
 from ._least_squares import LeastSquares
+from ._prior import PriorRidge
 from ._stlsq import STLSQ
 from ._svr import SVR
 
@@ -21,6 +22,7 @@ OPTIMIZERS: dict[str, type[_LinearModel]] = {
     "stlsq": STLSQ,
     "lasso": LassoCV,
     "svr": SVR,
+    "prior": PriorRidge,
 }
 
 
@@ -29,7 +31,7 @@ def make_optimizer(name: str, **params: Any) -> _LinearModel:
 
     Parameters
     ----------
-    name : {"ls", "stlsq", "lasso", "svr"}
+    name : {"ls", "stlsq", "lasso", "svr", "prior"}
         Which optimizer (:data:`OPTIMIZERS`).
     **params
         Its parameters, as returned by its ``get_params()``.
@@ -51,7 +53,7 @@ def make_optimizer(name: str, **params: Any) -> _LinearModel:
     >>> make_optimizer("ridge")
     Traceback (most recent call last):
     ...
-    sindyship.errors.SindyshipInputError: unknown optimizer 'ridge': choose one of 'ls', 'stlsq', 'lasso', 'svr'.
+    sindyship.errors.SindyshipInputError: unknown optimizer 'ridge': choose one of 'ls', 'stlsq', 'lasso', 'svr', 'prior'.
     """  # noqa: E501
     if name not in OPTIMIZERS:
         valid = ", ".join(repr(k) for k in OPTIMIZERS)

@@ -7,7 +7,7 @@ import os
 from collections.abc import Sequence
 
 from ..errors import SindyshipInputError
-from ..identify import fitted_model, resolve_library
+from ..identify import dof_params, fitted_model, resolve_library, straight_run_stable
 from ..model import AbkowitzModel
 from ..optimizers import make_optimizer
 from ..ships import Ship
@@ -87,13 +87,7 @@ def fit_reduction(whole: Reduction, settings: StreamSettings, *, optimizer: str 
         ``info["streamed"]``.
     """
     lib = resolve_library(settings.library, settings.effects)
-    fitted = {}
-    for dof in DOFS:
-        estimator = make_optimizer(optimizer, **(params or {}))
-        if estimator.cross_validates and records is None:
-            raise ValueError(f"optimizer {optimizer!r} cross-validates: pass records=.")
-        parts = [r.factors[dof] for r in records] if records is not None else []
-        fitted[dof] = estimator.fit_factors(parts, whole.factors[dof])
+    terms = {dof: [t.text for t in lib.terms[dof]] for dof in DOFS}
     info = {
         "training": list(whole.names),
         "n_samples": int(whole.n_samples),
@@ -107,9 +101,25 @@ def fit_reduction(whole: Reduction, settings: StreamSettings, *, optimizer: str 
     }
     if settings.smoothing is not None:
         info["smoothing"] = settings.smoothing.as_dict()
-    terms = {dof: [t.text for t in lib.terms[dof]] for dof in DOFS}
-    return fitted_model(settings.ship, lib, fitted, terms, optimizer=optimizer,
-                        rudder_signal=settings.rudder_signal, info=info)
+
+    def fitted_with(strength: float | None) -> AbkowitzModel:
+        chosen = dict(params or {}) if strength is None else {**(params or {}),
+                                                             "strength": strength}
+        fitted = {}
+        for dof in DOFS:
+            estimator = make_optimizer(optimizer, **dof_params(optimizer, chosen, settings.ship,
+                                                               dof, terms[dof]))
+            if estimator.cross_validates and records is None:
+                raise ValueError(f"optimizer {optimizer!r} cross-validates: pass records=.")
+            parts = [r.factors[dof] for r in records] if records is not None else []
+            fitted[dof] = estimator.fit_factors(parts, whole.factors[dof])
+        return fitted_model(settings.ship, lib, fitted, terms, optimizer=optimizer,
+                            rudder_signal=settings.rudder_signal, info=info)
+
+    model = fitted_with(None)
+    if optimizer == "prior":
+        model = straight_run_stable(model, fitted_with)
+    return model
 
 
 def fit_files(paths: Sequence[str | os.PathLike], ship: Ship, *, optimizer: str = "ls",

@@ -1,0 +1,105 @@
+"""Coefficients against captive tests: least squares beside the physics-consistent fit.
+
+Identifies the KCS on the paper's training set (8 manoeuvres) and on its three zig-zags alone,
+with least squares (``ls``) and with ``prior`` at a range of strengths (its default 1e-5
+among them), and for every model reports
+
+- the agreement of its forces with the MMG's virtual captive tests
+  (:func:`sindyship.captive.captive_tests`: static drift to 20 deg, rudder to 35 deg, pure yaw
+  to r' = 0.6, drift and yaw combined): correlation and relative RMS error of X, Y and N per
+  test (:func:`sindyship.forces.compare_forces`);
+- the held-out flights of the protocol (tc15_port, tc15_stbd, zz10_10; mean distance in
+  ship lengths, a diverged flight as such);
+- its straight-run stability.
+
+Prints the tables and saves ``benchmarks/results/captive.json``.  Run with
+``python benchmarks/bench_captive.py`` (about a minute).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+from sindyship._io import clean_json, write_text_atomic
+from sindyship.captive import captive_tests
+from sindyship.evaluation import distance_errors, fly_like_batch
+from sindyship.forces import compare_forces
+from sindyship.identify import design, fit, resolve_library
+from sindyship.manoeuvres import fly, protocol_manoeuvres
+from sindyship.mmg import MMGModel
+from sindyship.ships import load_ship
+
+OUT = Path(__file__).parent / "results" / "captive.json"
+TESTS = ("static-drift", "rudder", "pure-yaw", "drift-yaw")
+STRENGTHS = (1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
+
+
+def evaluate(model, captive, test, ship) -> dict:
+    """Captive agreement per test, held-out flights and stability of one model."""
+    by_test = compare_forces(model, captive).to_dict()["by_test"]
+    flown = fly_like_batch(model.dynamics(), test)
+    return {
+        "captive": {t: {f: {k: by_test[t][f][k] for k in ("correlation", "relative_rms")}
+                        for f in "XYN"} for t in TESTS},
+        "held_out": {r.name: distance_errors(f, r, ship.L) for f, r in zip(flown, test,
+                                                                            strict=True)},
+        "straight_run": model.info.get("straight_run"),
+        "strength": model.optimizer["params"].get("strength"),
+    }
+
+
+def run() -> dict:
+    """Every fit of every training set."""
+    start = time.perf_counter()
+    ship = load_ship("kcs")
+    plan = protocol_manoeuvres()
+    flown = fly(MMGModel(ship), plan["train"] + plan["test"])
+    train, test = flown[: len(plan["train"])], flown[len(plan["train"]):]
+    captive = captive_tests(ship, "all")
+    library = resolve_library("abkowitz")
+    sets = {"protocol": train, "zigzags": [r for r in train if r.name.startswith("zz")]}
+    out = {"library": library.name, "tests": list(TESTS), "strengths": list(STRENGTHS),
+           "default_strength": 1e-5, "sets": {}}
+    for name, records in sets.items():
+        problems = design(records, ship, library)
+        rows = {"ls": evaluate(fit(records, ship, library=library, problems=problems),
+                               captive, test, ship)}
+        for strength in STRENGTHS:
+            model = fit(records, ship, library=library, optimizer="prior",
+                        params={"strength": strength}, problems=problems)
+            rows[f"prior {strength:.0e}"] = evaluate(model, captive, test, ship)
+        out["sets"][name] = {"training": [r.name for r in records], "fits": rows}
+    out["seconds"] = time.perf_counter() - start
+    return out
+
+
+def format_table(result: dict) -> str:
+    """Correlations per test and force, and held-out mean distances, per fit."""
+    lines = []
+    for name, data in result["sets"].items():
+        lines.append(f"Identified on {name} ({', '.join(data['training'])}); captive "
+                     "correlation X Y N per test; held-out mean distance [L]")
+        head = "  ".join(f"{t:>16s}" for t in TESTS)
+        lines.append(f"{'fit':14s}{head}   tc15_port tc15_stbd  zz10_10")
+        for fit_name, row in data["fits"].items():
+            cells = "  ".join(" ".join(f"{row['captive'][t][f]['correlation']:+.2f}"
+                                       for f in "XYN") + " " for t in TESTS)
+            flights = "  ".join(
+                f"{'diverged':>9s}" if e["diverged_at_s"] is not None
+                else f"{e['mean_distance_L']:9.3f}" for e in row["held_out"].values())
+            lines.append(f"{fit_name:14s}{cells}  {flights}")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    result = run()
+    print(format_table(result))
+    write_text_atomic(OUT, json.dumps(clean_json(result), indent=1) + "\n")
+    print(f"saved {OUT} ({result['seconds']:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()

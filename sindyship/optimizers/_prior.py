@@ -1,0 +1,131 @@
+"""Least squares drawn toward prior coefficients (generalised Tikhonov): :class:`PriorRidge`."""
+
+from __future__ import annotations
+
+from numbers import Real
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+from sklearn.utils._param_validation import Interval
+
+from ._base import _FitData, _LinearModel
+
+
+class PriorRidge(_LinearModel):
+    """Least squares with a Gaussian prior on the coefficients.
+
+    Minimises, per target,
+
+    ``||y - X w||^2 + strength * ||y||^2 * sum_k ((w_j(k) - c_k w_i(k) - mean_k) / scale_k)^2``
+
+    where every column ``j`` has one prior row: toward ``mean_j`` with standard deviation
+    ``scale_j``, or, for a column named in ``relations``, toward ``c`` times the coefficient of
+    another column ``i`` (a relation such as "the force grows with the speed squared").  A
+    deviation of one standard deviation costs ``strength`` times the target's sum of squares:
+    where the data determine a combination of coefficients, a small ``strength`` leaves it to
+    them; along the combinations the data cannot tell apart (collinear columns, the
+    "parameter drift" of the paper's section 4) the prior decides.  With ``strength=0`` this
+    is :class:`~sindyship.optimizers.LeastSquares`.
+
+    A ``scale`` of NaN (the default for every column) is the *weak* prior: the root mean square
+    of ``y`` over that of the column, i.e. one standard deviation is a term that alone explains
+    as much force as there is.  Relation rows use the weak scale of column ``j``.
+
+    Parameters
+    ----------
+    strength : float, default=1e-5
+        Weight of the prior against the data (see above).
+    mean : sequence of float or None, default=None
+        Prior mean of every coefficient (physical scale); ``None`` is zero.
+    scale : sequence of float or None, default=None
+        Prior standard deviation of every coefficient (physical scale); NaN or ``None`` is the
+        weak prior.
+    relations : sequence of (j, i, c) or None, default=None
+        Coefficient ``j`` is drawn toward ``c`` times coefficient ``i`` instead of toward
+        ``mean_j``.
+
+    Attributes
+    ----------
+    coef_ : ndarray, shape (n_targets, n_features)
+        Coefficients on the physical scale.
+    n_features_in_ : int
+        Number of library columns seen in ``fit``.
+
+    Examples
+    --------
+    Two identical columns: least squares cannot split the coefficient between them, the prior
+    can.
+
+    >>> import numpy as np
+    >>> v = np.linspace(-0.3, 0.3, 101)
+    >>> X = np.column_stack([v, v])
+    >>> model = PriorRidge(strength=1e-6, mean=[-0.01, 0.0], scale=[0.005, 0.005])
+    >>> np.round(model.fit(X, -0.03 * v).coef_ * 1e3, 2)
+    array([[-20., -10.]])
+    """
+
+    _parameter_constraints: dict = {
+        "strength": [Interval(Real, 0, None, closed="left")],
+        "mean": ["array-like", None],
+        "scale": ["array-like", None],
+        "relations": ["array-like", None],
+    }
+
+    def __init__(self, *, strength: float = 1e-5, mean=None, scale=None,
+                 relations=None) -> None:
+        self.strength = strength
+        self.mean = mean
+        self.scale = scale
+        self.relations = relations
+
+    def _uses_cv(self) -> bool:
+        return False
+
+    def _vector(self, values, default: float, p: int, what: str) -> NDArray:
+        if values is None:
+            return np.full(p, default)
+        out = np.asarray(values, dtype=float).reshape(-1)
+        if out.shape != (p,):
+            raise ValueError(f"the prior {what} has {out.size} values for {p} columns; give one "
+                             "per column.")
+        return out
+
+    def _prior_rows(self, p: int) -> tuple[NDArray, NDArray, NDArray]:
+        """``(D, m, scale)``: one prior row per column, ``D w ~ m`` with that scale."""
+        mean = self._vector(self.mean, 0.0, p, "mean")
+        scale = self._vector(self.scale, np.nan, p, "scale")
+        D = np.eye(p)
+        for j, i, c in ([] if self.relations is None else self.relations):
+            j, i = int(j), int(i)
+            if not (0 <= j < p and 0 <= i < p) or i == j:
+                raise ValueError(f"the prior relation ({j}, {i}, {c}) names a column outside "
+                                 f"0..{p - 1} or the column itself; relate two columns.")
+            D[j, i] = -float(c)
+            mean[j], scale[j] = 0.0, np.nan
+        bad = np.isfinite(scale) & (scale <= 0)
+        if bad.any():
+            raise ValueError(f"the prior scale of column {int(np.argmax(bad))} is not positive; "
+                             "give a positive standard deviation or NaN for the weak prior.")
+        return D, mean, scale
+
+    def _reduce(self, data: _FitData) -> NDArray:
+        """The stacked least-squares problem of data and prior rows, per target."""
+        p = data.n_features
+        D, mean, scale = self._prior_rows(p)
+        A, B = data.scaled_problem(np.ones(p))
+        norms = data.column_norms()
+        coef = np.empty((data.n_targets, p))
+        for t in range(data.n_targets):
+            total = data.n_samples * float(data.y_mean_square[t])  # ||y||^2
+            # weak scale rms(y) / rms(X_j) makes the row weight sqrt(strength) * ||X_j||
+            weight = np.where(np.isfinite(scale),
+                              np.sqrt(self.strength * total) / np.where(np.isfinite(scale),
+                                                                        scale, 1.0),
+                              np.sqrt(self.strength) * norms)
+            rows = D * weight[:, None]
+            lhs = np.vstack([A, rows])
+            rhs = np.concatenate([B[:, t], weight * mean])
+            coef[t] = scipy.linalg.lstsq(lhs, rhs, lapack_driver="gelsd",
+                                         check_finite=False)[0]
+        return coef

@@ -1,0 +1,177 @@
+"""The physics-consistent fit: PriorRidge, the ship's prior and the ``prior`` optimizer."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from sindyship.captive import captive_tests
+from sindyship.forces import compare_forces, model_captive_forces
+from sindyship.identify import fit
+from sindyship.library import load_library
+from sindyship.model import AbkowitzModel
+from sindyship.optimizers import LeastSquares, PriorRidge, RowFactor, make_optimizer
+from sindyship.priors import prior_means, prior_parameters, semi_empirical_derivatives
+
+SWEEPS = ("static-drift", "pure-yaw", "drift-yaw")
+
+
+def test_zero_strength_is_least_squares(seed):
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=(300, 6))
+    y = X @ rng.normal(size=6) + 0.01 * rng.normal(size=300)
+    prior = PriorRidge(strength=0.0, mean=np.ones(6), scale=np.full(6, 0.1)).fit(X, y)
+    assert np.allclose(prior.coef_, LeastSquares().fit(X, y).coef_, rtol=1e-10, atol=1e-12)
+
+
+def test_prior_decides_only_what_the_data_cannot(seed):
+    rng = np.random.default_rng(seed)
+    v = rng.uniform(-0.3, 0.3, 400)
+    r = rng.uniform(-0.3, 0.3, 400)
+    X = np.column_stack([v, r, v])  # columns 0 and 2 are the same: only their sum is known
+    y = X @ np.array([-0.01, 0.003, -0.02])
+    model = PriorRidge(strength=1e-6, mean=[-0.012, 0.0, 0.0], scale=[0.002, None, None])
+    coef = model.fit(X, y).coef_[0]
+    assert coef[0] + coef[2] == pytest.approx(-0.03, rel=1e-6)  # the data's combination
+    assert coef[1] == pytest.approx(0.003, rel=1e-6)
+    assert coef[0] == pytest.approx(-0.012 - 0.0, abs=2e-4)  # the prior's split
+
+
+def test_relation_draws_one_coefficient_toward_a_multiple_of_another():
+    v = np.linspace(-0.3, 0.3, 101)
+    X = np.column_stack([v, v])
+    coef = PriorRidge(strength=1e-6, relations=[(1, 0, 2.0)]).fit(X, -0.03 * v).coef_[0]
+    # the data fix w0 + w1 = -0.03; the prior rows (both of weight ||v||) minimise
+    # w0^2 + (w1 - 2 w0)^2 on that line: w0 = -0.009, w1 = -0.021
+    assert coef == pytest.approx([-0.009, -0.021], rel=1e-4)
+
+
+@pytest.mark.parametrize("params, message", [
+    ({"mean": [0.0]}, "the prior mean has 1 values for 2 columns"),
+    ({"scale": [0.1, -1.0]}, "the prior scale of column 1 is not positive"),
+    ({"relations": [(1, 1, 2.0)]}, "relate two columns"),
+])
+def test_bad_prior_is_refused_in_one_sentence(params, message):
+    X = np.column_stack([np.linspace(0, 1, 20), np.linspace(1, 0, 20) ** 2])
+    with pytest.raises(ValueError, match=message):
+        PriorRidge(**params).fit(X, X[:, 0])
+
+
+def test_fit_from_factors_equals_fit_on_rows(seed):
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=(600, 5))
+    X[:, 4] = X[:, 3] + 1e-6 * rng.normal(size=600)
+    y = X @ rng.normal(size=5)
+    params = {"strength": 1e-5, "mean": [0, 0, 0, 0.5, 0.5], "scale": [None] * 3 + [0.2, 0.2]}
+    rows = PriorRidge(**params).fit(X, y).coef_
+    factors = [RowFactor.of_rows(X[k:k + 200], y[k:k + 200]) for k in (0, 200, 400)]
+    streamed = PriorRidge(**params).fit_factors(factors).coef_
+    assert np.allclose(streamed, rows, rtol=1e-9, atol=1e-12)
+
+
+def test_clarke_linear_derivatives_of_the_kcs(kcs):
+    p = kcs.particulars
+    c_b = p.displacement / (p.L * p.B * p.d)
+    base = math.pi * (p.d / p.L) ** 2
+    y_v = -base * (1 + 0.4 * c_b * p.B / p.d)  # Clarke et al. (1983)
+    n_r = -base * (0.25 + 0.039 * p.B / p.d - 0.56 * p.B / p.L)
+    captive = semi_empirical_derivatives(kcs)
+    assert captive["Y"]["v"] == pytest.approx(y_v, rel=1e-12)
+    assert captive["N"]["r"] == pytest.approx(n_r, rel=1e-12)
+    assert captive["Y"]["v"] * 1e5 == pytest.approx(-1230, abs=1)  # MMG Taylor -1292
+    assert captive["N"]["v^2 r"] / (p.d / p.L) == pytest.approx(1.55 * c_b * p.B / p.L - 0.76)
+
+
+def test_prior_means_predict_the_semi_empirical_captive_forces(kcs):
+    """The conversion to fitted coefficients undoes the added-mass terms that
+    model_captive_forces adds back: a model of the prior means predicts captive forces whose
+    slopes are the semi-empirical derivatives."""
+    library = load_library("abkowitz")
+    means = prior_means(kcs)
+    model = AbkowitzModel(ship=kcs, library=library, coefficients={
+        dof: {t.text: means[dof].get(t.canonical(), 0.0) for t in library.terms[dof]}
+        for dof in "XYN"})
+    small = captive_tests(kcs, "all", points=3)
+    scale = 0.5 * kcs.particulars.rho * kcs.U0**2 * kcs.L**2
+    predicted = model_captive_forces(model, small)
+    v = small["v"].to_numpy() / kcs.U0
+    r = small["r"].to_numpy() * kcs.L / kcs.U0
+    captive = semi_empirical_derivatives(kcs)
+    pure_yaw = (np.abs(v) < 1e-12) & (r > 0) & (small["delta"].to_numpy() == 0)
+    k = np.flatnonzero(pure_yaw)[0]
+    expected_n = captive["N"]["r"] * r[k] + captive["N"]["r^3"] * r[k] ** 3
+    assert predicted["N"].iloc[k] / (scale * kcs.L) == pytest.approx(expected_n, rel=1e-9)
+    expected_y = captive["Y"]["r"] * r[k] + captive["Y"]["r^3"] * r[k] ** 3
+    assert predicted["Y"].iloc[k] / scale == pytest.approx(expected_y, rel=1e-9)
+
+
+def test_prior_parameters_cover_every_column(kcs):
+    terms = load_library("abkowitz").terms
+    params = prior_parameters(kcs, "Y", [t.text for t in terms["Y"]])
+    texts = [t.text for t in terms["Y"]]
+    assert len(params["mean"]) == len(params["scale"]) == len(texts)
+    assert params["scale"][texts.index("v")] == pytest.approx(
+        0.5 * abs(params["mean"][texts.index("v")]))
+    assert params["scale"][texts.index("delta")] is None  # no estimate: the weak prior
+    assert [texts.index("du v"), texts.index("v"), 1.0] in params["relations"]
+    json.dumps(params)  # saved with the model: plain JSON
+
+
+@pytest.fixture(scope="module")
+def zigzag_fits(kcs, protocol_runs):
+    """Least squares and the prior fit on the protocol's three zig-zags alone."""
+    zigzags = [r for r in protocol_runs["train"] if r.name.startswith("zz")]
+    captive = captive_tests(kcs, "all", points=11)
+    out = {}
+    for name in ("ls", "prior"):
+        model = fit(zigzags, kcs, optimizer=name)
+        out[name] = (model, compare_forces(model, captive).to_dict()["by_test"])
+    return out
+
+
+def test_prior_keeps_sway_and_yaw_forces_where_least_squares_loses_them(zigzag_fits):
+    """Identified on zig-zags alone: the prior fit's Y and N agree with the MMG's captive
+    forces (correlation >= 0.9 on every sweep); least squares' do not."""
+    prior = zigzag_fits["prior"][1]
+    least = zigzag_fits["ls"][1]
+    for test in SWEEPS:
+        for dof in "YN":
+            assert prior[test][dof]["correlation"] >= 0.9, (test, dof)
+    assert min(least[t][d]["correlation"] for t in SWEEPS for d in "YN") < 0.0
+
+
+def test_prior_fit_is_saved_with_its_prior_and_stability(zigzag_fits, tmp_path):
+    model = zigzag_fits["prior"][0]
+    model.save(tmp_path / "m.json")
+    data = json.loads((tmp_path / "m.json").read_text())
+    assert data["optimizer"] == {"name": "prior", "params": {"strength": 1e-5}}
+    assert data["info"]["straight_run"] == {"stable": True, "strength": 1e-5, "raised": 0}
+    y_terms = [t.text for t in model.library.terms["Y"]]
+    assert data["info"]["prior"]["Y"]["mean"][y_terms.index("v")] == pytest.approx(
+        prior_means(model.ship)["Y"]["v"])
+
+
+def test_unstable_fit_raises_the_prior_strength(kcs, protocol_runs, monkeypatch):
+    import sindyship.stability as stability
+
+    real = stability.straight_run_stability
+    calls = []
+
+    def unstable_twice(model):
+        calls.append(model.optimizer["params"]["strength"])
+        result = real(model)
+        return result if len(calls) > 2 else type(result)(
+            result.eigenvalues, result.jacobian, False, 1.0)
+
+    monkeypatch.setattr(stability, "straight_run_stability", unstable_twice)
+    zigzags = [r for r in protocol_runs["train"] if r.name.startswith("zz")]
+    model = fit(zigzags, kcs, optimizer="prior")
+    assert calls == pytest.approx([1e-5, 1e-4, 1e-3])
+    assert model.info["straight_run"] == {"stable": True, "strength": pytest.approx(1e-3),
+                                          "raised": 2}
+    assert model.optimizer["params"]["strength"] == pytest.approx(1e-3)
+
+
+def test_make_optimizer_knows_prior():
+    assert isinstance(make_optimizer("prior", strength=1e-4), PriorRidge)
