@@ -82,3 +82,20 @@ def test_fit_on_the_three_zigzags_warns_of_the_collinear_terms(protocol_runs, tm
     document = json.loads(done.stdout)
     flagged = {term for g in document["identifiability"]["groups"] for term in g["terms"]}
     assert {"v^3", "r^2 v", "v^2 r"} <= flagged
+
+
+def test_fit_with_the_prior_says_the_prior_decides_the_collinear_terms(protocol_runs,
+                                                                        tmp_path):
+    from sindyship.measurements import write_csv
+
+    paths = [write_csv(r, tmp_path / f"{r.name}.csv") for r in protocol_runs["train"]
+             if r.name.startswith("zz")]
+    done = subprocess.run([sys.executable, "-m", "sindyship.cli", "fit", *map(str, paths),
+                           "--ship", "kcs", "--optimizer", "prior",
+                           "--out", str(tmp_path / "m.json")],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert "the ship's prior decides what the records cannot" in done.stderr
+    saved = json.loads((tmp_path / "m.json").read_text())
+    assert saved["optimizer"]["name"] == "prior"
+    assert saved["info"]["straight_run"]["stable"] is True

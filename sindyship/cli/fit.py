@@ -119,8 +119,11 @@ def _identifiability(args, records, ship, effects):
                              remedies=ship.has_mmg)
     text = report.text()
     if text:
-        progress("Identifiability (terms these records cannot separate; their coefficients "
-                 "are not trustworthy as derivatives):")
+        verdict = ("the ship's prior decides what the records cannot (--optimizer prior)"
+                   if args.optimizer == "prior" else
+                   "their coefficients are not trustworthy as derivatives; --optimizer prior "
+                   "lets the ship's semi-empirical derivatives decide them")
+        progress(f"Identifiability (terms these records cannot separate; {verdict}):")
         for line in text.splitlines():
             progress(f"  {line}")
     return report
