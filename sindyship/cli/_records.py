@@ -111,7 +111,7 @@ def reading(args, ship) -> dict:
 
 
 def _time_range(text: str) -> tuple[float, float] | str:
-    from ..streaming import time_window
+    from ..records import time_window
 
     return time_window(text)
 
@@ -119,9 +119,9 @@ def _time_range(text: str) -> tuple[float, float] | str:
 def _read_one(path: Path, resample, ship, skip, window, time_range):
     """One record (a measurement CSV or a Parquet file), checked, with its notes on stderr,
     cut to the time range."""
-    from ..streaming import read_record
+    from ..records import PARQUET_SUFFIXES, read_record
 
-    if resample is not None and path.suffix.lower() not in (".parquet", ".pq"):
+    if resample is not None and path.suffix.lower() not in PARQUET_SUFFIXES:
         _check_resample_memory(path, resample)
     record, notes, cut = read_record(path, ship=ship, resample=resample, skip_checks=skip,
                                      time_range=window)

@@ -57,8 +57,8 @@ def fit_inputs(args) -> list[str]:
 def run(args) -> int:
     from .._io import check_output
     from ..identify import fit
+    from ..records import expand_paths
     from ..ships import load_ship
-    from ..streaming import expand_paths
 
     args.data = expand_paths(args.data)
     check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}")

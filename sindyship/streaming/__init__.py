@@ -11,8 +11,9 @@ compressed problem (``ls``, ``stlsq``, ``lasso``) fits from the merged factor, i
 leave-one-manoeuvre-out folds from the factors of all the other records, and gives the
 coefficients of the in-memory fit up to rounding.  ``svr`` needs every sample and is refused.
 
-- :mod:`._read`: which files a list of paths and glob patterns names; reading a measurement
-  CSV or a Parquet file with the same columns through the same checks.
+- :mod:`sindyship.records` (re-exported here): which files a list of paths and glob patterns
+  names; reading a measurement CSV or a Parquet file with the same columns through the same
+  checks.
 - :mod:`._reduce`: one record file to its factors (:func:`reduce_record`), and the merge.
 - :mod:`._cluster`: a Dask client (:func:`connect`: a scheduler's address, or a
   ``LocalCluster``) and the reduction of many files on it (:func:`reduce_files`), or in this
@@ -31,9 +32,9 @@ On a cluster (``python3 -m pip install "sindyship[cluster]"``)::
 
 from __future__ import annotations
 
+from ..records import PARQUET_SUFFIXES, expand_paths, read_record, time_window
 from ._cluster import DASK_INSTALL, connect, reduce_files
 from ._fit import fit_files, fit_reduction, stream_settings
-from ._read import PARQUET_SUFFIXES, expand_paths, read_record, time_window
 from ._reduce import Reduction, StreamSettings, merge_reductions, reduce_record
 
 __all__ = [

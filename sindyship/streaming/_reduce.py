@@ -1,12 +1,12 @@
 """One record file reduced to the small factors of its regression problems, and their merge.
 
 :func:`reduce_record` runs where the record is (a worker of a cluster): it reads the file
-(:func:`~._read.read_record`), smooths it when asked, builds the regression problem of every
-degree of freedom exactly as the in-memory fit does (:func:`sindyship.identify.design`: the
-library terms and the eq. 16 forces) and reduces each to its triangular factor
-(:class:`~sindyship.optimizers.RowFactor`: the least-squares problem of eq. 18 on a few dozen
-rows).  Only the factors, the record's ranges and its notes leave the worker.
-:func:`merge_reductions` combines two reductions (one step of the tree).
+(:func:`sindyship.records.read_record`), smooths it when asked, builds the regression
+problem of every degree of freedom exactly as the in-memory fit does
+(:func:`sindyship.identify.design`: the library terms and the eq. 16 forces) and reduces each
+to its triangular factor (:class:`~sindyship.optimizers.RowFactor`: the least-squares problem
+of eq. 18 on a few dozen rows).  Only the factors, the record's ranges and its notes leave the
+worker.  :func:`merge_reductions` combines two reductions (one step of the tree).
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ class StreamSettings:
         Applied to every record before differencing (a fixed setting: the automatic choice
         flies every record and needs them all in memory).
     resample, skip_checks, time_range
-        As for :func:`~._read.read_record`.
+        As for :func:`~sindyship.records.read_record`.
     """
 
     ship: Ship
@@ -114,7 +114,7 @@ def reduce_record(path: str | os.PathLike, name: str, settings: StreamSettings) 
         sentence naming the file or record).
     """
     from ..identify import design, resolve_library, training_envelope
-    from ._read import read_record
+    from ..records import read_record
 
     ship = settings.ship
     record, notes, cut = read_record(path, name=name, ship=ship, resample=settings.resample,

@@ -1,9 +1,11 @@
 """Record files: which files a list of paths and patterns names, and reading one of them.
 
-A record is one file: a measurement CSV (docs/measurement-csv.md) or a Parquet file with the
-same columns (``.parquet``, ``.pq``; the column names may carry units in brackets as CSV
-headers do).  Both go through :func:`sindyship.measurements.trajectory_from_frame`, so the
-unit conversions, the checks and their one-line errors are those of the CSV reader.
+Every verb reads its records here, in memory or on the workers of a streamed fit
+(:mod:`sindyship.streaming`).  A record is one file: a measurement CSV
+(docs/measurement-csv.md) or a Parquet file with the same columns (``.parquet``, ``.pq``;
+the column names may carry units in brackets as CSV headers do).  Both go through
+:func:`sindyship.measurements.trajectory_from_frame`, so the unit conversions, the checks and
+their one-line errors are those of the CSV reader.
 """
 
 from __future__ import annotations
@@ -16,8 +18,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..errors import SindyshipInputError
-from ..trajectory import Trajectory
+from .errors import SindyshipInputError
+from .trajectory import Trajectory
 
 __all__ = ["PARQUET_SUFFIXES", "expand_paths", "read_record", "time_window"]
 
@@ -96,7 +98,7 @@ def time_window(text: str) -> tuple[float, float] | str:
 
 def _read_parquet(path: Path, name: str, **options) -> Trajectory:
     """A Parquet record through the checks of the CSV reader."""
-    from ..measurements import trajectory_from_frame
+    from .measurements import trajectory_from_frame
 
     source = str(path)
     if not path.is_file():
@@ -160,8 +162,8 @@ def read_record(path: str | os.PathLike, *, name: str | None = None, ship=None,
         For a file the reader refuses (one sentence naming the file), or a time range that
         keeps fewer than two samples.
     """
-    from ..measurements import PlausibilityNote, read_csv
-    from ..trials import trim, underway_window
+    from .measurements import PlausibilityNote, read_csv
+    from .trials import trim, underway_window
 
     path = Path(path)
     name = path.stem if name is None else name
