@@ -24,7 +24,8 @@ from pathlib import Path
 
 from sindyship._io import clean_json, write_text_atomic
 from sindyship.captive import captive_tests
-from sindyship.evaluation import distance_errors, fly_like_batch
+from sindyship.evaluation import distance_errors
+from sindyship.flights import fly_like_batch
 from sindyship.forces import compare_forces
 from sindyship.identify import design, fit, resolve_library
 from sindyship.manoeuvres import fly, protocol_manoeuvres

@@ -39,7 +39,7 @@ import numpy as np
 
 from sindyship.diagnose import before_after, discover
 from sindyship.effects import parse_effects, sensor_noise, simulate_with_effects
-from sindyship.evaluation import fly_like
+from sindyship.flights import fly_like
 from sindyship.identify import fit
 from sindyship.manoeuvres import fly, protocol_manoeuvres
 from sindyship.model import paper_model

@@ -41,7 +41,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from joblib import Parallel, delayed  # noqa: E402
 
 from sindyship.effects import add_noise, quantise  # noqa: E402
-from sindyship.evaluation import distance_errors, fly_like_batch  # noqa: E402
+from sindyship.evaluation import distance_errors  # noqa: E402
+from sindyship.flights import fly_like_batch
 from sindyship.identify import fit  # noqa: E402
 from sindyship.manoeuvres import fly, protocol_manoeuvres  # noqa: E402
 from sindyship.mmg import MMGModel  # noqa: E402

@@ -48,7 +48,8 @@ import pysindy as ps
 from scipy.integrate import solve_ivp
 from threadpoolctl import threadpool_limits
 
-from sindyship.evaluation import distance_errors, evaluate, fly_like_batch
+from sindyship.evaluation import distance_errors, evaluate
+from sindyship.flights import fly_like_batch
 from sindyship.identify import fit
 from sindyship.manoeuvres import Manoeuvre, fly, protocol_manoeuvres
 from sindyship.mmg import MMGModel

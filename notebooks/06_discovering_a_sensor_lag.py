@@ -26,7 +26,7 @@ import numpy as np
 
 from sindyship.diagnose import diagnose, discover
 from sindyship.effects import parse_effects, simulate_with_effects
-from sindyship.evaluation import fly_like
+from sindyship.flights import fly_like
 from sindyship.identify import fit
 from sindyship.manoeuvres import protocol_manoeuvres
 from sindyship.ships import load_ship

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from sindyship.effects import add_noise
-from sindyship.evaluation import distance_errors, evaluate, fly_like_batch
+from sindyship.evaluation import distance_errors, evaluate
+from sindyship.flights import fly_like_batch
 from sindyship.identify import fit
 from sindyship.manoeuvres import fly, protocol_manoeuvres, turning_figures, zigzag_figures
 from sindyship.mmg import MMGModel

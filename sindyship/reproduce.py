@@ -17,7 +17,8 @@ from pathlib import Path
 import pandas as pd
 
 from ._io import save_figure, write_text_atomic
-from .evaluation import distance_errors, fly_like_batch
+from .evaluation import distance_errors
+from .flights import fly_like_batch
 from .identify import design, fit, resolve_library
 from .manoeuvres import fly, protocol_manoeuvres
 from .mmg import MMGModel
@@ -121,7 +122,7 @@ def _trajectory_figures(test, flights: dict, ship) -> list:
     """Per held-out record: the track overlay, and the standard figure of its manoeuvre (a
     zig-zag's heading and rudder with its overshoots, a turn with advance and tactical
     diameter), each beside the IMO criteria."""
-    from .evaluation import recognised_zigzag
+    from .flights import recognised_zigzag
     from .plotting import plot_turning_circle, plot_zigzag, trajectory_overlay
 
     out = []

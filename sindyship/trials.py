@@ -6,7 +6,7 @@ plateaus sit a degree or so off the nominal angle, and the log ends with blank r
 :func:`underway_window` and :func:`trim` cut a record to the part under way;
 :func:`recognise_zigzag` recognises a zig-zag despite a manual lead-in and imperfect plateaus
 (the strict recognition that flies zig-zags closed loop is
-:func:`sindyship.evaluation.detect_zigzag`).
+:func:`sindyship.flights.detect_zigzag`).
 
 Thresholds (module constants) and why:
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sindyship.evaluation import evaluate, fly_like_batch
+from sindyship.evaluation import evaluate
+from sindyship.flights import fly_like_batch
 from sindyship.library import TermLibrary
 from sindyship.manoeuvres import Manoeuvre, fly
 from sindyship.mmg import MMGModel
@@ -101,7 +102,7 @@ def test_a_divergence_after_a_shorter_record_ends_is_not_its_own(kcs):
 
 
 def test_models_flown_side_by_side_fly_as_alone(kcs, depth_model, protocol_runs):
-    from sindyship.evaluation import fly_jobs_like
+    from sindyship.flights import fly_jobs_like
 
     model = paper_model(kcs)
     unstable = AbkowitzModel(kcs, model.library,

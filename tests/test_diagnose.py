@@ -29,7 +29,7 @@ from sindyship.diagnose import (
 )
 from sindyship.effects import parse_effects, simulate_with_effects
 from sindyship.errors import SindyshipInputError
-from sindyship.evaluation import fly_like_batch
+from sindyship.flights import fly_like_batch
 from sindyship.identify import resolve_library
 from sindyship.library import feature_matrix
 from sindyship.manoeuvres import Manoeuvre, fly, protocol_manoeuvres

@@ -14,7 +14,7 @@ from sindyship.diagnose import discover
 from sindyship.diagnose.candidates import families
 from sindyship.effects import parse_effects, simulate_with_effects
 from sindyship.errors import SindyshipInputError
-from sindyship.evaluation import fly_like
+from sindyship.flights import fly_like
 from sindyship.identify import fit
 from sindyship.library import Effect, TermLibrary, load_effect, load_library
 from sindyship.manoeuvres import Manoeuvre

@@ -25,7 +25,6 @@ import sympy
 
 from sindyship.cli import export as export_verb
 from sindyship.errors import SindyshipInputError
-from sindyship.evaluation import fly_like_batch
 from sindyship.export import (
     ACCELERATIONS,
     coefficient_symbol,
@@ -37,6 +36,7 @@ from sindyship.export import (
     generate_python,
     model_equations,
 )
+from sindyship.flights import fly_like_batch
 from sindyship.library import TermLibrary, load_library
 from sindyship.manoeuvres import Manoeuvre, fly, protocol_manoeuvres
 from sindyship.mmg import MMGModel

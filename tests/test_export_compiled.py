@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sindyship.evaluation import fly_like_batch
 from sindyship.export import generate_python
+from sindyship.flights import fly_like_batch
 from sindyship.library import TermLibrary, load_library
 from sindyship.manoeuvres import Manoeuvre, fly, protocol_manoeuvres
 from sindyship.mmg import MMGModel

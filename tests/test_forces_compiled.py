@@ -7,7 +7,7 @@ import importlib.util
 import numpy as np
 import pytest
 
-from sindyship.evaluation import fly_like_batch
+from sindyship.flights import fly_like_batch
 from sindyship.library import TermLibrary
 from sindyship.model import AbkowitzDynamics, AbkowitzModel, paper_model
 

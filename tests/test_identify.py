@@ -9,7 +9,8 @@ import numpy as np
 import pysindy as ps
 import pytest
 
-from sindyship.evaluation import distance_errors, fly_like_batch
+from sindyship.evaluation import distance_errors
+from sindyship.flights import fly_like_batch
 from sindyship.identify import design, fit
 from sindyship.library import AbkowitzFeatureLibrary, feature_matrix, load_library
 from sindyship.manoeuvres import fly, protocol_manoeuvres

@@ -4,7 +4,7 @@ The questions a user asks after :func:`sindyship.identify.fit`, in order:
 
 Compare
     :func:`compare` flies the identified model the way each record was flown (zig-zags
-    closed loop, :func:`sindyship.evaluation.fly_like`) and summarises the error per
+    closed loop, :func:`sindyship.flights.fly_like`) and summarises the error per
     manoeuvre: mean and maximum distance in ship lengths, RMS heading and speed error, and
     the time a flight diverged, if it did.
 Where it fails

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
-from ..evaluation import fly_jobs_like, fly_like_batch
+from ..flights import fly_jobs_like, fly_like_batch
 from ..library import (
     DOFS,
     TermLibrary,
@@ -64,7 +64,7 @@ def _fly_many(
     what: str,
 ) -> list[list[Trajectory]]:
     """Fly several (model, records) jobs: in one process side by side
-    (:func:`sindyship.evaluation.fly_jobs_like`), or in parallel processes when ``n_jobs`` != 1."""
+    (:func:`sindyship.flights.fly_jobs_like`), or in parallel processes when ``n_jobs`` != 1."""
     from tqdm.auto import tqdm
 
     jobs = [(model, list(records)) for model, records in jobs if records]

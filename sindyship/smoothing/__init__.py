@@ -34,7 +34,7 @@ so one window means roughly the same smoothing for both methods.
 Choosing the setting.  :func:`choose_smoothing` compares candidate settings by
 leave-one-manoeuvre-out cross-validation on the training records alone: for every candidate
 and every record, the model is fitted on the other records (smoothed with that candidate)
-and flown the way the held-out record was flown (:func:`sindyship.evaluation.fly_like`),
+and flown the way the held-out record was flown (:func:`sindyship.flights.fly_like`),
 from the candidate's estimate of the record's first state; the fold's error is the mean
 distance between that flight and the held-out record's *measured* track, in ship lengths (the
 Table-10 metric, with the recorded positions as the reference), and a candidate's score is

@@ -36,7 +36,8 @@ def _fold_task(smoothed: Sequence[Trajectory], raw: Trajectory, held_out: int, s
     """Fit on all smoothed records but one, fly like the raw held-out one, measure."""
     from threadpoolctl import threadpool_limits
 
-    from ..evaluation import distance_errors, fly_like
+    from ..evaluation import distance_errors
+    from ..flights import fly_like
     from ..identify import fit
 
     train = [r for k, r in enumerate(smoothed) if k != held_out]

@@ -1,0 +1,352 @@
+"""Fly a model the way a record was flown.
+
+A record is recognised as a zig-zag when its commanded rudder (else its rudder) takes values
++-A (|A| >= 1 deg, spread <= 0.5 deg) with at least two reversals, each at a sample where
+|psi - psi(0)| is within 1 deg of a common check angle C; it is then flown closed loop with A
+and C rounded to 0.1 deg and the recorded first rudder sign.  A logged zig-zag (a manual
+lead-in, plateaus a degree or two off nominal: :func:`sindyship.trials.recognise_zigzag`) is
+flown from its execute, as a zig-zag test is defined (:func:`from_execute`; replaying a
+zig-zag's rudder open loop is not a zig-zag test: small heading errors grow without bound).
+Any other record replays its commanded rudder through the servo, or its actual rudder
+directly if that is all it has.  Every flight starts from the record's first row.
+
+Many records fly together: :func:`fly_like_batch` in one integration of the kernel where they
+share a sampling grid, :func:`fly_jobs_like` several models of one ship side by side
+(stacked).  :mod:`sindyship.evaluation` measures how far a flight ends from its record.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from .manoeuvres import result_to_trajectory
+from .simulation import (
+    PrescribedRudder,
+    SimulationResult,
+    StepCommand,
+    ZigZagCommand,
+    simulate_batch,
+)
+from .trajectory import Trajectory
+from .trials import recognise_zigzag, trim, zigzag_levels
+
+
+def detect_zigzag(record: Trajectory) -> tuple[float, float, int] | None:
+    """``(rudder_deg, check_deg, first_sign)`` if the record is a zig-zag, else None.
+
+    Examples
+    --------
+    >>> from sindyship import MMGModel, Manoeuvre, fly, load_ship
+    >>> plan = [Manoeuvre("zigzag", rudder=20, check=20, duration=600)]
+    >>> (run,) = fly(MMGModel(load_ship("kcs")), plan)
+    >>> detect_zigzag(run)
+    (20.0, 20.0, 1)
+    """
+    command = record["delta_c"] if record.has("delta_c") else record.rudder
+    cmd = np.degrees(command)
+    moving = np.flatnonzero(np.abs(cmd) >= 1.0)
+    if moving.size == 0:
+        return None
+    values = cmd[moving[0]:]
+    magnitude = np.abs(values)
+    if magnitude.min() < 1.0 or magnitude.max() - magnitude.min() > 0.5:
+        return None
+    sign = np.sign(values)
+    reversals = np.flatnonzero(np.diff(sign) != 0) + 1 + moving[0]
+    if len(reversals) < 2:
+        return None
+    psi = np.degrees(record["psi"] - record["psi"][0])
+    at_reversal = np.abs(psi[reversals])
+    before = np.abs(psi[reversals - 1])
+    if at_reversal.max() - at_reversal.min() > 2.0:
+        return None
+    rudder = round(float(magnitude.mean()), 1)
+    return rudder, _check_angle(before.max(), at_reversal.min()), int(sign[0])
+
+
+def _check_angle(low: float, high: float) -> float:
+    """The check angle the samples allow: the roundest value in (low, high], to 0.1 deg.
+
+    The rudder reverses at the first sample past the check angle C, so C lies between the
+    heading change one sample before each reversal and the one at it.
+    """
+    if high <= low:
+        return round(0.5 * (low + high), 1)
+    for step in (5.0, 1.0, 0.5, 0.1):
+        candidate = math.ceil(low / step + 1e-9) * step
+        if candidate <= high:
+            return round(candidate, 1)
+    return round(0.5 * (low + high), 1)
+
+
+class RecordedZigZag(ZigZagCommand):
+    """A closed-loop zig-zag whose legs hold the rudder angles a logged trial held.
+
+    The reversals come from the flight's own heading at the check angle, as in any zig-zag;
+    leg k holds ``levels[k]`` (the last one thereafter), so plateaus a degree off the nominal
+    angle are flown as they were steered.
+    """
+
+    def __init__(self, rudder: float, check: float, first_sign: int = 1, *,
+                 levels: tuple[float, ...] = ()):
+        super().__init__(rudder, check, first_sign)
+        self.levels = tuple(levels)
+        self._leg = 0
+
+    def reset(self, state0):
+        super().reset(state0)
+        self._leg = 0
+
+    def value(self, t, state):
+        if not self.levels:
+            return super().value(t, state)
+        return self._sign * self.levels[min(self._leg, len(self.levels) - 1)]
+
+    def on_event(self):
+        super().on_event()
+        self._leg += 1
+
+
+def recognised_zigzag(record: Trajectory) -> tuple[float, float, int, float] | None:
+    """``(rudder_deg, check_deg, first_sign, execute_time)`` of a zig-zag record, else None.
+
+    The strict recognition (:func:`detect_zigzag`, a zig-zag from the first row) first, then
+    the tolerant one of logged trials (:func:`sindyship.trials.recognise_zigzag`: a manual
+    lead-in, plateaus a degree or two off the nominal angle).
+    """
+    strict = detect_zigzag(record)
+    if strict is not None:
+        return (*strict, float(record.t[0]))
+    found = recognise_zigzag(record)
+    return None if found is None else tuple(found)
+
+
+def command_for(record: Trajectory):
+    """The rudder command that re-flies a record (see the module docstring)."""
+    strict = detect_zigzag(record)
+    if strict is not None:
+        rudder, check, first = strict
+        return ZigZagCommand(math.radians(rudder), math.radians(check), first)
+    logged = recognise_zigzag(record)
+    if logged is not None:
+        levels = tuple(math.radians(abs(level)) for level in zigzag_levels(record))
+        return RecordedZigZag(math.radians(logged.amplitude_deg), math.radians(logged.check_deg),
+                              logged.first_sign, levels=levels)
+    if record.has("delta_c"):
+        return StepCommand(record.t, record["delta_c"])
+    return PrescribedRudder(record.t, record["delta"])
+
+
+def _aligned(flier, records: Sequence[Trajectory]) -> list[Trajectory]:
+    """The records as a fitted model reads them: the channels its library delays moved to the
+    physics' time (:meth:`sindyship.library.TermLibrary.aligned`), so that a replayed rudder
+    is the one the water saw."""
+    library = getattr(flier, "library", None)
+    return [library.aligned(r) for r in records] if library is not None else list(records)
+
+
+def _dynamics_for(flier, records: Sequence[Trajectory]):
+    """Dynamics that fly ``records``: a dynamics object as given, or a fitted model's dynamics
+    with the channels its library uses taken from the records as time series."""
+    if hasattr(flier, "accelerations") or not hasattr(flier, "dynamics"):
+        return flier
+    return flier.dynamics(records=records)
+
+
+def fly_like(dynamics, records: Sequence[Trajectory], *, step: float | None = None
+             ) -> list[Trajectory]:
+    """Fly ``dynamics`` (or a fitted model, with its records' channels) the way each record
+    was flown, from each record's first row."""
+    out = []
+    for record in _aligned(dynamics, records):
+        state0 = record.state()[:, 0]
+        (result,) = simulate_batch(_dynamics_for(dynamics, [record]), [command_for(record)],
+                                   record.t, state0, step=step)
+        out.append(result_to_trajectory(result, record.name))
+    return out
+
+
+def fly_like_batch(dynamics, records: Sequence[Trajectory], *, step: float | None = None
+                   ) -> list[Trajectory]:
+    """As :func:`fly_like`, integrating records together whose sample times are one grid or
+    the start of it (records of one logger, of different lengths).
+
+    A shorter record's member flies on to the end of the longest with its last rudder and
+    channels held; its flight is cut at its own last sample, and a divergence after that
+    sample is not its own.  The states at the record's samples are those of a flight of the
+    record alone (``tests/test_channels.py``).
+    """
+    return fly_jobs_like([(dynamics, records)], step=step)[0]
+
+
+def fly_jobs_like(jobs: Sequence[tuple[object, Sequence[Trajectory]]], *,
+                  step: float | None = None) -> list[list[Trajectory]]:
+    """Fly several ``(dynamics or fitted model, records)`` jobs as :func:`fly_like_batch`
+    flies one, in as few integrations as possible.
+
+    Records of one job that share a grid fly in one batch; fitted models of one ship and
+    rudder signal fly side by side in that batch too (their accelerations evaluated each on
+    its own members, :class:`_Stacked`), so the integrator's work per step is shared by
+    every model a diagnosis compares.  Each flight is that of its model alone.
+
+    Returns
+    -------
+    list of list of Trajectory
+        Per job, in the order of its records.
+    """
+    out: list[list] = [[None] * len(records) for _, records in jobs]
+    groups: dict[tuple, list] = {}
+    for i, (flier, records) in enumerate(jobs):
+        key = (("model", id(flier.ship), flier.rudder_signal) if _stackable(flier)
+               else ("own", i))
+        for k, record in enumerate(_aligned(flier, records)):
+            groups.setdefault(key, []).append((i, k, flier, record))
+    for members in groups.values():
+        for grid, idx in _common_grids([m[3] for m in members]):
+            batch = [members[j] for j in idx]
+            state0 = np.column_stack([m[3].state()[:, 0] for m in batch])
+            results = simulate_batch(_batch_dynamics(batch, grid),
+                                     [_command_on(m[3], grid) for m in batch], grid, state0,
+                                     step=step)
+            for (i, k, _, record), res in zip(batch, results, strict=True):
+                out[i][k] = result_to_trajectory(_cut(res, len(record.t)), record.name)
+    return out
+
+
+def _command_on(record: Trajectory, grid: np.ndarray):
+    """The record's command (:func:`command_for`); a replayed rudder is held on to the end of
+    the batch's grid, changing at its samples as the longer records' do, so that the batch
+    keeps stepping from sample to sample together (see :func:`_held_to`)."""
+    command = command_for(record)
+    n = len(record.t)
+    if command.prescribed and len(grid) > n:
+        angles = np.asarray(_held_to(record, grid)["delta"], dtype=float).copy()
+        # the first held sample continues the last slope: at the record's last sample the
+        # servo sees the rate it sees in a flight of the record alone
+        angles[n:] = angles[n - 1] + command.rate(command.times[-1]) * (grid[n] - grid[n - 1])
+        return PrescribedRudder(grid, angles)
+    return command
+
+
+def _stackable(flier) -> bool:
+    """Whether ``flier`` is a fitted model (it makes dynamics that fly beside others')."""
+    return all(hasattr(flier, name) for name in ("dynamics", "library", "rudder_signal"))
+
+
+def _batch_dynamics(batch, grid: np.ndarray):
+    """The dynamics of a batch of ``(job, index, flier, record)`` members ordered by job: the
+    flier's own with one flier, else its models' side by side."""
+    parts, start = [], 0
+    for stop in range(1, len(batch) + 1):
+        if stop == len(batch) or batch[stop][0] != batch[start][0]:
+            held = [_held_to(m[3], grid) for m in batch[start:stop]]
+            parts.append((_dynamics_for(batch[start][2], held), start, stop))
+            start = stop
+    return parts[0][0] if len(parts) == 1 else _Stacked(tuple(parts))
+
+
+class _Stacked:
+    """Several fitted models' dynamics flown in one batch, each on a contiguous range of its
+    members (same ship and rudder signal; simulator dynamics, see
+    :func:`sindyship.simulation.simulate_batch`)."""
+
+    time_varying = True  # the integrator then passes the members, which select the models
+
+    def __init__(self, parts: tuple):
+        self.parts = parts
+        first = parts[0][0]
+        self.ship = first.ship
+        self.rudder_input = first.rudder_input
+        self.uses_position = any(d.uses_position for d, _, _ in parts)
+        self.uses_rudder_rate = any(d.uses_rudder_rate for d, _, _ in parts)
+
+    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None,
+                      position=None, rudder_rate=None):
+        """Each model's accelerations on its members (``members`` ascending, as the
+        integrator passes them)."""
+        out = (np.empty_like(u), np.empty_like(u), np.empty_like(u))
+        for dynamics, start, stop in self.parts:
+            lo, hi = np.searchsorted(members, (start, stop))
+            if lo == hi:
+                continue
+            part = slice(lo, hi)
+            extra = {}
+            if dynamics.time_varying:
+                extra = {"t": t, "members": members[part] - start}
+            if position is not None:
+                extra["position"] = (position[0][part], position[1][part])
+            if rudder_rate is not None:
+                extra["rudder_rate"] = rudder_rate[part]
+            accelerations = dynamics.accelerations(u[part], v[part], r[part], delta[part],
+                                                   psi[part], **extra)
+            for whole, piece in zip(out, accelerations, strict=True):
+                whole[part] = piece
+        return out
+
+
+def _common_grids(records: Sequence[Trajectory]) -> list[tuple[np.ndarray, list[int]]]:
+    """Records grouped by sample times: each group's times are the first samples of the
+    longest member's (to a millionth of the sample interval)."""
+    groups: list[tuple[np.ndarray, list[int]]] = []
+    for i in sorted(range(len(records)), key=lambda k: -len(records[k].t)):
+        t = np.asarray(records[i].t, dtype=float)
+        tol = 1e-6 * (float(np.min(np.diff(t))) if len(t) > 1 else 1.0)
+        for grid, idx in groups:
+            if len(t) <= len(grid) and np.allclose(grid[: len(t)], t, rtol=0.0, atol=tol):
+                idx.append(i)
+                break
+        else:
+            groups.append((t, [i]))
+    return [(grid, sorted(idx)) for grid, idx in groups]
+
+
+def _held_to(record: Trajectory, grid: np.ndarray) -> Trajectory:
+    """The record on a longer grid that starts with its samples, its last row held."""
+    n = len(record.t)
+    if n == len(grid):
+        return record
+    data = record.data
+    tail = data.iloc[np.full(len(grid) - n, n - 1)].copy()
+    tail["t"] = grid[n:]
+    held = pd.concat([data, tail], ignore_index=True)
+    return Trajectory(held, name=record.name, meta=record.meta)
+
+
+def _cut(result: SimulationResult, n: int) -> SimulationResult:
+    """A batch member's flight cut to its record's ``n`` samples."""
+    diverged_at = result.diverged_at
+    if diverged_at is not None and diverged_at > result.t[n - 1]:
+        diverged_at = None
+    return SimulationResult(t=result.t[:n], states=result.states[:, :n],
+                            delta_c=result.delta_c[:n], diverged_at=diverged_at)
+
+
+def flown_as(record: Trajectory) -> dict:
+    """How :func:`fly_like` flies a record, for reports.
+
+    Returns
+    -------
+    dict
+        ``{"flown_as": "zigzag", "amplitude_deg": A, "check_deg": C}`` for a recognised
+        zig-zag (closed loop), else ``{"flown_as": "replay-commanded"}`` (the commanded rudder
+        through the servo) or ``{"flown_as": "replay-actual"}`` (the recorded actual rudder).
+    """
+    zigzag = recognised_zigzag(record)
+    if zigzag is not None:
+        out = {"flown_as": "zigzag", "amplitude_deg": zigzag[0], "check_deg": zigzag[1]}
+        if zigzag[3] > record.t[0] + 1e-9:
+            out["execute_s"] = zigzag[3]
+        return out
+    return {"flown_as": "replay-commanded" if record.has("delta_c") else "replay-actual"}
+
+
+def from_execute(record: Trajectory) -> Trajectory:
+    """A zig-zag record from its execute on (a manual lead-in cut off); any other record as is."""
+    zigzag = recognised_zigzag(record)
+    if zigzag is None or zigzag[3] <= record.t[0] + 1e-9:
+        return record
+    return trim(record, (zigzag[3], float(record.t[-1])))
