@@ -137,6 +137,33 @@ def test_compiled_rhs_equals_sindyship_single_and_batch(model, compiled_sim, see
     assert any(p.suffix == ".nbi" for p in cache.iterdir())  # compiled once, kept
 
 
+def test_arguments_that_need_no_conversion_take_the_short_way_with_the_same_result(
+        model, compiled_sim, seed, tmp_path):
+    """A float64 state and a float or float64 command go straight into the compiled loop
+    (_rhs_as_given); every other form is converted first; both give the plain module's
+    numbers."""
+    plain = load_module(generate_python(model), tmp_path / "kcs_plain_forms.py")
+    states, delta_c = random_states(model.ship, np.random.default_rng(seed), 5)
+    short = [(states, delta_c), (states, 0.2), (states, np.float64(0.2)), (states, delta_c[:1]),
+             (states[:, 0].copy(), 0.2), (np.asfortranarray(states), delta_c),
+             (states[:, ::2], -0.1)]
+    converted = [(states.astype(np.float32), delta_c), (states, delta_c.astype(np.float32)),
+                 (states.tolist(), 0.2), (states, 1), (states[:, 0], delta_c[:1])]
+    for state, command in short + converted:
+        expected = plain.rhs(0.0, np.asarray(state, dtype=float), command)
+        got = compiled_sim.rhs(0.0, state, command)
+        assert got.shape == expected.shape and got.dtype == np.float64
+        assert relative_difference(got, expected) <= RHS_RTOL
+    for state, command in short:
+        assert compiled_sim._rhs_as_given(state, command) is not None
+    for state, command in converted:
+        assert compiled_sim._rhs_as_given(state, command) is None
+    with pytest.raises(ValueError, match="delta_c has 3 values"):
+        compiled_sim.rhs(0.0, states, delta_c[:3])
+    with pytest.raises(ValueError, match="cannot reshape"):
+        compiled_sim.rhs(0.0, states[:6], 0.1)
+
+
 def test_compiled_module_flies_held_out_manoeuvres_like_sindyship(model, compiled_sim):
     t = np.arange(3200.0)
     state0 = np.array([model.ship.U0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
@@ -225,7 +252,8 @@ spec = importlib.util.spec_from_file_location("unregistered", kcs_fast.__file__)
 loose = importlib.util.module_from_spec(spec)  # not in sys.modules: compiles, no cache
 spec.loader.exec_module(loose)
 print(json.dumps({"cache": [kcs_fast._CACHE, loose._CACHE],
-                  "hits": sum(kcs_fast._rhs_columns.stats.cache_hits.values()),
+                  # one state and one command: the compiled _rhs_one_state, from the cache
+                  "hits": sum(kcs_fast._rhs_one_state.stats.cache_hits.values()),
                   "same": loose.rhs(0.0, state, 0.1).tolist() == imported.tolist()}))
 '''
 

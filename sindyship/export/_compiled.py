@@ -35,7 +35,12 @@ NUMBA_IMPORT = ["", "try:  # optional: compiles the right-hand side", "    impor
 # Places in the runtime's text where the compiled functions take over.
 _RHS_ANCHOR = ("    state = np.asarray(state, dtype=float)\n"
                "    columns = state.reshape(N_STATE, -1)\n")
-_RHS_DISPATCH = "    if COMPILED:\n        return _compiled_rhs(state, delta_c, channels)\n"
+_RHS_DISPATCH = ("    if COMPILED:\n"
+                 "        if channels is None:\n"
+                 "            out = _rhs_as_given(state, delta_c)\n"
+                 "            if out is not None:\n"
+                 "                return out\n"
+                 "        return _compiled_rhs(state, delta_c, channels)\n")
 _FLY_ANCHOR = "    integ = _Integrator(_Model(series=series), [command], _SERVO)\n"
 _FLY_COMPILED = ("    flier = _CompiledIntegrator if COMPILED else _Integrator\n"
                  "    integ = flier(_Model(series=series), [command], _SERVO)\n")
@@ -136,6 +141,72 @@ def _rk4_columns(y, h, delta_c, channels, k1):
             end[i, j] = y[i, j] + sixth * (k1[i, j] + 2.0 * k2[i, j] + 2.0 * k3[i, j]
                                            + k4[i, j])
     return end
+
+
+@_jit
+def _rhs_commands(y, commands, out):
+    """``_rhs_columns`` of a batch ``y`` (7, k) with the default channels into ``out``; False
+    (nothing done) unless ``commands`` holds one command or k."""
+    if y.shape[0] != N_STATE or (commands.shape[0] != 1 and commands.shape[0] != y.shape[1]):
+        return False
+    _rhs_columns(y, commands, _CHANNEL_DEFAULTS, out)
+    return True
+
+
+@_jit
+def _rhs_one_command(y, command, out):
+    """``_rhs_columns`` of a batch ``y`` (7, k) with one command for all into ``out``; False
+    (nothing done) unless ``y`` has 7 rows."""
+    if y.shape[0] != N_STATE:
+        return False
+    commands = np.empty(1)
+    commands[0] = command
+    _rhs_columns(y, commands, _CHANNEL_DEFAULTS, out)
+    return True
+
+
+@_jit
+def _rhs_one_state(y, command, out):
+    """``_rhs_columns`` of one state ``y`` (7,) and its command into ``out`` (7,); False
+    (nothing done) unless ``y`` has 7 values."""
+    if y.shape[0] != N_STATE:
+        return False
+    column = np.empty((N_STATE, 1))
+    for i in range(N_STATE):
+        column[i, 0] = y[i]
+    commands = np.empty(1)
+    commands[0] = command
+    result = np.empty((N_STATE, 1))
+    _rhs_columns(column, commands, _CHANNEL_DEFAULTS, result)
+    for i in range(N_STATE):
+        out[i] = result[i, 0]
+    return True
+
+
+_ARRAY = np.ndarray
+_FLOAT64 = np.dtype(np.float64)
+_SCALARS = (float, np.float64)
+
+
+def _rhs_as_given(state, delta_c):
+    """``rhs`` with the default channels for arguments that need no conversion (a float64
+    state of shape (7,) or (7, k), a float command or a float64 array of one or k), straight
+    into the compiled loop; None for any other arguments (``_compiled_rhs`` converts them).
+    The output array is made here: an array made by compiled code costs more to return."""
+    if type(state) is not _ARRAY or state.dtype is not _FLOAT64:
+        return None
+    out = np.empty_like(state)
+    if state.ndim == 2:
+        if type(delta_c) is _ARRAY:
+            if delta_c.dtype is _FLOAT64 and delta_c.ndim == 1 and _rhs_commands(state,
+                                                                                delta_c, out):
+                return out
+        elif type(delta_c) in _SCALARS and _rhs_one_command(state, delta_c, out):
+            return out
+    elif state.ndim == 1 and type(delta_c) in _SCALARS and _rhs_one_state(state, delta_c,
+                                                                            out):
+        return out
+    return None
 
 
 def _channel_block(values, k):
