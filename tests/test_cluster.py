@@ -96,3 +96,33 @@ def test_the_readme_cluster_example_runs(tmp_path):
                           text=True, timeout=600, env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.startswith("8 members;")
+
+
+def test_diagnose_and_discover_take_a_glob_and_a_scheduler(client, lagged, tmp_path, capsys):
+    """The command line: quoted glob patterns for the records, and --scheduler runs the work
+    on the cluster with the numbers of a run on this machine."""
+    import json
+
+    from sindyship.cli import main
+    from sindyship.measurements import write_csv
+
+    _, runs = lagged
+    folder = tmp_path / "records"
+    folder.mkdir()
+    for k, run in enumerate(runs):
+        write_csv(run, folder / f"run{k}.csv")
+    pattern = str(folder / "run[0-2].csv")
+    common = [pattern, "--test", str(folder / "run3*.csv"), "--ship", "kcs",
+              "--candidates", "asymmetry,environment", "--confirm", "1", "--json"]
+    assert main(["diagnose", *common]) == 0
+    local = json.loads(capsys.readouterr().out)
+    assert main(["diagnose", *common, "--scheduler", client.scheduler.address]) == 0
+    captured = capsys.readouterr()
+    remote = json.loads(captured.out)
+    assert f"running on the Dask cluster at {client.scheduler.address}" in captured.err
+    assert remote["errors"] == local["errors"]
+    assert [r["effect"] for r in remote["ranking"]] == [r["effect"] for r in local["ranking"]]
+    assert main(["discover", str(folder / "*.csv"), "--ship", "kcs", "--json",
+                 "--scheduler", client.scheduler.address]) == 0
+    found = json.loads(capsys.readouterr().out)
+    assert found["accepted"]

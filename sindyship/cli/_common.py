@@ -8,6 +8,7 @@ message gives the range and the unit (argparse adds the option's name).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -217,6 +218,36 @@ def add_n_jobs(p, *, default: int | None = 1) -> None:
                    f"at the cores, with a notice), or -1 for every core (default {default})")
 
 
+def add_scheduler(p, *, work: str) -> None:
+    """``--scheduler``: run a verb's parallel work on a Dask cluster (:func:`on_cluster`)."""
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help=f"run {work} on the Dask cluster of this scheduler (tcp://host:8786) "
+                   "through joblib's dask backend, on every worker unless --n-jobs says how "
+                   "many tasks at once; the records are read in this process (default: this "
+                   "machine)")
+
+
+@contextlib.contextmanager
+def on_cluster(scheduler: str | None, n_jobs: int | None):
+    """The block's joblib work on the Dask cluster of ``scheduler`` (None: on this machine).
+
+    Yields the ``n_jobs`` to pass on: ``n_jobs`` itself without a scheduler; with one, every
+    worker (-1) unless ``n_jobs`` asks for more than one task at once.
+    """
+    if not scheduler:
+        yield n_jobs
+        return
+    import joblib
+
+    from ..streaming import connect
+
+    with connect(scheduler) as client:
+        workers = len(client.scheduler_info().get("workers", {}))
+        progress(f"running on the Dask cluster at {scheduler} ({workers} workers)")
+        with joblib.parallel_config(backend="dask"):
+            yield -1 if n_jobs in (None, 1) else n_jobs
+
+
 #: What every output option's help says of the output policy (:func:`sindyship._io.check_output`).
 OUT_NOTE = ("missing folders are created; a link, device, pipe, socket or one of the inputs is "
             "refused")
@@ -291,8 +322,8 @@ def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool =
     ``discover``): the records, the ship, how the library is fitted, smoothing, resampling,
     workers, JSON."""
     p.add_argument("data", nargs="+",
-                   help="training records: measurement CSV or Parquet files (fit also takes "
-                   "quoted glob patterns, 'fleet/*.parquet')")
+                   help="training records: measurement CSV or Parquet files, or quoted glob "
+                   "patterns that name them ('fleet/*.parquet')")
     add_ship(p)
     add_identification(p, optimizer=optimizer)
     p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",

@@ -9,12 +9,14 @@ from pathlib import Path
 
 from ._common import (
     OUT_NOTE,
+    add_scheduler,
     add_training_options,
     bounded_float,
     bounded_int,
     check_inputs,
     check_simulation_cost,
     emit,
+    on_cluster,
     progress,
     split_names,
 )
@@ -41,8 +43,9 @@ def add_parser(sub) -> None:
     p.add_argument("--candidates", default="", metavar="NAME,...",
                    help="comma-separated effects to score (default: the whole catalogue)")
     p.add_argument("--test", nargs="+", default=[], metavar="HELD_OUT.csv",
-                   help="held-out records: flown before and after, never fitted on "
-                   "(default: none)")
+                   help="held-out records (files or quoted glob patterns): flown before and "
+                   "after, never fitted on (default: none)")
+    add_scheduler(p, work="the diagnosis's fits, flights and grids")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="folder for figures, report.txt and diagnose.json, written aside and "
                    "put in place at the end; an existing folder is replaced only when it is "
@@ -81,9 +84,11 @@ def run(args) -> int:
     from .._io import check_output, output_folder
     from ..diagnose import diagnose, diagnose_iteratively
     from ..identify import resolve_library
+    from ..records import expand_paths
     from ..ships import load_ship
 
     start = time.perf_counter()
+    args.data, args.test = expand_paths(args.data), expand_paths(args.test)
     if args.out is not None:
         check_output(args.out, inputs=fit_inputs(args), kind="folder",
                      label=f"--out {args.out}", replaceable="diagnose.json")
@@ -109,12 +114,15 @@ def run(args) -> int:
     progress(f"sindyship diagnose: {len(records)} training and {len(test)} held-out records, "
              f"library {library.name}")
     iterative = None
-    if args.rounds > 1:
-        iterative = diagnose_iteratively(records, ship, library=library, test=test,
-                                         max_rounds=args.rounds, progress=bar, **options)
-        result = iterative.rounds[0].diagnosis
-    else:
-        result = diagnose(records, ship, library=library, test=test, progress=bar, **options)
+    with on_cluster(args.scheduler, args.n_jobs) as n_jobs:
+        options["n_jobs"] = n_jobs
+        if args.rounds > 1:
+            iterative = diagnose_iteratively(records, ship, library=library, test=test,
+                                             max_rounds=args.rounds, progress=bar, **options)
+            result = iterative.rounds[0].diagnosis
+        else:
+            result = diagnose(records, ship, library=library, test=test, progress=bar,
+                              **options)
     document = result.to_json()
     text = result.report()
     if iterative is not None:

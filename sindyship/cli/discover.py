@@ -5,11 +5,13 @@ from __future__ import annotations
 
 from ._common import (
     OUT_NOTE,
+    add_scheduler,
     add_training_options,
     bounded_float,
     bounded_int,
     check_inputs,
     emit,
+    on_cluster,
     progress,
     split_names,
 )
@@ -38,6 +40,7 @@ def add_parser(sub) -> None:
     p.add_argument("--rounds", type=bounded_int(1, 5), default=1,
                    help="search again with each discovery added, up to this many rounds, 1 to "
                    "5 (default 1: the best finding)")
+    add_scheduler(p, work="the search's fits and grids")
     p.add_argument("--out", default=None, metavar="EFFECT.toml",
                    help="write the discovered effect here, in the catalogue's format "
                    f"(docs/effects.md; {OUT_NOTE}; default: do not write)")
@@ -47,8 +50,10 @@ def run(args) -> int:
     """Run ``sindyship discover``; text report on stdout, or one JSON document with --json."""
     from .._io import check_output, write_text_atomic
     from ..diagnose import discover
+    from ..records import expand_paths
     from ..ships import load_ship
 
+    args.data = expand_paths(args.data)
     if args.out is not None:
         check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}")
     check_inputs(fit_inputs(args))
@@ -56,11 +61,12 @@ def run(args) -> int:
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
     progress(f"sindyship discover: {len(records)} records, library {args.library}")
-    found = discover(records, ship, library=args.library, effects=split_names(args.effects),
-                     rudder_signal=args.rudder_signal, derivative=args.derivative,
-                     window=args.window,
-                     smoothing=None if args.smoothing == "none" else args.smoothing,
-                     threshold=args.threshold, max_rounds=args.rounds, n_jobs=args.n_jobs)
+    with on_cluster(args.scheduler, args.n_jobs) as n_jobs:
+        found = discover(records, ship, library=args.library,
+                         effects=split_names(args.effects), rudder_signal=args.rudder_signal,
+                         derivative=args.derivative, window=args.window,
+                         smoothing=None if args.smoothing == "none" else args.smoothing,
+                         threshold=args.threshold, max_rounds=args.rounds, n_jobs=n_jobs)
     document = found.to_json()
     if args.out is not None:
         if found.accepted:
