@@ -23,27 +23,24 @@ import time
 from pathlib import Path
 
 from sindyship._io import clean_json, write_text_atomic
-from sindyship.captive import captive_tests
 from sindyship.evaluation import distance_errors
 from sindyship.flights import fly_like_batch
-from sindyship.forces import compare_forces
 from sindyship.identify import design, fit, resolve_library
 from sindyship.manoeuvres import fly, protocol_manoeuvres
 from sindyship.mmg import MMGModel
+from sindyship.optimizers import PriorRidge
+from sindyship.reproduce import CAPTIVE_TESTS, captive_agreement
 from sindyship.ships import load_ship
 
 OUT = Path(__file__).parent / "results" / "captive.json"
-TESTS = ("static-drift", "rudder", "pure-yaw", "drift-yaw")
 STRENGTHS = (1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
 
 
-def evaluate(model, captive, test, ship) -> dict:
+def evaluate(model, test, ship) -> dict:
     """Captive agreement per test, held-out flights and stability of one model."""
-    by_test = compare_forces(model, captive).to_dict()["by_test"]
     flown = fly_like_batch(model.dynamics(), test)
     return {
-        "captive": {t: {f: {k: by_test[t][f][k] for k in ("correlation", "relative_rms")}
-                        for f in "XYN"} for t in TESTS},
+        "captive": captive_agreement({"model": model}, ship)["model"],
         "held_out": {r.name: distance_errors(f, r, ship.L) for f, r in zip(flown, test,
                                                                             strict=True)},
         "straight_run": model.info.get("straight_run"),
@@ -58,19 +55,18 @@ def run() -> dict:
     plan = protocol_manoeuvres()
     flown = fly(MMGModel(ship), plan["train"] + plan["test"])
     train, test = flown[: len(plan["train"])], flown[len(plan["train"]):]
-    captive = captive_tests(ship, "all")
     library = resolve_library("abkowitz")
     sets = {"protocol": train, "zigzags": [r for r in train if r.name.startswith("zz")]}
-    out = {"library": library.name, "tests": list(TESTS), "strengths": list(STRENGTHS),
-           "default_strength": 1e-5, "sets": {}}
+    out = {"library": library.name, "tests": list(CAPTIVE_TESTS), "strengths": list(STRENGTHS),
+           "default_strength": PriorRidge().strength, "sets": {}}
     for name, records in sets.items():
         problems = design(records, ship, library)
-        rows = {"ls": evaluate(fit(records, ship, library=library, problems=problems),
-                               captive, test, ship)}
+        rows = {"ls": evaluate(fit(records, ship, library=library, problems=problems), test,
+                               ship)}
         for strength in STRENGTHS:
             model = fit(records, ship, library=library, optimizer="prior",
                         params={"strength": strength}, problems=problems)
-            rows[f"prior {strength:.0e}"] = evaluate(model, captive, test, ship)
+            rows[f"prior {strength:.0e}"] = evaluate(model, test, ship)
         out["sets"][name] = {"training": [r.name for r in records], "fits": rows}
     out["seconds"] = time.perf_counter() - start
     return out
@@ -82,11 +78,11 @@ def format_table(result: dict) -> str:
     for name, data in result["sets"].items():
         lines.append(f"Identified on {name} ({', '.join(data['training'])}); captive "
                      "correlation X Y N per test; held-out mean distance [L]")
-        head = "  ".join(f"{t:>16s}" for t in TESTS)
+        head = "  ".join(f"{t:>16s}" for t in result["tests"])
         lines.append(f"{'fit':14s}{head}   tc15_port tc15_stbd  zz10_10")
         for fit_name, row in data["fits"].items():
             cells = "  ".join(" ".join(f"{row['captive'][t][f]['correlation']:+.2f}"
-                                       for f in "XYN") + " " for t in TESTS)
+                                       for f in "XYN") + " " for t in result["tests"])
             flights = "  ".join(
                 f"{'diverged':>9s}" if e["diverged_at_s"] is not None
                 else f"{e['mean_distance_L']:9.3f}" for e in row["held_out"].values())

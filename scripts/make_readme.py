@@ -299,7 +299,10 @@ def _noise(n: dict) -> str:
 
 
 def _correlations(by_test: dict) -> list[str]:
-    return [" / ".join(f"{by_test[t][f]['correlation']:+.2f}" for f in "XYN")
+    def cell(value):
+        return "n/a" if value is None else f"{value:+.2f}"
+
+    return [" / ".join(cell(by_test[t][f]["correlation"]) for f in "XYN")
             for t in CAPTIVE_LABELS]
 
 

@@ -171,7 +171,8 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
     """Identify an Abkowitz model from records.
 
     The ``prior`` optimizer also requires a model that is stable in straight running: it
-    raises the prior's strength until the model is (:func:`straight_run_stable`).
+    raises the prior's strength, a few times at most, until the model is
+    (:func:`straight_run_stable`; ``info["straight_run"]`` says how it ended).
 
     Parameters
     ----------
@@ -241,6 +242,8 @@ def _fit_each(problems: dict[str, Design], optimizer: str, params: dict | None,
 #: How often the ``prior`` fit raises its strength tenfold to reach a straight-run-stable
 #: model (:func:`straight_run_stable`).
 STABILITY_RAISES = 3
+#: The strength the raises start from when the fit's own is smaller (0 is least squares).
+LEAST_RAISED_STRENGTH = 1e-8
 
 
 def straight_run_stable(model: AbkowitzModel, refit) -> AbkowitzModel:
@@ -248,9 +251,11 @@ def straight_run_stable(model: AbkowitzModel, refit) -> AbkowitzModel:
 
     A model that is unstable in straight running
     (:func:`sindyship.stability.straight_run_stability`) is refitted with the prior's
-    strength raised tenfold, at most :data:`STABILITY_RAISES` times, so that the prior's
-    (stable) linear derivatives weigh more; the model records the strength it ends with and
-    whether it is stable (``info["straight_run"]``).
+    strength raised tenfold (from at least :data:`LEAST_RAISED_STRENGTH`), at most
+    :data:`STABILITY_RAISES` times, so that the prior's (stable) linear derivatives weigh
+    more.  The model records the strength it ends with and whether it is stable
+    (``info["straight_run"]``): a model still unstable after the raises is returned as it is,
+    for the caller to report.
 
     Parameters
     ----------
@@ -261,7 +266,7 @@ def straight_run_stable(model: AbkowitzModel, refit) -> AbkowitzModel:
     """
     from .stability import straight_run_stability
 
-    strength = float(model.optimizer["params"]["strength"])
+    strength = max(float(model.optimizer["params"]["strength"]), LEAST_RAISED_STRENGTH)
     stable = straight_run_stability(model).stable
     raises = 0
     while not stable and raises < STABILITY_RAISES:

@@ -21,6 +21,9 @@ Semi-empirical derivatives (:func:`semi_empirical_derivatives`)
       sign of X'_rr differs between hull forms (-0.012 for the KCS of the paper's Table 3,
       +0.011 for the KVLCC2 of the MMG standard), so no regression on main dimensions sets it.
 
+    Each has a standard deviation of half its value, at least a tenth of that of the
+    largest estimate of its order (:func:`prior_widths`).
+
     The identified coefficients are not quite these: the regression target of eq. 16 moves
     the added-mass Coriolis and Munk terms to the right-hand side of eq. 14
     (:func:`sindyship.targets.coriolis`), so e.g. Y'_r(fitted) = Y'_r(captive) - X'_udot and
@@ -53,11 +56,15 @@ import numpy as np
 from .ships import Ship
 from .terms import Term
 
-__all__ = ["RELATIVE_WIDTH", "prior_means", "prior_parameters", "semi_empirical_derivatives",
-           "speed_relations"]
+__all__ = ["RELATIVE_WIDTH", "WIDTH_FLOOR", "prior_means", "prior_parameters", "prior_widths",
+           "semi_empirical_derivatives", "speed_relations"]
 
 #: Prior standard deviation of a semi-empirical derivative, as a share of its value.
 RELATIVE_WIDTH = 0.5
+
+#: The least prior standard deviation, as a share of the relative width times the largest
+#: estimate of the same order (linear, or non-linear) of the ship (:func:`prior_widths`).
+WIDTH_FLOOR = 0.1
 
 
 def semi_empirical_derivatives(ship: Ship) -> dict[str, dict[str, float]]:
@@ -163,6 +170,32 @@ def speed_relations(terms: Sequence[str]) -> list[tuple[int, int, float]]:
     return out
 
 
+def prior_widths(ship: Ship, *, relative_width: float = RELATIVE_WIDTH
+                 ) -> dict[str, dict[str, float]]:
+    """The prior standard deviation of every semi-empirical derivative (Prime I).
+
+    ``relative_width`` times its value, but at least :data:`WIDTH_FLOOR` times that of the
+    largest estimate of the same order (the linear derivatives, or the non-linear ones, over
+    X, Y and N): the regressions change sign inside the range of hull forms (X'_vv of
+    Yoshimura & Masumoto at C_B / (L / B) = 0.157), so an estimate near zero says that the
+    derivative is small, not that it is known to be zero.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> widths = prior_widths(load_ship("kcs"))
+    >>> round(widths["Y"]["v"] * 1e5), round(widths["N"]["r^3"] * 1e5)  # own share; floor
+    (615, 198)
+    """
+    means = semi_empirical_derivatives(ship)
+    largest = {order: max(abs(v) for terms in means.values() for t, v in terms.items()
+                          if (Term(t).degree == 1) == (order == "linear"))
+               for order in ("linear", "non-linear")}
+    return {dof: {t: relative_width * max(abs(v), WIDTH_FLOOR * largest[
+        "linear" if Term(t).degree == 1 else "non-linear"]) for t, v in terms.items()}
+            for dof, terms in means.items()}
+
+
 def prior_parameters(ship: Ship, dof: str, terms: Sequence[str], *,
                      relative_width: float = RELATIVE_WIDTH) -> dict:
     """The ``mean``, ``scale`` and ``relations`` of :class:`~sindyship.optimizers.PriorRidge`
@@ -175,7 +208,8 @@ def prior_parameters(ship: Ship, dof: str, terms: Sequence[str], *,
     terms : sequence of str
         The library's terms of ``dof`` (the columns, in order).
     relative_width : float
-        Standard deviation of a semi-empirical derivative as a share of its value.
+        Standard deviation of a semi-empirical derivative as a share of its value
+        (:func:`prior_widths`).
 
     Returns
     -------
@@ -184,12 +218,13 @@ def prior_parameters(ship: Ship, dof: str, terms: Sequence[str], *,
         ``relations``.
     """
     means = prior_means(ship)[dof]
+    widths = prior_widths(ship, relative_width=relative_width)[dof]
     mean = np.zeros(len(terms))
     scale = np.full(len(terms), np.nan)
     for j, text in enumerate(terms):
-        value = means.get(Term(text).canonical())
-        if value is not None:
-            mean[j], scale[j] = value, relative_width * abs(value)
+        canonical = Term(text).canonical()
+        if canonical in means:
+            mean[j], scale[j] = means[canonical], widths[canonical]
     return {"mean": mean.tolist(),
             "scale": [float(x) if np.isfinite(x) else None for x in scale],
             "relations": [list(r) for r in speed_relations(terms)]}

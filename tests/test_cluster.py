@@ -116,7 +116,9 @@ def test_diagnose_and_discover_take_a_glob_and_a_scheduler(client, lagged, tmp_p
               "--candidates", "asymmetry,environment", "--confirm", "1", "--json"]
     assert main(["diagnose", *common]) == 0
     local = json.loads(capsys.readouterr().out)
-    assert main(["diagnose", *common, "--scheduler", client.scheduler.address]) == 0
+    with distributed.get_task_stream(client) as stream:
+        assert main(["diagnose", *common, "--scheduler", client.scheduler.address]) == 0
+    assert len(stream.data) > 0  # the work ran on the cluster
     captured = capsys.readouterr()
     remote = json.loads(captured.out)
     assert f"running on the Dask cluster at {client.scheduler.address}" in captured.err

@@ -12,7 +12,12 @@ from sindyship.identify import fit
 from sindyship.library import load_library
 from sindyship.model import AbkowitzModel
 from sindyship.optimizers import LeastSquares, PriorRidge, RowFactor, make_optimizer
-from sindyship.priors import prior_means, prior_parameters, semi_empirical_derivatives
+from sindyship.priors import (
+    prior_means,
+    prior_parameters,
+    prior_widths,
+    semi_empirical_derivatives,
+)
 
 SWEEPS = ("static-drift", "pure-yaw", "drift-yaw")
 
@@ -48,9 +53,12 @@ def test_relation_draws_one_coefficient_toward_a_multiple_of_another():
 
 
 @pytest.mark.parametrize("params, message", [
-    ({"mean": [0.0]}, "the prior mean has 1 values for 2 columns"),
-    ({"scale": [0.1, -1.0]}, "the prior scale of column 1 is not positive"),
+    ({"mean": [0.0]}, r"the prior mean has 1 value\(s\) for 2 columns"),
+    ({"mean": [None, 0.1]}, "the prior mean of column 0 is not a finite number"),
+    ({"scale": [0.1, -1.0]}, "the prior scale of column 1 is not a positive number"),
+    ({"scale": [np.inf, None]}, "the prior scale of column 0 is not a positive number"),
     ({"relations": [(1, 1, 2.0)]}, "relate two columns"),
+    ({"relations": [(1, 0, np.nan)]}, "not two column numbers and a finite factor"),
 ])
 def test_bad_prior_is_refused_in_one_sentence(params, message):
     X = np.column_stack([np.linspace(0, 1, 20), np.linspace(1, 0, 20) ** 2])
@@ -80,6 +88,11 @@ def test_clarke_linear_derivatives_of_the_kcs(kcs):
     assert captive["Y"]["v"] == pytest.approx(y_v, rel=1e-12)
     assert captive["N"]["r"] == pytest.approx(n_r, rel=1e-12)
     assert captive["Y"]["v"] * 1e5 == pytest.approx(-1230, abs=1)  # MMG Taylor -1292
+    widths = prior_widths(kcs)
+    assert widths["Y"]["v"] == pytest.approx(0.5 * abs(captive["Y"]["v"]))
+    largest = max(abs(v) for terms in captive.values() for t, v in terms.items()
+                  if t not in ("v", "r"))
+    assert widths["N"]["r^3"] == pytest.approx(0.5 * 0.1 * largest)  # the floor
     assert captive["N"]["v^2 r"] / (p.d / p.L) == pytest.approx(1.55 * c_b * p.B / p.L - 0.76)
 
 
@@ -104,6 +117,16 @@ def test_prior_means_predict_the_semi_empirical_captive_forces(kcs):
     assert predicted["N"].iloc[k] / (scale * kcs.L) == pytest.approx(expected_n, rel=1e-9)
     expected_y = captive["Y"]["r"] * r[k] + captive["Y"]["r^3"] * r[k] ** 3
     assert predicted["Y"].iloc[k] / scale == pytest.approx(expected_y, rel=1e-9)
+    # drift with yaw at the design speed: every linear term, the Munk moment's conversion
+    # (N'_v) the largest; the cubic terms in v and r as they are
+    combined = small.iloc[:1].assign(u=kcs.U0, v=-0.1 * kcs.U0, r=0.2 * kcs.U0 / kcs.L,
+                                     delta=0.0)
+    n_pred = model_captive_forces(model, combined)["N"].iloc[0] / (scale * kcs.L)
+    v1, r1 = -0.1, 0.2
+    n = captive["N"]
+    expected = (n["v"] * v1 + n["r"] * r1 + n["v^3"] * v1**3 + n["v^2 r"] * v1**2 * r1
+                + n["v r^2"] * v1 * r1**2 + n["r^3"] * r1**3)
+    assert n_pred == pytest.approx(expected, rel=1e-9)
 
 
 def test_prior_parameters_cover_every_column(kcs):
@@ -171,6 +194,30 @@ def test_unstable_fit_raises_the_prior_strength(kcs, protocol_runs, monkeypatch)
     assert model.info["straight_run"] == {"stable": True, "strength": pytest.approx(1e-3),
                                           "raised": 2}
     assert model.optimizer["params"]["strength"] == pytest.approx(1e-3)
+
+
+def test_an_unstable_fit_at_strength_zero_raises_from_a_floor_and_says_how_it_ended(
+        kcs, protocol_runs, monkeypatch, capsys):
+    import sindyship.stability as stability
+    from sindyship.cli.fit import report_straight_run
+
+    real = stability.straight_run_stability
+    calls = []
+
+    def always_unstable(model):
+        calls.append(model.optimizer["params"]["strength"])
+        result = real(model)
+        return type(result)(result.eigenvalues, result.jacobian, False, 1.0)
+
+    monkeypatch.setattr(stability, "straight_run_stability", always_unstable)
+    zigzags = [r for r in protocol_runs["train"] if r.name.startswith("zz")]
+    model = fit(zigzags, kcs, optimizer="prior", params={"strength": 0.0})
+    assert calls == pytest.approx([0.0, 1e-7, 1e-6, 1e-5])
+    assert model.info["straight_run"] == {"stable": False, "strength": pytest.approx(1e-5),
+                                          "raised": 3}
+    report_straight_run(model)
+    err = capsys.readouterr().err
+    assert "warning: the model is unstable in straight running" in err and "1e-05" in err
 
 
 def test_make_optimizer_knows_prior():

@@ -221,18 +221,17 @@ def add_n_jobs(p, *, default: int | None = 1) -> None:
 def add_scheduler(p, *, work: str) -> None:
     """``--scheduler``: run a verb's parallel work on a Dask cluster (:func:`on_cluster`)."""
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help=f"run {work} on the Dask cluster of this scheduler (tcp://host:8786) "
-                   "through joblib's dask backend, on every worker unless --n-jobs says how "
-                   "many tasks at once; the records are read in this process (default: this "
-                   "machine)")
+                   help=f"run {work} on every worker of the Dask cluster of this scheduler "
+                   "(tcp://host:8786) through joblib's dask backend (--n-jobs is then not "
+                   "used); the records are read in this process (default: this machine)")
 
 
 @contextlib.contextmanager
 def on_cluster(scheduler: str | None, n_jobs: int | None):
     """The block's joblib work on the Dask cluster of ``scheduler`` (None: on this machine).
 
-    Yields the ``n_jobs`` to pass on: ``n_jobs`` itself without a scheduler; with one, every
-    worker (-1) unless ``n_jobs`` asks for more than one task at once.
+    Yields the ``n_jobs`` to pass on: ``n_jobs`` itself without a scheduler; with one, -1
+    (every worker: ``--n-jobs`` counts this machine's cores, so it is not used there).
     """
     if not scheduler:
         yield n_jobs
@@ -241,11 +240,14 @@ def on_cluster(scheduler: str | None, n_jobs: int | None):
 
     from ..streaming import connect
 
+    if n_jobs not in (None, 1):
+        progress("--n-jobs counts this machine's cores; with --scheduler every worker of the "
+                 "cluster is used.")
     with connect(scheduler) as client:
         workers = len(client.scheduler_info().get("workers", {}))
         progress(f"running on the Dask cluster at {scheduler} ({workers} workers)")
         with joblib.parallel_config(backend="dask"):
-            yield -1 if n_jobs in (None, 1) else n_jobs
+            yield -1
 
 
 #: What every output option's help says of the output policy (:func:`sindyship._io.check_output`).

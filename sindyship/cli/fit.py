@@ -81,6 +81,7 @@ def run(args) -> int:
                 window=args.window)
     if smoothing is not None:
         model.info["smoothing"] = smoothing.as_dict()
+    report_straight_run(model)
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
     report = None if args.no_identifiability else _identifiability(args, records, ship, effects)
@@ -96,6 +97,7 @@ def _run_streamed(args, ship) -> int:
     effects = split_names(args.effects)
     params = {"random_state": args.seed} if args.optimizer == "svr" else {}
     model, summary = streamed_fit(args, ship, effects, params)
+    report_straight_run(model)
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
     if not args.no_identifiability:
@@ -106,6 +108,20 @@ def _run_streamed(args, ship) -> int:
               "library": model.library.name, "optimizer": model.optimizer["name"],
               "identifiability": None, "streamed": summary})
     return 0
+
+
+def report_straight_run(model) -> None:
+    """What the ``prior`` fit's stability requirement did, on stderr (nothing otherwise)."""
+    state = model.info.get("straight_run")
+    if not state or (state["stable"] and not state["raised"]):
+        return
+    if state["stable"]:
+        progress(f"the fit was unstable in straight running; raising the prior's strength "
+                 f"{state['raised']} times (to {state['strength']:g}) made it stable.")
+    else:
+        progress(f"warning: the model is unstable in straight running even with the prior's "
+                 f"strength raised to {state['strength']:g}; its flights may diverge (add "
+                 "manoeuvres that the identifiability report names).")
 
 
 def _identifiability(args, records, ship, effects):

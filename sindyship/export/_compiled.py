@@ -155,31 +155,21 @@ def _rhs_commands(y, commands, out):
 
 @_jit
 def _rhs_one_command(y, command, out):
-    """``_rhs_columns`` of a batch ``y`` (7, k) with one command for all into ``out``; False
-    (nothing done) unless ``y`` has 7 rows."""
-    if y.shape[0] != N_STATE:
-        return False
-    commands = np.empty(1)
-    commands[0] = command
-    _rhs_columns(y, commands, _CHANNEL_DEFAULTS, out)
-    return True
+    """``_rhs_commands`` with one command for every column."""
+    return _rhs_commands(y, np.full(1, command), out)
 
 
 @_jit
 def _rhs_one_state(y, command, out):
-    """``_rhs_columns`` of one state ``y`` (7,) and its command into ``out`` (7,); False
+    """``_rhs_commands`` of one state ``y`` (7,) and its command into ``out`` (7,); False
     (nothing done) unless ``y`` has 7 values."""
     if y.shape[0] != N_STATE:
         return False
     column = np.empty((N_STATE, 1))
-    for i in range(N_STATE):
-        column[i, 0] = y[i]
-    commands = np.empty(1)
-    commands[0] = command
+    column[:, 0] = y
     result = np.empty((N_STATE, 1))
-    _rhs_columns(column, commands, _CHANNEL_DEFAULTS, result)
-    for i in range(N_STATE):
-        out[i] = result[i, 0]
+    _rhs_one_command(column, command, result)
+    out[:] = result[:, 0]
     return True
 
 

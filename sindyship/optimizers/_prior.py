@@ -87,26 +87,33 @@ class PriorRidge(_LinearModel):
             return np.full(p, default)
         out = np.asarray(values, dtype=float).reshape(-1)
         if out.shape != (p,):
-            raise ValueError(f"the prior {what} has {out.size} values for {p} columns; give one "
-                             "per column.")
+            raise ValueError(f"the prior {what} has {out.size} value(s) for {p} columns; give "
+                             "one per column.")
         return out
 
     def _prior_rows(self, p: int) -> tuple[NDArray, NDArray, NDArray]:
         """``(D, m, scale)``: one prior row per column, ``D w ~ m`` with that scale."""
         mean = self._vector(self.mean, 0.0, p, "mean")
         scale = self._vector(self.scale, np.nan, p, "scale")
+        if not np.all(np.isfinite(mean)):
+            raise ValueError(f"the prior mean of column {int(np.argmin(np.isfinite(mean)))} "
+                             "is not a finite number; give a number for every column.")
+        bad = np.isinf(scale) | (np.isfinite(scale) & (scale <= 0))
+        if bad.any():
+            raise ValueError(f"the prior scale of column {int(np.argmax(bad))} is not a "
+                             "positive number; give a positive standard deviation, or NaN "
+                             "(None) for the weak prior.")
         D = np.eye(p)
         for j, i, c in ([] if self.relations is None else self.relations):
+            if not (float(j).is_integer() and float(i).is_integer() and np.isfinite(c)):
+                raise ValueError(f"the prior relation ({j}, {i}, {c}) is not two column "
+                                 "numbers and a finite factor; give (j, i, c).")
             j, i = int(j), int(i)
             if not (0 <= j < p and 0 <= i < p) or i == j:
                 raise ValueError(f"the prior relation ({j}, {i}, {c}) names a column outside "
                                  f"0..{p - 1} or the column itself; relate two columns.")
             D[j, i] = -float(c)
             mean[j], scale[j] = 0.0, np.nan
-        bad = np.isfinite(scale) & (scale <= 0)
-        if bad.any():
-            raise ValueError(f"the prior scale of column {int(np.argmax(bad))} is not positive; "
-                             "give a positive standard deviation or NaN for the weak prior.")
         return D, mean, scale
 
     def _reduce(self, data: _FitData) -> NDArray:
