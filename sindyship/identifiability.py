@@ -320,6 +320,7 @@ def _group(dof, members, ci, problem, vif, values, shell, tie_bound, remedies):
 
 def identifiability(records: Sequence[Trajectory], ship: Ship, *,
                     library="abkowitz", effects: Sequence[str] = (), optimizer: str = "ls",
+                    params: dict | None = None,
                     rudder_signal: str = "actual", vif_bound: float = VIF_BOUND,
                     condition_bound: float = CONDITION_BOUND,
                     proportion_bound: float = PROPORTION_BOUND, tie_bound: float = TIE_BOUND,
@@ -336,6 +337,8 @@ def identifiability(records: Sequence[Trajectory], ship: Ship, *,
         As for :func:`sindyship.identify.fit`.
     optimizer : str
         Method of the leave-one-manoeuvre-out fits (default least squares).
+    params : dict, optional
+        Its parameters (:func:`sindyship.optimizers.make_optimizer`).
     vif_bound : float
         Terms above it are reported (module docstring: why 1e5).
     condition_bound, proportion_bound : float
@@ -365,7 +368,8 @@ def identifiability(records: Sequence[Trajectory], ship: Ship, *,
         residual[dof] = float(np.sqrt(np.mean(error**2)) / max(np.std(p.target), 1e-300))
     flips = {dof: {} for dof in DOFS}
     if len(records) >= 2:
-        lomo = ensemble(records, ship, optimizer, scheme="lomo", problems=problems, n_jobs=1)
+        lomo = ensemble(records, ship, optimizer, params=params, scheme="lomo",
+                        problems=problems, n_jobs=1)
         for dof in DOFS:
             coef = lomo.coefficients[dof]
             for j, term in enumerate(lomo.terms[dof]):

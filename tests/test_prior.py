@@ -222,3 +222,25 @@ def test_an_unstable_fit_at_strength_zero_raises_from_a_floor_and_says_how_it_en
 
 def test_make_optimizer_knows_prior():
     assert isinstance(make_optimizer("prior", strength=1e-4), PriorRidge)
+
+
+def test_fit_takes_the_prior_strength_and_refuses_it_for_another_optimizer(protocol_runs,
+                                                                            tmp_path, capsys):
+    from sindyship.cli import main
+    from sindyship.measurements import write_csv
+
+    paths = [str(write_csv(r, tmp_path / f"{r.name}.csv")) for r in protocol_runs["train"]
+             if r.name.startswith("zz")]
+    out = tmp_path / "m.json"
+    assert main(["fit", *paths, "--optimizer", "prior", "--prior-strength", "1e-7",
+                 "--no-identifiability", "--out", str(out)]) == 0
+    saved = json.loads(out.read_text())
+    assert saved["optimizer"]["params"] == {"strength": 1e-7}
+    capsys.readouterr()
+    assert main(["fit", *paths, "--prior-strength", "1e-7", "--out",
+                 str(tmp_path / "n.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == ("sindyship fit: error: --prior-strength weighs the prior of "
+                       "--optimizer prior, not of ls; add --optimizer prior or drop "
+                       "--prior-strength.")
+    assert not (tmp_path / "n.json").exists()

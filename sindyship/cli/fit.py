@@ -6,6 +6,7 @@ from ._common import (
     OUT_NOTE,
     SEED,
     add_training_options,
+    bounded_float,
     check_inputs,
     emit,
     progress,
@@ -25,6 +26,11 @@ def add_parser(sub) -> None:
     add_stream_options(p)
     p.add_argument("--seed", type=SEED, default=0,
                    help="seed of randomised optimizers, a whole number >= 0 (default 0)")
+    p.add_argument("--prior-strength", type=bounded_float(0, 1, "", low_open=False),
+                   default=None, metavar="S",
+                   help="with --optimizer prior: the weight of the ship's prior, in [0, 1], as "
+                   "a share of the force's sum of squares that one prior standard deviation "
+                   "costs (default 1e-5; smaller follows the data, larger the prior)")
     p.add_argument("--out", required=True, metavar="FILE",
                    help=f"output model JSON ({OUT_NOTE})")
     p.add_argument("--no-identifiability", action="store_true",
@@ -48,6 +54,27 @@ def _smoothing(args, records, ship, effects, params):
     return setting
 
 
+def optimizer_params(args) -> dict:
+    """The optimizer's parameters the options give (``--seed``, ``--prior-strength``).
+
+    Raises
+    ------
+    SindyshipInputError
+        For ``--prior-strength`` without ``--optimizer prior``.
+    """
+    from ..errors import SindyshipInputError
+
+    params = {"random_state": args.seed} if args.optimizer == "svr" else {}
+    if args.prior_strength is not None:
+        if args.optimizer != "prior":
+            raise SindyshipInputError(
+                f"--prior-strength weighs the prior of --optimizer prior, not of "
+                f"{args.optimizer}; add --optimizer prior or drop --prior-strength."
+            )
+        params["strength"] = args.prior_strength
+    return params
+
+
 def fit_inputs(args) -> list[str]:
     """Every file ``fit`` or ``diagnose`` reads: records, ship, library and effect files."""
     return [*args.data, *getattr(args, "test", []), *ship_file(args.ship), args.library,
@@ -61,15 +88,15 @@ def run(args) -> int:
     from ..ships import load_ship
 
     args.data = expand_paths(args.data)
+    params = optimizer_params(args)
     check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}")
     check_inputs(fit_inputs(args))
     ship = load_ship(args.ship)
     if args.stream or args.scheduler:
-        return _run_streamed(args, ship)
+        return _run_streamed(args, ship, params)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
     effects = split_names(args.effects)
-    params = {"random_state": args.seed} if args.optimizer == "svr" else {}
     smoothing = _smoothing(args, records, ship, effects, params)
     if smoothing is not None:
         from ..smoothing import smooth_records
@@ -84,7 +111,8 @@ def run(args) -> int:
     report_straight_run(model)
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
-    report = None if args.no_identifiability else _identifiability(args, records, ship, effects)
+    report = None if args.no_identifiability else _identifiability(args, records, ship, effects,
+                                                                   params)
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
               "library": model.library.name, "optimizer": model.optimizer["name"],
@@ -92,10 +120,9 @@ def run(args) -> int:
     return 0
 
 
-def _run_streamed(args, ship) -> int:
+def _run_streamed(args, ship, params: dict) -> int:
     """``fit --stream``: the model from per-record factors reduced on a Dask cluster."""
     effects = split_names(args.effects)
-    params = {"random_state": args.seed} if args.optimizer == "svr" else {}
     model, summary = streamed_fit(args, ship, effects, params)
     report_straight_run(model)
     model.save(args.out)
@@ -121,17 +148,21 @@ def report_straight_run(model) -> None:
     else:
         progress(f"warning: the model is unstable in straight running even with the prior's "
                  f"strength raised to {state['strength']:g}; its flights may diverge (add "
-                 "manoeuvres that the identifiability report names).")
+                 "manoeuvres that the identifiability report names, or a larger "
+                 "--prior-strength).")
 
 
-def _identifiability(args, records, ship, effects):
+def _identifiability(args, records, ship, effects, params):
     """Terms the records cannot separate, on stderr (the remedies need the ship's MMG)."""
     if len(records) < 2:
         return None
     from ..identifiability import identifiability
 
+    # the members draw their own seeds (uncertainty.ensemble); the strength is the fit's
+    members = {k: v for k, v in params.items() if k != "random_state"}
     report = identifiability(records, ship, library=args.library, effects=effects,
-                             optimizer=args.optimizer, rudder_signal=args.rudder_signal,
+                             optimizer=args.optimizer, params=members,
+                             rudder_signal=args.rudder_signal,
                              remedies=ship.has_mmg)
     text = report.text()
     if text:
