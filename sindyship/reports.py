@@ -245,10 +245,12 @@ def _verdict_lines(diagnosis) -> list[str]:
                 "every training flight completed and the library predicts most of every force.")
     elif verdict == "add-effect":
         top = diagnosis.top
+        optimizer = diagnosis.settings.get("optimizer", "ls")
+        chosen = "" if optimizer == "ls" else f" --optimizer {optimizer}"
         text = (f"Verdict: add {top.effect.name}: sindyship fit DATA.csv... --ship "
                 f"{_ship_argument(diagnosis.ship)} --effects "
-                f"{','.join([*diagnosis.library.effects, top.effect.name])}; then diagnose "
-                "again with the same --effects.")
+                f"{','.join([*diagnosis.library.effects, top.effect.name])}{chosen}; then "
+                "diagnose again with the same --effects.")
     elif verdict == "add-discovered":
         found = " and ".join(f.family for f in diagnosis.discovery.accepted)
         text = (f"Verdict: no catalogued effect is meaningful, but {found} was discovered "

@@ -244,3 +244,12 @@ def test_fit_takes_the_prior_strength_and_refuses_it_for_another_optimizer(proto
                        "--optimizer prior, not of ls; add --optimizer prior or drop "
                        "--prior-strength.")
     assert not (tmp_path / "n.json").exists()
+
+
+def test_the_diagnosis_verdict_keeps_the_prior_optimizer(kcs, protocol_runs):
+    from sindyship.diagnose import diagnose
+
+    result = diagnose(protocol_runs["train"], kcs, optimizer="prior", fly_training=False,
+                      confirm=0)
+    assert result.verdict == "add-effect"
+    assert "--effects asymmetry --optimizer prior;" in " ".join(result.report().split())
