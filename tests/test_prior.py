@@ -50,6 +50,9 @@ def test_relation_draws_one_coefficient_toward_a_multiple_of_another():
     # the data fix w0 + w1 = -0.03; the prior rows (both of weight ||v||) minimise
     # w0^2 + (w1 - 2 w0)^2 on that line: w0 = -0.009, w1 = -0.021
     assert coef == pytest.approx([-0.009, -0.021], rel=1e-4)
+    mean = np.array([-0.01, 5.0])  # the relation replaces column 1's mean, not the caller's
+    PriorRidge(strength=1e-6, mean=mean, relations=[(1, 0, 2.0)]).fit(X, -0.03 * v)
+    assert mean.tolist() == [-0.01, 5.0]
 
 
 @pytest.mark.parametrize("params, message", [

@@ -85,7 +85,7 @@ class PriorRidge(_LinearModel):
     def _vector(self, values, default: float, p: int, what: str) -> NDArray:
         if values is None:
             return np.full(p, default)
-        out = np.asarray(values, dtype=float).reshape(-1)
+        out = np.array(values, dtype=float).reshape(-1)  # a copy: the relations write to it
         if out.shape != (p,):
             raise ValueError(f"the prior {what} has {out.size} value(s) for {p} columns; give "
                              "one per column.")
