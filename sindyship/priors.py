@@ -14,20 +14,26 @@ Semi-empirical derivatives (:func:`semi_empirical_derivatives`)
       (1983), *The application of manoeuvring criteria in hull design using linear theory*,
       Trans. RINA 125, 45-68 (the regression on L, B, d and C_B that
       :func:`sindyship.ships.clarke_added_masses` uses for the added masses);
-    - the non-linear hull derivatives X'_vv, Y'_vvv, Y'_vvr, Y'_vrr, Y'_rrr, N'_vvv, N'_vvr,
-      N'_vrr, N'_rrr of Yoshimura & Masumoto (2012), *Hydrodynamic database and manoeuvring
-      prediction method with medium high-speed merchant ships and fishing vessels*, Proc.
-      MARSIM 2012 (Prime II, times d/L for Prime I).  Their X'_rr and X'_vr are left out: the
-      sign of X'_rr differs between hull forms (-0.012 for the KCS of the paper's Table 3,
-      +0.011 for the KVLCC2 of the MMG standard), so no regression on main dimensions sets it.
+    - the non-linear hull derivatives X'_vv, X'_vr, Y'_vvv, Y'_vvr, Y'_vrr, Y'_rrr, N'_vvv,
+      N'_vvr, N'_vrr, N'_rrr of Yoshimura & Masumoto (2012), *Hydrodynamic database and
+      manoeuvring prediction method with medium high-speed merchant ships and fishing
+      vessels*, Proc. MARSIM 2012 (Prime II, times d/L for Prime I).  Their X'_vr is the
+      hull's force with the added-mass term m'_y v' r' inside, as a dynamometer measures it:
+      1.91 C_B / (L / B) - 0.08 gives 441e-5 for the KCS and 1295e-5 for the KVLCC2 against
+      their MMG models' 509e-5 and 1723e-5 (propeller included).  Their X'_rr is left out:
+      its sign differs between hull forms (-0.012 for the KCS of the paper's Table 3, +0.011
+      for the KVLCC2 of the MMG standard), so no regression on main dimensions sets it.
 
     Each has a standard deviation of half its value, at least a tenth of that of the
     largest estimate of its order (:func:`prior_widths`).
 
     The identified coefficients are not quite these: the regression target of eq. 16 moves
     the added-mass Coriolis and Munk terms to the right-hand side of eq. 14
-    (:func:`sindyship.targets.coriolis`), so e.g. Y'_r(fitted) = Y'_r(captive) - X'_udot and
-    N'_v(fitted) = N'_v(captive) + X'_udot - Y'_vdot; :func:`prior_means` converts.
+    (:func:`sindyship.targets.coriolis`), so e.g. Y'_r(fitted) = Y'_r(captive) - X'_udot,
+    N'_v(fitted) = N'_v(captive) + X'_udot - Y'_vdot and X'_vr(fitted) = X'_vr(captive) +
+    Y'_vdot; :func:`prior_means` converts.  The paper's surge library (eq. 17a) has no
+    ``v r``: use the library ``abkowitz-vr``, or X'_rr takes up X'_vr's share of the force
+    in turns (v' is about -0.5 r' there) and comes out with the wrong sign.
 Speed scaling (:func:`speed_relations`)
     A term ``du^k m`` describes how the force of the monomial ``m`` changes with the surge
     speed.  Quasi-steady forces scale with U^2 f(v/U, r L/U, delta), so with u' = 1 + du the
@@ -56,8 +62,8 @@ import numpy as np
 from .ships import Ship
 from .terms import Term
 
-__all__ = ["RELATIVE_WIDTH", "WIDTH_FLOOR", "prior_means", "prior_parameters", "prior_widths",
-           "semi_empirical_derivatives", "speed_relations"]
+__all__ = ["RELATIVE_WIDTH", "WIDTH_FLOOR", "estimates_outside", "prior_means", "prior_parameters",
+           "prior_widths", "semi_empirical_derivatives", "speed_relations"]
 
 #: Prior standard deviation of a semi-empirical derivative, as a share of its value.
 RELATIVE_WIDTH = 0.5
@@ -85,7 +91,7 @@ def semi_empirical_derivatives(ship: Ship) -> dict[str, dict[str, float]]:
     clarke = math.pi * k**2
     b_l, b_t = p.B / p.L, p.B / p.d
     return {
-        "X": {"v^2": k * (1.15 * cb_lb - 0.18)},
+        "X": {"v^2": k * (1.15 * cb_lb - 0.18), "v r": k * (1.91 * cb_lb - 0.08)},
         "Y": {
             "v": -clarke * (1.0 + 0.40 * c_b * b_t),
             "r": -clarke * (-0.5 + 2.2 * b_l - 0.080 * b_t),
@@ -117,6 +123,7 @@ def prior_means(ship: Ship) -> dict[str, dict[str, float]]:
     out["Y"]["r"] -= x_udot  # added-mass Coriolis X'_udot u' r'
     out["N"]["v"] += x_udot - y_vdot  # Munk moment -(X'_udot - Y'_vdot) u' v'
     out["N"]["r"] -= y_rdot  # Y'_rdot u' r'
+    out["X"]["v r"] += y_vdot  # added-mass centripetal term -Y'_vdot v' r'
     return out
 
 
@@ -228,3 +235,27 @@ def prior_parameters(ship: Ship, dof: str, terms: Sequence[str], *,
     return {"mean": mean.tolist(),
             "scale": [float(x) if np.isfinite(x) else None for x in scale],
             "relations": [list(r) for r in speed_relations(terms)]}
+
+
+def estimates_outside(ship: Ship, terms: dict[str, Sequence[str]]) -> dict[str, list[str]]:
+    """The semi-empirical derivatives that a library has no term for, per degree of freedom.
+
+    Their share of the force goes to the library's other terms instead, so the prior cannot
+    set them: without ``v r`` in X, X'_rr takes up X'_vr's share of the surge force in turns.
+
+    Examples
+    --------
+    >>> from sindyship.library import load_library
+    >>> from sindyship.ships import load_ship
+    >>> library = load_library("abkowitz")
+    >>> estimates_outside(load_ship("kcs"), {d: [t.text for t in library.terms[d]]
+    ...                                      for d in "XYN"})
+    {'X': ['v r']}
+    """
+    out = {}
+    for dof, estimates in semi_empirical_derivatives(ship).items():
+        have = {Term(t).canonical() for t in terms.get(dof, ())}
+        missing = [t for t in estimates if t not in have]
+        if missing:
+            out[dof] = missing
+    return out

@@ -144,25 +144,77 @@ def test_prior_parameters_cover_every_column(kcs):
     json.dumps(params)  # saved with the model: plain JSON
 
 
+def _mmg_captive_x_vr(ship, step=0.01) -> float:
+    """X'_vr (Prime I) of the ship's MMG model as a dynamometer measures it: the mixed
+    difference of the captive surge force about straight running at the design speed."""
+    from sindyship.captive import _mmg_hydrodynamic
+
+    def surge(v, r):
+        state = [np.array([x]) for x in (ship.U0, v * ship.U0, r * ship.U0 / ship.L, 0.0)]
+        return _mmg_hydrodynamic(ship, *state)[0][0]
+
+    mixed = surge(step, step) - surge(step, -step) - surge(-step, step) + surge(-step, -step)
+    return mixed / (4 * step**2) / (0.5 * ship.particulars.rho * ship.U0**2 * ship.L**2)
+
+
+@pytest.mark.parametrize(("name", "mmg"), [("kcs", 509e-5), ("kvlcc2", 1723e-5)])
+def test_the_surge_derivative_x_vr_is_the_dynamometers(name, mmg):
+    """Yoshimura & Masumoto's X'_vr includes the added-mass term m'_y v' r': it is within 30 %
+    of both MMG models' captive X'_vr (not of their hull coefficients 0.047 d/L and 0.002 d/L
+    without it), and the fitted prior mean removes that term again."""
+    from sindyship.ships import load_ship
+
+    ship = load_ship(name)
+    assert _mmg_captive_x_vr(ship) == pytest.approx(mmg, rel=1e-3)
+    estimate = semi_empirical_derivatives(ship)["X"]["v r"]
+    assert estimate == pytest.approx(mmg, rel=0.3)
+    y_vdot = ship.prime_i_inertia()["Y_vdot"]
+    assert prior_means(ship)["X"]["v r"] == pytest.approx(estimate + y_vdot, rel=1e-12)
+
+
+@pytest.fixture(scope="module")
+def protocol_prior(kcs, protocol_runs):
+    """The prior fit on the protocol's training set and its captive agreement."""
+    model = fit(protocol_runs["train"], kcs, optimizer="prior", library="abkowitz-vr")
+    return model, compare_forces(model, captive_tests(kcs, "all", points=11)).to_dict()[
+        "by_test"]
+
+
+def test_prior_fit_of_the_training_set_agrees_with_every_captive_force(protocol_prior):
+    """The paper's training set, the library with v r: X, Y and N agree with the MMG's
+    captive forces (correlation >= 0.95) in static drift, rudder, pure yaw and both."""
+    by_test = protocol_prior[1]
+    for test in (*SWEEPS, "rudder"):
+        for dof in "XYN":
+            assert by_test[test][dof]["correlation"] >= 0.95, (test, dof)
+
+
+def test_without_v_r_the_surge_force_in_pure_yaw_has_the_wrong_sign(kcs, protocol_runs):
+    model = fit(protocol_runs["train"], kcs, optimizer="prior")
+    by_test = compare_forces(model, captive_tests(kcs, "pure-yaw", points=11)).to_dict()[
+        "by_test"]
+    assert by_test["pure-yaw"]["X"]["correlation"] < 0.0
+
+
 @pytest.fixture(scope="module")
 def zigzag_fits(kcs, protocol_runs):
-    """Least squares and the prior fit on the protocol's three zig-zags alone."""
+    """Least squares and the prior fit (library with v r) on the three zig-zags alone."""
     zigzags = [r for r in protocol_runs["train"] if r.name.startswith("zz")]
     captive = captive_tests(kcs, "all", points=11)
     out = {}
-    for name in ("ls", "prior"):
-        model = fit(zigzags, kcs, optimizer=name)
+    for name, library in (("ls", "abkowitz"), ("prior", "abkowitz-vr")):
+        model = fit(zigzags, kcs, optimizer=name, library=library)
         out[name] = (model, compare_forces(model, captive).to_dict()["by_test"])
     return out
 
 
-def test_prior_keeps_sway_and_yaw_forces_where_least_squares_loses_them(zigzag_fits):
-    """Identified on zig-zags alone: the prior fit's Y and N agree with the MMG's captive
-    forces (correlation >= 0.9 on every sweep); least squares' do not."""
+def test_prior_keeps_the_forces_where_least_squares_loses_them(zigzag_fits):
+    """Identified on zig-zags alone: the prior fit's X, Y and N agree with the MMG's captive
+    forces (correlation >= 0.9 on every sweep); least squares' Y and N do not."""
     prior = zigzag_fits["prior"][1]
     least = zigzag_fits["ls"][1]
     for test in SWEEPS:
-        for dof in "YN":
+        for dof in "XYN":
             assert prior[test][dof]["correlation"] >= 0.9, (test, dof)
     assert min(least[t][d]["correlation"] for t in SWEEPS for d in "YN") < 0.0
 
@@ -239,7 +291,11 @@ def test_fit_takes_the_prior_strength_and_refuses_it_for_another_optimizer(proto
                  "--no-identifiability", "--out", str(out)]) == 0
     saved = json.loads(out.read_text())
     assert saved["optimizer"]["params"] == {"strength": 1e-7}
-    capsys.readouterr()
+    # the paper's library has no v r in X: the fit says so and names the library that has
+    assert "estimates of X: v r" in capsys.readouterr().err
+    assert main(["fit", *paths, "--optimizer", "prior", "--library", "abkowitz-vr",
+                 "--no-identifiability", "--out", str(tmp_path / "vr.json")]) == 0
+    assert "has no term" not in capsys.readouterr().err
     assert main(["fit", *paths, "--prior-strength", "1e-7", "--out",
                  str(tmp_path / "n.json")]) == 2
     err = capsys.readouterr().err.strip().splitlines()

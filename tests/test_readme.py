@@ -68,8 +68,10 @@ def _row(method: str, effects=()):
 def test_table_10_rows_are_pinned(method, kcs, protocol_runs):
     from sindyship.evaluation import evaluate
     from sindyship.identify import fit
+    from sindyship.reproduce import METHOD_LIBRARIES
 
-    model = fit(protocol_runs["train"], kcs, optimizer=method)
+    model = fit(protocol_runs["train"], kcs, optimizer=method,
+                library=METHOD_LIBRARIES.get(method, "abkowitz"))
     errors = evaluate(model, protocol_runs["test"])
     for name, saved in _row(method)["errors"].items():
         assert errors[name]["mean_distance_L"] == pytest.approx(saved["mean_distance_L"],
@@ -94,7 +96,8 @@ def test_the_captive_correlations_are_pinned(kcs, protocol_runs):
     from sindyship.reproduce import captive_agreement
 
     models = {"ls": fit(protocol_runs["train"], kcs),
-              "prior": fit(protocol_runs["train"], kcs, optimizer="prior"),
+              "prior": fit(protocol_runs["train"], kcs, optimizer="prior",
+                           library="abkowitz-vr"),
               "ls+asymmetry+higher_order": fit(protocol_runs["train"], kcs,
                                                effects=["asymmetry", "higher_order"])}
     fresh = captive_agreement(models, kcs)

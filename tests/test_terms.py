@@ -28,7 +28,8 @@ from sindyship.terms import (
 REPO = Path(__file__).resolve().parents[1]
 #: The paper's Tables 7-9 as shipped with the package (sindyship.paper reads the same file).
 PAPER_TABLE = Path(sindyship.__file__).parent / "data" / "paper-tables-7-9.csv"
-LIBRARY_FILES = [REPO / "libraries" / "abkowitz.toml", REPO / "libraries" / "abkowitz-noconst.toml"]
+LIBRARY_FILES = [REPO / "libraries" / f"{name}.toml"
+                 for name in ("abkowitz", "abkowitz-noconst", "abkowitz-vr")]
 
 
 def _library_terms() -> list[str]:

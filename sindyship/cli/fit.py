@@ -138,7 +138,18 @@ def _run_streamed(args, ship, params: dict) -> int:
 
 
 def report_straight_run(model) -> None:
-    """What the ``prior`` fit's stability requirement did, on stderr (nothing otherwise)."""
+    """What the ``prior`` fit's stability requirement did, and the ship's estimates its library
+    has no term for, on stderr (nothing otherwise)."""
+    if model.optimizer["name"] == "prior":
+        from ..priors import estimates_outside
+
+        missing = estimates_outside(model.ship, {dof: [t.text for t in terms] for dof, terms
+                                                 in model.library.terms.items()})
+        if missing:
+            listed = "; ".join(f"{dof}: {', '.join(terms)}" for dof, terms in missing.items())
+            progress(f"note: the library {model.library.name!r} has no term for the prior's "
+                     f"estimates of {listed}, so other terms take up their force and may come "
+                     "out with the wrong sign; add them (--library abkowitz-vr has X's v r).")
     state = model.info.get("straight_run")
     if not state or (state["stable"] and not state["raised"]):
         return

@@ -2,10 +2,12 @@
 
 A *term library* (``libraries/<name>.toml``) declares the terms of the surge force X, sway
 force Y and yaw moment N of a manoeuvring model; the built-in ``abkowitz`` library holds the
-paper's eq. 15 / 17 (16 surge, 22 sway and 22 yaw terms) and ``abkowitz-noconst`` the same
-without the constant terms.  An *effect* (``libraries/effects/<name>.toml``) is a catalogued
-physical effect: a paragraph on its physics, the data channels it needs, and the extra terms
-per degree of freedom that model it; :meth:`TermLibrary.extended` adds effects to a library.
+paper's eq. 15 / 17 (16 surge, 22 sway and 22 yaw terms), ``abkowitz-noconst`` the same
+without the constant terms and ``abkowitz-vr`` the same with the surge term ``v r`` of the MMG
+hull model (the library of the physics-consistent fit, :mod:`sindyship.priors`).  An *effect*
+(``libraries/effects/<name>.toml``) is a catalogued physical effect: a paragraph on its
+physics, the data channels it needs, and the extra terms per degree of freedom that model it;
+:meth:`TermLibrary.extended` adds effects to a library.
 Every term is declared once, in these files, and its column, name, LaTeX and generated code
 all come from that declaration (:class:`sindyship.terms.Term`).  The files are untrusted
 input: their terms are read by the whitelist parser of :mod:`sindyship.terms`.
