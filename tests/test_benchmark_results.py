@@ -73,8 +73,20 @@ def test_the_prior_keeps_sway_and_yaw_forces_that_least_squares_loses():
     protocol = result["sets"]["protocol"]["fits"]
     assert _lowest(protocol[default], result["tests"], "XYN") >= 0.95
     assert _lowest(protocol["ls"], result["tests"]) < 0.0
+    # zig-zags alone: the semi-empirical prior flies the turns worse than least squares; the
+    # MMG's own Taylor coefficients as the prior (the yardstick) fly every manoeuvre better
+    def flights(row):
+        return [e["mean_distance_L"] for e in row["held_out"].values()]
+
+    held_out = list(zigzags["ls"]["held_out"])
+    assert held_out == ["tc15_port", "tc15_stbd", "zz10_10"]
+    assert flights(zigzags[default])[1] > flights(zigzags["ls"])[1]
+    assert all(b < a for a, b in zip(flights(zigzags["ls"]), flights(zigzags["prior 1e-04 taylor"]),
+                                     strict=True))
+    assert _lowest(zigzags["prior 1e-04 taylor"], sweeps, "XYN") >= 0.95
     # without the surge term v r, the surge force in pure yaw has the wrong sign
     paper_library = f"{default} {result['libraries']['ls']}"
     assert protocol[paper_library]["captive"]["pure-yaw"]["X"]["correlation"] < 0.0
     for fits in (zigzags, protocol):
-        assert all(row["straight_run"]["stable"] for key, row in fits.items() if key != "ls")
+        assert all(row["straight_run"]["stable"] for key, row in fits.items()
+                   if key != "ls" and not key.endswith("taylor"))  # the yardstick is no fit
