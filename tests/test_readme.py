@@ -136,6 +136,30 @@ def test_the_kvlcc2_turns_are_pinned():
             assert fresh[side][key] == pytest.approx(figures[key], rel=1e-6), (side, key)
 
 
+def _numbers_in(value) -> list[float]:
+    """Every number of a nested JSON value, in order (booleans and None left out)."""
+    if isinstance(value, dict):
+        return [x for key in sorted(value) for x in _numbers_in(value[key])]
+    if isinstance(value, list):
+        return [x for item in value for x in _numbers_in(item)]
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return []
+    return [float(value)]
+
+
+def test_the_marin_numbers_are_pinned():
+    """The KVLCC2 measurements' block (skipped without the shared data folder)."""
+    from sindyship.marin import default_marin_dir
+
+    if default_marin_dir() is None or NUMBERS["marin"] is None:
+        pytest.skip("the MARIN measurements (../shared/data) are not here")
+    fresh = json.loads(json.dumps(_script()._marin()))
+    saved = NUMBERS["marin"]
+    assert fresh["top"] == saved["top"] and fresh["confirmed"] == saved["confirmed"]
+    assert fresh["not_testable"] == saved["not_testable"]
+    assert _numbers_in(fresh) == pytest.approx(_numbers_in(saved), rel=1e-6, abs=1e-12)
+
+
 def test_the_noise_ratios_are_pinned(kcs, protocol_runs):
     """1 % noise (seed 1), 21 s Savitzky-Golay smoothing, least squares: the held-out error
     over the clean one, as scripts/regenerate_golden.py computes it (tests/golden/kcs.json)."""

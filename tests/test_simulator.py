@@ -11,7 +11,12 @@ import pytest
 
 from sindyship.manoeuvres import Manoeuvre, fly, turning_figures, zigzag_figures
 from sindyship.mmg import MMGModel, force_components
-from sindyship.simulation import ConstantCommand, ZigZagCommand, simulate_batch
+from sindyship.simulation import (
+    ConstantCommand,
+    PrescribedRudder,
+    ZigZagCommand,
+    simulate_batch,
+)
 
 GOLDEN = json.loads((Path(__file__).parent / "golden" / "kcs.json").read_text())
 
@@ -77,6 +82,21 @@ def test_rudder_rate_limit_binds_with_fast_servo(kcs):
     assert np.degrees(run["delta"][-1]) == pytest.approx(35.0, abs=1e-3)
     (slow,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=35, duration=60, dt=0.25)])
     assert np.degrees(np.diff(slow["delta"]) / 0.25).max() < 5.0
+
+
+@pytest.mark.parametrize("sample_interval", [1.0, 0.3])
+def test_a_prescribed_rudder_is_flown_exactly_while_it_moves(kcs, sample_interval):
+    """A replayed rudder angle (linear between samples) is the flown angle at every output
+    time, also while it moves: the last Runge-Kutta stage of a step that ends on a sample takes
+    the rate of the interval it ends, not of the next one (that led by h/6 of the change)."""
+    t = np.arange(0.0, 60.0, sample_interval)
+    ramp = np.clip(2.0 * (t - 10.0), 0.0, 20.0) - np.clip(2.0 * (t - 30.0), 0.0, 20.0)
+    angles = np.radians(ramp)  # up at 2 deg/s from 10 s, back down from 30 s
+    out = np.arange(0.0, 59.0, 0.25)
+    state0 = np.array([kcs.U0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    (result,) = simulate_batch(MMGModel(kcs), [PrescribedRudder(t, angles)], out, state0)
+    flown = np.degrees(result.states[6])
+    assert np.max(np.abs(flown - np.interp(out, t, ramp))) < 1e-9
 
 
 def test_halving_the_step_moves_positions_less_than_1e4_L(kcs):

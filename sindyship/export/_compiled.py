@@ -236,9 +236,9 @@ class _CompiledIntegrator(_Integrator):
             return _channel_block(model.values, len(members))
         return _CHANNEL_DEFAULTS
 
-    def rhs(self, t, y, delta_c, members, branch):
+    def rhs(self, t, y, delta_c, members, branch, rate_time=None):
         if self.any_prescribed:
-            return super().rhs(t, y, delta_c, members, branch)
+            return super().rhs(t, y, delta_c, members, branch, rate_time)
         y = np.ascontiguousarray(y, dtype=float)
         out = np.empty_like(y)
         _rhs_columns(y, np.ascontiguousarray(delta_c, dtype=float),

@@ -20,9 +20,7 @@ KERNEL_MARK = "# " + "-" * 77 + " kernel begins"
 N_STATE = 7
 
 
-# ---------------------------------------------------------------------------------------------
-# Rudder commands
-# ---------------------------------------------------------------------------------------------
+# -------------------- Rudder commands --------------------------------------------------------
 class RudderCommand:
     """A piecewise-constant commanded rudder angle, possibly closed loop.
 
@@ -151,9 +149,7 @@ class PrescribedRudder(RudderCommand):
         return float(self.times[k]) if k < len(self.times) else math.inf
 
 
-# ---------------------------------------------------------------------------------------------
-# Results
-# ---------------------------------------------------------------------------------------------
+# -------------------- Results ----------------------------------------------------------------
 class ChannelSeries:
     """Recorded channels as time series for a batch of flights (one row per member).
 
@@ -230,9 +226,7 @@ def diverged(state: np.ndarray, L: float, U0: float) -> np.ndarray:
     return ~finite | bad
 
 
-# ---------------------------------------------------------------------------------------------
-# Integration
-# ---------------------------------------------------------------------------------------------
+# -------------------- Integration ------------------------------------------------------------
 def _hermite(y0, f0, y1, f1, h, theta):
     """Cubic Hermite interpolation on a step of length h at fraction theta."""
     t2 = theta * theta
@@ -276,8 +270,9 @@ class _Integrator:
             return None
         return self.switching(y) > 0.0
 
-    def rhs(self, t, y, delta_c, members, branch):
-        """Time derivative of the state columns ``y`` (7, k) for the given members."""
+    def rhs(self, t, y, delta_c, members, branch, rate_time=None):
+        """Time derivative of the state columns ``y`` (7, k); a prescribed rudder moves at its
+        rate at ``rate_time`` (default ``t``), a time inside the step, not at its end sample."""
         u, v, r, x, y_east, psi, delta = y
         rudder = delta_c if self.rudder_input == "commanded" else delta
         target = np.minimum(np.maximum(delta_c, -self.delta_max), self.delta_max)
@@ -285,7 +280,7 @@ class _Integrator:
         if self.any_prescribed and self.prescribed[members].any():
             for j, m in enumerate(members):
                 if self.prescribed[m]:
-                    ddelta[j] = self.commands[m].rate(t)
+                    ddelta[j] = self.commands[m].rate(t if rate_time is None else rate_time)
         extra = {"position": (x, y_east)} if self.uses_position else {}
         if self.uses_rudder_rate:
             extra["rudder_rate"] = ddelta
@@ -305,17 +300,19 @@ class _Integrator:
         return out
 
     def step(self, t, y, h, delta_c, members, branch, f0=None):
-        k1 = self.rhs(t, y, delta_c, members, branch) if f0 is None else f0
-        k2 = self.rhs(t + 0.5 * h, y + 0.5 * h * k1, delta_c, members, branch)
-        k3 = self.rhs(t + 0.5 * h, y + 0.5 * h * k2, delta_c, members, branch)
-        k4 = self.rhs(t + h, y + h * k3, delta_c, members, branch)
+        mid = t + 0.5 * h
+        k1 = self.rhs(t, y, delta_c, members, branch, mid) if f0 is None else f0
+        k2 = self.rhs(mid, y + 0.5 * h * k1, delta_c, members, branch)
+        k3 = self.rhs(mid, y + 0.5 * h * k2, delta_c, members, branch)
+        k4 = self.rhs(t + h, y + h * k3, delta_c, members, branch, mid)
         return y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4), k1
 
 
 class _FirstSameAsLast:
-    """Right-hand sides at the end of the last step, reused at the start of the next one."""
+    """Right-hand sides at a step's end, reused at the next start (not a prescribed rudder's)."""
 
-    def __init__(self, n_members: int):
+    def __init__(self, n_members: int, prescribed: np.ndarray):
+        self.prescribed = prescribed
         self.f = np.zeros((N_STATE, n_members))
         self.delta_c = np.full(n_members, np.nan)
         self.branch = np.zeros(n_members, dtype=bool)
@@ -338,7 +335,7 @@ class _FirstSameAsLast:
         self.delta_c[members] = delta_c
         if branch is not None:
             self.branch[members] = branch
-        self.valid[members] = True
+        self.valid[members] = ~self.prescribed[members]
 
 
 def _advance(integ: _Integrator, commands, time, y, h, members, t_out, samples, out, out_cmd,
@@ -369,7 +366,7 @@ def _advance(integ: _Integrator, commands, time, y, h, members, t_out, samples, 
     if smooth.size:
         sub_branch = None if branch is None else branch[smooth]
         f_end = integ.rhs(time + h, y_end[:, smooth], delta_c[smooth], members[smooth],
-                          sub_branch)
+                          sub_branch, time + 0.5 * h)
         fsal.store(members[smooth], f_end, delta_c[smooth], sub_branch)
         for k in samples:
             theta = (t_out[k] - time) / h
@@ -417,13 +414,13 @@ def _advance_one(integ, cmd, j, time, h, y0, t_out, samples, out, out_cmd, first
             y_try, f0 = integ.step(time, y, h_try, delta_c, col, branch,
                                    f0=None if first is None else first[1])
         first = None
-        f1 = integ.rhs(time + h_try, y_try, delta_c, col, branch)
+        f1 = integ.rhs(time + h_try, y_try, delta_c, col, branch, time + 0.5 * h_try)
         theta, kind = _piece_end(integ, cmd, y, f0, y_try, f1, h_try, branch,
                                  "change" if h_try < remaining else None)
         h_taken = theta * h_try
         if theta < 1.0:
             y_new, _ = integ.step(time, y, h_taken, delta_c, col, branch, f0=f0)
-            f1 = integ.rhs(time + h_taken, y_new, delta_c, col, branch)
+            f1 = integ.rhs(time + h_taken, y_new, delta_c, col, branch, time + 0.5 * h_taken)
         else:
             y_new = y_try
         _write_samples(out, out_cmd, j, t_out, samples, time, h_taken, tol, y, f0, y_new, f1,
@@ -572,7 +569,7 @@ def integrate(integ: _Integrator, commands: Sequence[RudderCommand], t: np.ndarr
     time = float(t[0])
     t_end = float(t[-1])
     k_next = 1
-    fsal = _FirstSameAsLast(n_members)
+    fsal = _FirstSameAsLast(n_members, integ.prescribed)
     with np.errstate(all="ignore"):
         while k_next < n_out and active.any():
             h = min(h_max, t_end - time)
