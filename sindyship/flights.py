@@ -184,14 +184,16 @@ def fly_like_batch(dynamics, records: Sequence[Trajectory], *, step: float | Non
 
 
 def fly_jobs_like(jobs: Sequence[tuple[object, Sequence[Trajectory]]], *,
-                  step: float | None = None) -> list[list[Trajectory]]:
+                  step: float | None = None, bar=None) -> list[list[Trajectory]]:
     """Fly several ``(dynamics or fitted model, records)`` jobs as :func:`fly_like_batch`
     flies one, in as few integrations as possible.
 
     Records of one job that share a grid fly in one batch; fitted models of one ship and
     rudder signal fly side by side in that batch too (their accelerations evaluated each on
     its own members, :class:`_Stacked`), so the integrator's work per step is shared by
-    every model a diagnosis compares.  Each flight is that of its model alone.
+    every model a diagnosis compares.  Each flight is that of its model alone.  ``bar``, a
+    tqdm progress bar (optional), gets the seconds the integrations fly as its total and
+    advances with every step.
 
     Returns
     -------
@@ -205,15 +207,18 @@ def fly_jobs_like(jobs: Sequence[tuple[object, Sequence[Trajectory]]], *,
                else ("own", i))
         for k, record in enumerate(_aligned(flier, records)):
             groups.setdefault(key, []).append((i, k, flier, record))
-    for members in groups.values():
-        for grid, idx in _common_grids([m[3] for m in members]):
-            batch = [members[j] for j in idx]
-            state0 = np.column_stack([m[3].state()[:, 0] for m in batch])
-            results = simulate_batch(_batch_dynamics(batch, grid),
-                                     [_command_on(m[3], grid) for m in batch], grid, state0,
-                                     step=step)
-            for (i, k, _, record), res in zip(batch, results, strict=True):
-                out[i][k] = result_to_trajectory(_cut(res, len(record.t)), record.name)
+    batches = [(members, grid, idx) for members in groups.values()
+               for grid, idx in _common_grids([m[3] for m in members])]
+    if bar is not None:
+        bar.reset(total=sum(float(grid[-1] - grid[0]) for _, grid, _ in batches))
+    for members, grid, idx in batches:
+        batch = [members[j] for j in idx]
+        state0 = np.column_stack([m[3].state()[:, 0] for m in batch])
+        results = simulate_batch(_batch_dynamics(batch, grid),
+                                 [_command_on(m[3], grid) for m in batch], grid, state0,
+                                 step=step, on_step=None if bar is None else bar.update)
+        for (i, k, _, record), res in zip(batch, results, strict=True):
+            out[i][k] = result_to_trajectory(_cut(res, len(record.t)), record.name)
     return out
 
 

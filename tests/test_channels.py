@@ -110,8 +110,21 @@ def test_models_flown_side_by_side_fly_as_alone(kcs, depth_model, protocol_runs)
     test = protocol_runs["test"]
     deep = [_with_depth(r, np.linspace(0.0, 100.0, r.n_samples)) for r in test]
     jobs = [(model, test), (unstable, test[:2]), (depth_model, deep), (model.dynamics(), test)]
-    together = fly_jobs_like(jobs)
+    class Bar:  # what fly_jobs_like asks of a tqdm bar
+        def reset(self, total):
+            self.total, self.steps = total, []
+
+        def update(self, seconds):
+            self.steps.append(seconds)
+
+    bar = Bar()
+    together = fly_jobs_like(jobs, bar=bar)
     assert [len(j) for j in together] == [3, 2, 3, 3]
+    # progress in seconds flown: every integration's span, step by step
+    spans = [r.t[-1] - r.t[0] for r in test]
+    assert max(spans) <= bar.total <= len(jobs) * max(spans)
+    assert sum(bar.steps) == pytest.approx(bar.total, rel=1e-9)
+    assert len(bar.steps) > 100
     assert any(f.meta["diverged_at"] is not None for f in together[1])
     for flights, (flier, records) in zip(together, jobs, strict=True):
         for a, b in zip(flights, fly_like_batch(flier, records), strict=True):

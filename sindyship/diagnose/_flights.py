@@ -13,6 +13,10 @@ from ..library import (
 from ..model import AbkowitzModel
 from ..trajectory import Trajectory
 
+#: The flights' progress bar: seconds of flight integrated, of all the integrations' total.
+_SECONDS_BAR = ("{desc}: {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} s flown "
+                "[{elapsed}<{remaining}]")
+
 
 # =============================================================================== flights
 def fly_model(model: AbkowitzModel, records: Sequence[Trajectory]) -> list[Trajectory]:
@@ -70,11 +74,14 @@ def _fly_many(
     jobs = [(model, list(records)) for model, records in jobs if records]
     if not jobs:
         return []
-    bar = tqdm(total=len(jobs), desc=what, file=sys.stderr, disable=not progress, leave=False)
     if n_jobs == 1 or len(jobs) == 1:
-        out = fly_jobs_like(jobs)  # every model side by side in one integration per grid
-        bar.update(len(jobs))
+        # every model side by side in one integration per grid: progress in seconds flown
+        bar = tqdm(total=1, desc=what, file=sys.stderr, disable=not progress, leave=False,
+                   bar_format=_SECONDS_BAR, delay=0.5)  # fly_jobs_like sets the total
+        out = fly_jobs_like(jobs, bar=bar)
     else:
+        bar = tqdm(total=len(jobs), desc=what, file=sys.stderr, disable=not progress,
+                   leave=False)
         from joblib import Parallel, delayed
 
         results = Parallel(n_jobs=n_jobs, return_as="generator")(

@@ -41,6 +41,7 @@ def simulate_batch(
     *,
     step: float | None = None,
     check_divergence: bool = True,
+    on_step=None,
 ) -> list[SimulationResult]:
     """Fly several manoeuvres of one model together.
 
@@ -62,6 +63,9 @@ def simulate_batch(
     check_divergence : bool
         Stop a member whose state leaves the plausible range (:func:`diverged`) at an output
         time; its later samples are NaN and ``diverged_at`` holds that time.
+    on_step : callable, optional
+        Called with the length [s] of every Runge-Kutta step taken (a progress bar's
+        ``update``).
 
     Returns
     -------
@@ -72,4 +76,4 @@ def simulate_batch(
     integ = integrator_for(dynamics, commands)
     h_max = float(step) if step is not None else default_step(ship)
     return integrate(integ, commands, np.asarray(t, dtype=float), state0, h_max,
-                     check_divergence, ship.L, ship.U0)
+                     check_divergence, ship.L, ship.U0, on_step)

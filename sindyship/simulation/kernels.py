@@ -517,8 +517,8 @@ def _common_change(commands, members, time: float, h: float) -> float:
 
 
 def integrate(integ: _Integrator, commands: Sequence[RudderCommand], t: np.ndarray,
-              state0: np.ndarray, h_max: float, check_divergence: bool, L: float, U0: float
-              ) -> list[SimulationResult]:
+              state0: np.ndarray, h_max: float, check_divergence: bool, L: float, U0: float,
+              on_step: Callable[[float], None] | None = None) -> list[SimulationResult]:
     """Fly the commands' manoeuvres together with one integrator (see the module docstring).
 
     Parameters
@@ -537,6 +537,8 @@ def integrate(integ: _Integrator, commands: Sequence[RudderCommand], t: np.ndarr
         Stop a member whose state leaves the plausible range (:func:`diverged`).
     L, U0 : float
         Ship length [m] and design speed [m/s] of the divergence test.
+    on_step : callable, optional
+        Called with the length [s] of every step taken (progress).
 
     Returns
     -------
@@ -581,6 +583,8 @@ def integrate(integ: _Integrator, commands: Sequence[RudderCommand], t: np.ndarr
             y = _advance(integ, commands, time, y, h, members, t, samples, out, out_cmd, fsal)
             time = t_new
             k_next = k_stop
+            if on_step is not None:
+                on_step(h)
             if check_divergence and len(samples):
                 block = out[:, samples.start:samples.stop][:, :, members]
                 bad = diverged(block.reshape(N_STATE, -1), L, U0).reshape(
