@@ -14,11 +14,12 @@ surge term ``v r``), and for every model reports
   ship lengths, a diverged flight as such);
 - its straight-run stability.
 
-A bound on what any prior on main dimensions could do: ``prior 1e-05 taylor`` (and ``1e-04``)
-is the same fit with the prior's means replaced by the MMG's own Taylor coefficients
-(:func:`sindyship.taylor.taylor_reference`, half their value as the standard deviation): the
-prior a perfect semi-empirical method would give.  It uses the simulator's coefficients, so it
-is a yardstick, never a workflow.
+A yardstick for the semi-empirical estimates: ``prior 1e-05 taylor`` (and ``1e-04``) is the
+same fit (terms, widths, speed relations, stability requirement) with the means of the
+estimated derivatives replaced by the MMG's own Taylor coefficients
+(:func:`sindyship.taylor.taylor_reference`): what the prior would give if the regressions on
+main dimensions were exact for this hull.  It uses the simulator's coefficients, so it is a
+yardstick, never a workflow.
 
 Prints the tables and saves ``benchmarks/results/captive.json``.  Run with
 ``python benchmarks/bench_captive.py`` (about 10 s).
@@ -33,36 +34,47 @@ from pathlib import Path
 from sindyship._io import clean_json, write_text_atomic
 from sindyship.evaluation import distance_errors
 from sindyship.flights import fly_like_batch
-from sindyship.identify import design, fit, fitted_model, resolve_library
+from sindyship.identify import (
+    design,
+    fit,
+    fitted_model,
+    resolve_library,
+    straight_run_stable,
+)
 from sindyship.manoeuvres import fly, protocol_manoeuvres
 from sindyship.mmg import MMGModel
 from sindyship.optimizers import PriorRidge
-from sindyship.priors import prior_parameters
+from sindyship.priors import prior_means, prior_parameters
 from sindyship.reproduce import CAPTIVE_TESTS, METHOD_LIBRARIES, captive_agreement
 from sindyship.ships import load_ship
 from sindyship.taylor import taylor_reference
+from sindyship.terms import Term
 
 OUT = Path(__file__).parent / "results" / "captive.json"
 STRENGTHS = (1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
-#: The strengths of the fits with the MMG's Taylor coefficients as the prior (the bound).
+#: The strengths of the fits with the MMG's Taylor coefficients as the prior (the yardstick).
 TAYLOR_STRENGTHS = (1e-5, 1e-4)
-#: Their least standard deviation, as a share of the largest Taylor coefficient of the equation.
-TAYLOR_FLOOR = 0.05
 
 
 def taylor_prior_fit(ship, library, problems, strength: float):
-    """The prior fit with the MMG's own Taylor coefficients as every term's prior mean."""
+    """The ``prior`` fit with the MMG's own Taylor coefficients in place of the semi-empirical
+    estimates: the same terms, widths, speed relations and stability requirement."""
     reference = taylor_reference(ship, library)
-    fitted = {}
-    for dof, problem in problems.items():
-        mean = [reference[dof].get(term, 0.0) for term in problem.terms]
-        floor = TAYLOR_FLOOR * max(abs(m) for m in mean)
-        scale = [0.5 * max(abs(m), floor) for m in mean]
-        relations = prior_parameters(ship, dof, problem.terms)["relations"]
-        fitted[dof] = PriorRidge(strength=strength, mean=mean, scale=scale,
-                                 relations=relations).fit(problem.features, problem.target)
-    return fitted_model(ship, library, fitted, {d: p.terms for d, p in problems.items()},
-                        optimizer="prior", rudder_signal="actual", info={})
+    estimated = prior_means(ship)
+
+    def fitted_with(chosen: float):
+        fitted = {}
+        for dof, problem in problems.items():
+            params = prior_parameters(ship, dof, problem.terms)
+            mean = [reference[dof][term] if Term(term).canonical() in estimated[dof] else m
+                    for term, m in zip(problem.terms, params["mean"], strict=True)]
+            fitted[dof] = PriorRidge(strength=chosen, mean=mean, scale=params["scale"],
+                                     relations=params["relations"]).fit(problem.features,
+                                                                        problem.target)
+        return fitted_model(ship, library, fitted, {d: p.terms for d, p in problems.items()},
+                            optimizer="prior", rudder_signal="actual", info={})
+
+    return straight_run_stable(fitted_with(strength), fitted_with)
 
 
 def evaluate(model, test, ship) -> dict:

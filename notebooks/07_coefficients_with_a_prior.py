@@ -125,8 +125,8 @@ for key in ("ls", 1e-5):
 
 # %% [markdown]
 # The surge force in pure yaw needs the `v r` term: on the paper's library X'_rr stands in for
-# X'_vr in turns (v' is about -0.5 r' there) and the surge force in pure yaw comes out with the
-# wrong sign, whatever the strength.
+# X'_vr in turns (v' is about -0.5 r' there), and at the default strength the surge force in
+# pure yaw comes out with the wrong sign.
 
 # %%
 on_paper_library = fit(train, ship, library=paper_library, optimizer="prior")

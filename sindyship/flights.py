@@ -229,11 +229,9 @@ def _command_on(record: Trajectory, grid: np.ndarray):
     command = command_for(record)
     n = len(record.t)
     if command.prescribed and len(grid) > n:
-        angles = np.asarray(_held_to(record, grid)["delta"], dtype=float).copy()
-        # the first held sample continues the last slope: at the record's last sample the
-        # servo sees the rate it sees in a flight of the record alone
-        angles[n:] = angles[n - 1] + command.rate(command.times[-1]) * (grid[n] - grid[n - 1])
-        return PrescribedRudder(grid, angles)
+        # every Runge-Kutta stage up to the record's last sample takes the rate of its own
+        # interval, so the held tail does not change the flight up to there
+        return PrescribedRudder(grid, np.asarray(_held_to(record, grid)["delta"], dtype=float))
     return command
 
 

@@ -8,6 +8,7 @@ and returns an :class:`~sindyship.model.AbkowitzModel`.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -172,7 +173,9 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
 
     The ``prior`` optimizer also requires a model that is stable in straight running: it
     raises the prior's strength, a few times at most, until the model is
-    (:func:`straight_run_stable`; ``info["straight_run"]`` says how it ended).
+    (:func:`straight_run_stable`; ``info["straight_run"]`` says how it ended), and warns
+    (:class:`~sindyship.priors.PriorCoverageNote`) when the library has no term for some of
+    the ship's estimates (:func:`sindyship.priors.coverage_note`).
 
     Parameters
     ----------
@@ -221,8 +224,19 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
 
     model = fitted_with(None)
     if optimizer == "prior":
+        _note_prior_coverage(ship, lib)
         model = straight_run_stable(model, fitted_with)
     return model
+
+
+def _note_prior_coverage(ship: Ship, library: TermLibrary) -> None:
+    """Warn (:class:`sindyship.priors.PriorCoverageNote`) when the library has no term for
+    some of the ship's semi-empirical estimates."""
+    from .priors import PriorCoverageNote, coverage_note
+
+    note = coverage_note(ship, library)
+    if note is not None:
+        warnings.warn(note[0].upper() + note[1:], PriorCoverageNote, stacklevel=3)
 
 
 def _fit_each(problems: dict[str, Design], optimizer: str, params: dict | None,

@@ -20,9 +20,12 @@ Semi-empirical derivatives (:func:`semi_empirical_derivatives`)
       vessels*, Proc. MARSIM 2012 (Prime II, times d/L for Prime I).  Their X'_vr is the
       hull's force with the added-mass term m'_y v' r' inside, as a dynamometer measures it:
       1.91 C_B / (L / B) - 0.08 gives 441e-5 for the KCS and 1295e-5 for the KVLCC2 against
-      their MMG models' 509e-5 and 1723e-5 (propeller included).  Their X'_rr is left out:
-      its sign differs between hull forms (-0.012 for the KCS of the paper's Table 3, +0.011
-      for the KVLCC2 of the MMG standard), so no regression on main dimensions sets it.
+      their MMG models' 509e-5 and 1723e-5 (propeller included).  Fitted, with m'_y v' r'
+      taken out, the estimates are -291e-5 and -170e-5 against -223e-5 and +258e-5: the
+      difference of two large numbers, so the prior's width (half the captive value, 221e-5
+      and 648e-5) is wide there.  Their X'_rr is left out: its sign differs between hull
+      forms (-0.012 for the KCS of the paper's Table 3, +0.011 for the KVLCC2 of the MMG
+      standard), so no regression on main dimensions sets it.
 
     Each has a standard deviation of half its value, at least a tenth of that of the
     largest estimate of its order (:func:`prior_widths`).
@@ -33,7 +36,8 @@ Semi-empirical derivatives (:func:`semi_empirical_derivatives`)
     N'_v(fitted) = N'_v(captive) + X'_udot - Y'_vdot and X'_vr(fitted) = X'_vr(captive) +
     Y'_vdot; :func:`prior_means` converts.  The paper's surge library (eq. 17a) has no
     ``v r``: use the library ``abkowitz-vr``, or X'_rr takes up X'_vr's share of the force
-    in turns (v' is about -0.5 r' there) and comes out with the wrong sign.
+    in turns (v' is about -0.5 r' there) and can come out with the wrong sign (it does for
+    the KCS at the default strength; :func:`coverage_note`).
 Speed scaling (:func:`speed_relations`)
     A term ``du^k m`` describes how the force of the monomial ``m`` changes with the surge
     speed.  Quasi-steady forces scale with U^2 f(v/U, r L/U, delta), so with u' = 1 + du the
@@ -62,8 +66,12 @@ import numpy as np
 from .ships import Ship
 from .terms import Term
 
-__all__ = ["RELATIVE_WIDTH", "WIDTH_FLOOR", "estimates_outside", "prior_means", "prior_parameters",
-           "prior_widths", "semi_empirical_derivatives", "speed_relations"]
+__all__ = ["RELATIVE_WIDTH", "WIDTH_FLOOR", "PriorCoverageNote", "coverage_note",
+           "estimates_outside", "prior_means", "prior_parameters", "prior_widths",
+           "semi_empirical_derivatives", "speed_relations"]
+
+#: The library with every term the prior has an estimate for: the paper's and X's ``v r``.
+COMPLETE_LIBRARY = "abkowitz-vr"
 
 #: Prior standard deviation of a semi-empirical derivative, as a share of its value.
 RELATIVE_WIDTH = 0.5
@@ -259,3 +267,36 @@ def estimates_outside(ship: Ship, terms: dict[str, Sequence[str]]) -> dict[str, 
         if missing:
             out[dof] = missing
     return out
+
+
+class PriorCoverageNote(UserWarning):
+    """The ``prior`` fit's library has no term for some of the ship's estimates."""
+
+
+def coverage_note(ship: Ship, library) -> str | None:
+    """One sentence saying which estimates the library has no term for, and what to do; None
+    when it has them all.
+
+    Examples
+    --------
+    >>> from sindyship.library import load_library
+    >>> from sindyship.ships import load_ship
+    >>> print(coverage_note(load_ship("kcs"), load_library("abkowitz")))
+    the library 'abkowitz' has no X term 'v r' for the prior's estimate, so other terms take \
+up its force and can get the wrong sign; fit on the library 'abkowitz-vr', which has it.
+    >>> coverage_note(load_ship("kcs"), load_library("abkowitz-vr")) is None
+    True
+    """
+    missing = estimates_outside(ship, {dof: [t.text for t in terms]
+                                       for dof, terms in library.terms.items()})
+    if not missing:
+        return None
+    listed = "; ".join(f"{dof} {'term' if len(terms) == 1 else 'terms'} "
+                       + ", ".join(repr(t) for t in terms) for dof, terms in missing.items())
+    one = sum(len(terms) for terms in missing.values()) == 1
+    remedy = (f"fit on the library {COMPLETE_LIBRARY!r}, which has "
+              + ("it" if one else "them") if library.name == "abkowitz"
+              else "add " + ("it" if one else "them") + " to the library")
+    return (f"the library {library.name!r} has no {listed} for the prior's "
+            f"{'estimate' if one else 'estimates'}, so other terms take up "
+            f"{'its' if one else 'their'} force and can get the wrong sign; {remedy}.")

@@ -2,6 +2,7 @@
 
 import json
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -161,15 +162,31 @@ def _mmg_captive_x_vr(ship, step=0.01) -> float:
 def test_the_surge_derivative_x_vr_is_the_dynamometers(name, mmg):
     """Yoshimura & Masumoto's X'_vr includes the added-mass term m'_y v' r': it is within 30 %
     of both MMG models' captive X'_vr (not of their hull coefficients 0.047 d/L and 0.002 d/L
-    without it), and the fitted prior mean removes that term again."""
+    without it), and the fitted prior mean moves from the captive value as the MMG's fitted
+    (Taylor) X'_vr moves from its captive one."""
     from sindyship.ships import load_ship
+    from sindyship.taylor import taylor_reference
 
     ship = load_ship(name)
-    assert _mmg_captive_x_vr(ship) == pytest.approx(mmg, rel=1e-3)
+    captive = _mmg_captive_x_vr(ship)
+    assert captive == pytest.approx(mmg, rel=1e-3)
     estimate = semi_empirical_derivatives(ship)["X"]["v r"]
     assert estimate == pytest.approx(mmg, rel=0.3)
-    y_vdot = ship.prime_i_inertia()["Y_vdot"]
-    assert prior_means(ship)["X"]["v r"] == pytest.approx(estimate + y_vdot, rel=1e-12)
+    fitted = taylor_reference(ship, load_library("abkowitz-vr"))["X"]["v r"]
+    assert prior_means(ship)["X"]["v r"] - estimate == pytest.approx(fitted - captive,
+                                                                     rel=1e-4)
+
+
+def test_a_prior_fit_warns_of_estimates_its_library_has_no_term_for(kcs, protocol_runs):
+    from sindyship.priors import PriorCoverageNote
+
+    zigzags = [r for r in protocol_runs["train"] if r.name.startswith("zz")]
+    with pytest.warns(PriorCoverageNote, match="The library 'abkowitz' has no X term 'v r'"):
+        fit(zigzags, kcs, optimizer="prior")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PriorCoverageNote)
+        fit(zigzags, kcs, optimizer="prior", library="abkowitz-vr")
+        fit(zigzags, kcs)  # least squares has no prior to cover
 
 
 @pytest.fixture(scope="module")
@@ -254,7 +271,7 @@ def test_unstable_fit_raises_the_prior_strength(kcs, protocol_runs, monkeypatch)
 def test_an_unstable_fit_at_strength_zero_raises_from_a_floor_and_says_how_it_ended(
         kcs, protocol_runs, monkeypatch, capsys):
     import sindyship.stability as stability
-    from sindyship.cli.fit import report_straight_run
+    from sindyship.cli.fit import report_prior_fit
 
     real = stability.straight_run_stability
     calls = []
@@ -270,7 +287,7 @@ def test_an_unstable_fit_at_strength_zero_raises_from_a_floor_and_says_how_it_en
     assert calls == pytest.approx([0.0, 1e-7, 1e-6, 1e-5])
     assert model.info["straight_run"] == {"stable": False, "strength": pytest.approx(1e-5),
                                           "raised": 3}
-    report_straight_run(model)
+    report_prior_fit(model)
     err = capsys.readouterr().err
     assert "warning: the model is unstable in straight running" in err and "1e-05" in err
 
@@ -291,11 +308,20 @@ def test_fit_takes_the_prior_strength_and_refuses_it_for_another_optimizer(proto
                  "--no-identifiability", "--out", str(out)]) == 0
     saved = json.loads(out.read_text())
     assert saved["optimizer"]["params"] == {"strength": 1e-7}
-    # the paper's library has no v r in X: the fit says so and names the library that has
-    assert "estimates of X: v r" in capsys.readouterr().err
+    # the paper's library has no v r in X: the fit says so, once, and names the library that
+    # has it; so does a diagnosis with the prior
+    err = capsys.readouterr().err
+    assert err.count("note: the library 'abkowitz' has no X term 'v r' for the prior's "
+                     "estimate") == 1
+    assert "fit on the library 'abkowitz-vr', which has it." in err
+    assert "Warning" not in err
     assert main(["fit", *paths, "--optimizer", "prior", "--library", "abkowitz-vr",
                  "--no-identifiability", "--out", str(tmp_path / "vr.json")]) == 0
-    assert "has no term" not in capsys.readouterr().err
+    assert "has no" not in capsys.readouterr().err
+    assert main(["diagnose", *paths, "--optimizer", "prior", "--rounds", "1", "--confirm",
+                 "0", "--json"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("has no X term 'v r'") == 1 and "Warning" not in err
     assert main(["fit", *paths, "--prior-strength", "1e-7", "--out",
                  str(tmp_path / "n.json")]) == 2
     err = capsys.readouterr().err.strip().splitlines()

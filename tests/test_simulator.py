@@ -84,19 +84,23 @@ def test_rudder_rate_limit_binds_with_fast_servo(kcs):
     assert np.degrees(np.diff(slow["delta"]) / 0.25).max() < 5.0
 
 
-@pytest.mark.parametrize("sample_interval", [1.0, 0.3])
-def test_a_prescribed_rudder_is_flown_exactly_while_it_moves(kcs, sample_interval):
+@pytest.mark.parametrize(("sample_interval", "step"), [(1.0, None), (0.3, None), (1.0, 2.5),
+                                                      (0.3, 0.37)])
+def test_a_prescribed_rudder_is_flown_exactly_while_it_moves(kcs, sample_interval, step):
     """A replayed rudder angle (linear between samples) is the flown angle at every output
-    time, also while it moves: the last Runge-Kutta stage of a step that ends on a sample takes
-    the rate of the interval it ends, not of the next one (that led by h/6 of the change)."""
+    time, also while it moves, alone or beside a commanded rudder that steps differently: a
+    Runge-Kutta stage at the end of a step that ends on a sample takes the rate of the
+    interval it ends, not of the next one (that led by h/6 of the change)."""
     t = np.arange(0.0, 60.0, sample_interval)
     ramp = np.clip(2.0 * (t - 10.0), 0.0, 20.0) - np.clip(2.0 * (t - 30.0), 0.0, 20.0)
     angles = np.radians(ramp)  # up at 2 deg/s from 10 s, back down from 30 s
     out = np.arange(0.0, 59.0, 0.25)
     state0 = np.array([kcs.U0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
-    (result,) = simulate_batch(MMGModel(kcs), [PrescribedRudder(t, angles)], out, state0)
-    flown = np.degrees(result.states[6])
-    assert np.max(np.abs(flown - np.interp(out, t, ramp))) < 1e-9
+    for companions in ([], [ConstantCommand(math.radians(10.0))]):
+        results = simulate_batch(MMGModel(kcs), [PrescribedRudder(t, angles), *companions],
+                                 out, state0, step=step)
+        flown = np.degrees(results[0].states[6])
+        assert np.max(np.abs(flown - np.interp(out, t, ramp))) < 1e-9, len(companions)
 
 
 def test_halving_the_step_moves_positions_less_than_1e4_L(kcs):

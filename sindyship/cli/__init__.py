@@ -12,6 +12,7 @@ import argparse
 import signal
 import sys
 import threading
+import warnings
 
 from .. import __version__
 from ..errors import SindyshipInputError
@@ -89,8 +90,13 @@ def main(argv: list[str] | None = None) -> int:
 
 def _run(args) -> int:
     """Run the verb ``args`` name; turn bad input into status 2 and anything else into 1."""
+    from ..priors import PriorCoverageNote
+
     try:
-        return VERBS[args.verb].run(args)
+        with warnings.catch_warnings():
+            # fit and diagnose say it once, as a note, not once per fitted model
+            warnings.simplefilter("ignore", PriorCoverageNote)
+            return VERBS[args.verb].run(args)
     except SindyshipInputError as exc:
         message = " ".join(str(exc).split())
         print(f"sindyship {args.verb}: error: {message}", file=sys.stderr)

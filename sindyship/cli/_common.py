@@ -340,3 +340,13 @@ def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool =
     if workers:
         add_n_jobs(p, default=n_jobs_default)
     add_json(p)
+
+
+def report_prior_coverage(ship, library) -> None:
+    """A note on stderr when the library has no term for some of the prior's estimates
+    (:func:`sindyship.priors.coverage_note`)."""
+    from ..priors import coverage_note
+
+    note = coverage_note(ship, library)
+    if note is not None:
+        progress(f"note: {note}")

@@ -18,6 +18,7 @@ from ._common import (
     emit,
     on_cluster,
     progress,
+    report_prior_coverage,
     split_names,
 )
 from ._records import read_record_sets
@@ -99,6 +100,8 @@ def run(args) -> int:
                                      time_range=args.time_range)
     check_simulation_cost(ship, max(record.duration for record in records + test))
     library = resolve_library(args.library, split_names(args.effects))
+    if args.optimizer == "prior":
+        report_prior_coverage(ship, library)
     options = {
         "effects": split_names(args.candidates) or None,
         "threshold": args.threshold,

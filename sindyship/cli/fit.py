@@ -10,6 +10,7 @@ from ._common import (
     check_inputs,
     emit,
     progress,
+    report_prior_coverage,
     ship_file,
     split_names,
 )
@@ -108,7 +109,7 @@ def run(args) -> int:
                 window=args.window)
     if smoothing is not None:
         model.info["smoothing"] = smoothing.as_dict()
-    report_straight_run(model)
+    report_prior_fit(model)
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
     report = None if args.no_identifiability else _identifiability(args, records, ship, effects,
@@ -124,7 +125,7 @@ def _run_streamed(args, ship, params: dict) -> int:
     """``fit --stream``: the model from per-record factors reduced on a Dask cluster."""
     effects = split_names(args.effects)
     model, summary = streamed_fit(args, ship, effects, params)
-    report_straight_run(model)
+    report_prior_fit(model)
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
     if not args.no_identifiability:
@@ -137,19 +138,12 @@ def _run_streamed(args, ship, params: dict) -> int:
     return 0
 
 
-def report_straight_run(model) -> None:
-    """What the ``prior`` fit's stability requirement did, and the ship's estimates its library
-    has no term for, on stderr (nothing otherwise)."""
-    if model.optimizer["name"] == "prior":
-        from ..priors import estimates_outside
-
-        missing = estimates_outside(model.ship, {dof: [t.text for t in terms] for dof, terms
-                                                 in model.library.terms.items()})
-        if missing:
-            listed = "; ".join(f"{dof}: {', '.join(terms)}" for dof, terms in missing.items())
-            progress(f"note: the library {model.library.name!r} has no term for the prior's "
-                     f"estimates of {listed}, so other terms take up their force and may come "
-                     "out with the wrong sign; add them (--library abkowitz-vr has X's v r).")
+def report_prior_fit(model) -> None:
+    """On stderr, for a ``prior`` fit: the ship's estimates its library has no term for, and
+    what the stability requirement did (nothing for another fit)."""
+    if model.optimizer["name"] != "prior":
+        return
+    report_prior_coverage(model.ship, model.library)
     state = model.info.get("straight_run")
     if not state or (state["stable"] and not state["raised"]):
         return
