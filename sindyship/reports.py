@@ -366,6 +366,9 @@ def reproduce_report(output: dict) -> str:
             paper = None if res["effects"] else paper_row.get(name)
             cells.append(f"{value} [{paper:.4f}]" if paper is not None else value)
         label = res["method"] + "".join(f"+{e}" for e in res["effects"])
+        base = res.get("library", "abkowitz").split("+")[0]
+        if base != "abkowitz":  # the physics-consistent fit's library with v r
+            label += f" on {base}"
         lines.append(f"{label:30s}" + "".join(f"{c:>22s}" for c in cells))
     if output.get("diagnosis"):
         lines.append("")

@@ -145,6 +145,12 @@ def test_reproduce_json_contract(tmp_path):
             assert set(err_row) >= {"mean_distance_L", "max_distance_L", "diverged_at_s"}
     agreement = doc["paper_ls_agreement"]
     assert agreement["median_rel_dev"] < 0.15 and agreement["sign_agreement"] >= 0.95
+    # the physics-consistent fit runs on the library with v r, and the report says so
+    prior = next(r for r in doc["results"] if r["method"] == "prior")
+    assert prior["library"] == "abkowitz-vr"
+    from sindyship.reports import reproduce_report
+
+    assert "prior on abkowitz-vr " in reproduce_report(doc)
     assert doc["seconds"] < 120
     assert (tmp_path / "rep" / "results.json").exists()
     assert (tmp_path / "rep" / "trajectory-zz10_10.png").exists()
