@@ -178,6 +178,22 @@ class ForceComparison:
         return json.dumps(self.to_dict(), indent=2, allow_nan=False)
 
 
+#: Captive tests whose median speed differs from the model ship's design speed by more than
+#: this factor are of another ship or scale.
+SPEED_SCALE_FACTOR = 3.0
+
+
+def _check_speed_scale(captive: pd.DataFrame, ship) -> None:
+    """Refuse captive tests far from the model ship's speed: another ship, or another scale."""
+    speed = float(np.median(np.hypot(captive["u"], captive["v"])))
+    if not speed > ship.U0 / SPEED_SCALE_FACTOR or not speed < ship.U0 * SPEED_SCALE_FACTOR:
+        raise SindyshipInputError(
+            f"the captive tests run at {speed:.3g} m/s (median), far from the design speed "
+            f"{ship.U0:.3g} m/s of the model's ship {ship.name!r}; give captive tests of the "
+            "same ship at the same scale (Froude-scale them first)."
+        )
+
+
 def compare_forces(model: AbkowitzModel, captive: pd.DataFrame,
                    training_records: Sequence[Trajectory] | None = None) -> ForceComparison:
     """Compare a model's predicted captive forces with measured ones.
@@ -211,6 +227,7 @@ def compare_forces(model: AbkowitzModel, captive: pd.DataFrame,
             f"the captive table lacks the measured force '{missing[0]}'; give X, Y and N."
         )
     ship = model.ship
+    _check_speed_scale(captive, ship)
     predicted = model_captive_forces(model, captive)
     values = _nondimensional(captive, ship)
     envelope = (training_envelope(training_records, ship) if training_records

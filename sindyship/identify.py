@@ -258,6 +258,9 @@ def _fit_each(problems: dict[str, Design], optimizer: str, params: dict | None,
 STABILITY_RAISES = 3
 #: The strength the raises start from when the fit's own is smaller (0 is least squares).
 LEAST_RAISED_STRENGTH = 1e-8
+#: The largest strength a raise goes to: the prior then weighs as much as the forces' sum of
+#: squares (the top of ``fit --prior-strength``).
+MOST_RAISED_STRENGTH = 1.0
 
 
 def straight_run_stable(model: AbkowitzModel, refit) -> AbkowitzModel:
@@ -266,10 +269,10 @@ def straight_run_stable(model: AbkowitzModel, refit) -> AbkowitzModel:
     A model that is unstable in straight running
     (:func:`sindyship.stability.straight_run_stability`) is refitted with the prior's
     strength raised tenfold (from at least :data:`LEAST_RAISED_STRENGTH`), at most
-    :data:`STABILITY_RAISES` times, so that the prior's (stable) linear derivatives weigh
-    more.  The model records the strength it ends with and whether it is stable
-    (``info["straight_run"]``): a model still unstable after the raises is returned as it is,
-    for the caller to report.
+    :data:`STABILITY_RAISES` times and never above :data:`MOST_RAISED_STRENGTH`, so that the
+    prior's (stable) linear derivatives weigh more.  The model records the strength it ends
+    with and whether it is stable (``info["straight_run"]``): a model still unstable after the
+    raises is returned as it is, for the caller to report.
 
     Parameters
     ----------
@@ -283,9 +286,10 @@ def straight_run_stable(model: AbkowitzModel, refit) -> AbkowitzModel:
     strength = max(float(model.optimizer["params"]["strength"]), LEAST_RAISED_STRENGTH)
     stable = straight_run_stability(model).stable
     raises = 0
-    while not stable and raises < STABILITY_RAISES:
+    while not stable and raises < STABILITY_RAISES and strength * 10.0**raises < \
+            MOST_RAISED_STRENGTH:
         raises += 1
-        model = refit(strength * 10.0**raises)
+        model = refit(min(strength * 10.0**raises, MOST_RAISED_STRENGTH))
         stable = straight_run_stability(model).stable
     model.info["straight_run"] = {"stable": stable,
                                   "strength": float(model.optimizer["params"]["strength"]),

@@ -438,6 +438,12 @@ def _check_required(columns: list[Column], frame: pd.DataFrame, source: str) -> 
             break
     if "t" in wanted and frame.index.name in ("t", "time"):
         hint = " (time is the frame's index; call frame.reset_index() first)"
+    if {"X", "Y", "N"} <= set(names) and "t" in wanted:
+        raise SindyshipInputError(
+            f"{source}: this is a captive-test table (forces X, Y, N and no time column), not "
+            "a measured trajectory; give a trajectory record here, and captive tests where a "
+            "command takes them (sindyship forces MODEL CAPTIVE.csv)."
+        )
     noun = "column" if len(missing) == 1 else "columns"
     raise SindyshipInputError(
         f"{source}: missing {noun} {', '.join(missing)}{hint}; a measurement needs the "

@@ -162,3 +162,40 @@ def test_captive_and_forces_commands(kcs, tmp_path, capsys):
     assert capsys.readouterr().out.splitlines()[0].startswith("conditions")
     help_text = parser._subparsers._group_actions[0].choices["captive"].format_help()
     assert "default: 21" in help_text and "[m/s]" in help_text
+
+
+def test_forces_refuses_careless_input_in_one_sentence(kcs, tmp_path, capsys):
+    """Files given the wrong way round, captive tests of another ship's scale, a captive table
+    given as a training record, an output folder that is an input: each refused before any
+    output is written, in one sentence that says what to do."""
+    from sindyship.cli import main
+
+    captive = tmp_path / "captive.csv"
+    other = tmp_path / "kvlcc2.csv"
+    assert main(["captive", "--ship", "kcs", "--test", "rudder", "--points", "5",
+                 "--out", str(captive)]) == 0
+    assert main(["captive", "--ship", "kvlcc2", "--test", "rudder", "--points", "5",
+                 "--out", str(other)]) == 0
+    model = tmp_path / "paper.json"
+    paper_model(kcs, "LS").save(model)
+    capsys.readouterr()
+    cases = [
+        (["forces", str(captive), str(model)], "the saved model (JSON) comes first and the "
+         "captive CSV second"),
+        (["forces", str(model), str(other)], "kvlcc2.csv: the captive tests run at 1.18 m/s "
+         "(median), far from the design speed 12.3 m/s of the model's ship 'kcs'"),
+        (["forces", str(model), str(captive), "--training", str(captive)],
+         "captive.csv: this is a captive-test table"),
+        (["forces", str(model), str(captive), "--out", str(captive)], f"--out {captive}"),
+    ]
+    for argv, message in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and message in err, err
+    assert not (tmp_path / "forces.json").exists()
+    # an output folder of a previous run is replaced; any other non-empty folder is refused
+    report = tmp_path / "report"
+    assert main(["forces", str(model), str(captive), "--out", str(report)]) == 0
+    assert main(["forces", str(model), str(captive), "--out", str(report)]) == 0
+    assert main(["forces", str(model), str(captive), "--out", str(tmp_path)]) == 2
+    assert sorted(p.name for p in report.iterdir()) == ["captive-forces.png", "forces.json"]

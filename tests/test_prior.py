@@ -292,6 +292,32 @@ def test_an_unstable_fit_at_strength_zero_raises_from_a_floor_and_says_how_it_en
     assert "warning: the model is unstable in straight running" in err and "1e-05" in err
 
 
+@pytest.mark.parametrize(("start", "tried"), [(0.1, [0.1, 1.0]), (1.0, [1.0])])
+def test_raises_stop_at_the_largest_strength_and_the_advice_fits(
+        kcs, protocol_runs, monkeypatch, capsys, start, tried):
+    import sindyship.stability as stability
+    from sindyship.cli.fit import report_prior_fit
+
+    real = stability.straight_run_stability
+    calls = []
+
+    def always_unstable(model):
+        calls.append(model.optimizer["params"]["strength"])
+        result = real(model)
+        return type(result)(result.eigenvalues, result.jacobian, False, 1.0)
+
+    monkeypatch.setattr(stability, "straight_run_stability", always_unstable)
+    zigzags = [r for r in protocol_runs["train"] if r.name.startswith("zz")]
+    model = fit(zigzags, kcs, optimizer="prior", library="abkowitz-vr",
+                params={"strength": start})
+    assert calls == pytest.approx(tried)
+    assert model.info["straight_run"]["strength"] == pytest.approx(1.0)
+    report_prior_fit(model)
+    err = capsys.readouterr().err
+    assert "unstable in straight running even with the prior's strength" in err
+    assert "a larger --prior-strength" not in err  # 1 is the largest there is
+
+
 def test_make_optimizer_knows_prior():
     assert isinstance(make_optimizer("prior", strength=1e-4), PriorRidge)
 

@@ -151,10 +151,15 @@ def report_prior_fit(model) -> None:
         progress(f"the fit was unstable in straight running; raising the prior's strength "
                  f"{state['raised']} times (to {state['strength']:g}) made it stable.")
     else:
+        from ..identify import MOST_RAISED_STRENGTH
+
+        reached = (f"raised to {state['strength']:g}" if state["raised"]
+                   else f"at {state['strength']:g}")
+        larger = (", or a larger --prior-strength" if state["strength"] < MOST_RAISED_STRENGTH
+                  else "")
         progress(f"warning: the model is unstable in straight running even with the prior's "
-                 f"strength raised to {state['strength']:g}; its flights may diverge (add "
-                 "manoeuvres that the identifiability report names, or a larger "
-                 "--prior-strength).")
+                 f"strength {reached}; its flights may diverge (add manoeuvres that the "
+                 f"identifiability report names{larger}).")
 
 
 def _identifiability(args, records, ship, effects, params):

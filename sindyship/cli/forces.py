@@ -24,11 +24,21 @@ def add_parser(sub) -> None:
                    "envelope the model keeps, if any)")
     add_json(p)
     p.add_argument("--out", default=None, metavar="DIR",
-                   help="folder for forces.json and captive-forces.png (default: none)")
+                   help="folder for forces.json and captive-forces.png (default: none); an "
+                   "existing folder is replaced only if it holds a forces.json")
+
+
+def _check_order(model: str, captive: str) -> None:
+    """Refuse a CSV where the model belongs or a JSON where the captive CSV belongs."""
+    if Path(model).suffix.lower() == ".csv" or Path(captive).suffix.lower() == ".json":
+        raise SindyshipInputError(
+            f"{model} and {captive}: the saved model (JSON) comes first and the captive CSV "
+            "second; run sindyship forces MODEL.json CAPTIVE.csv."
+        )
 
 
 def run(args) -> int:
-    from .._io import save_figure, write_text_atomic
+    from .._io import check_output, output_folder, save_figure, write_text_atomic
     from ..captive import read_captive_csv
     from ..forces import compare_forces, plot_captive_forces
     from ..measurements import read_csv
@@ -36,21 +46,22 @@ def run(args) -> int:
     from ..reports import forces_report
     from ..ships import load_ship
 
-    for path in (args.model, args.captive, *(args.training or [])):
-        if args.out is not None and Path(path).resolve() == Path(args.out).resolve():
-            raise SindyshipInputError(f"{args.out}: the output folder is one of the inputs.")
-    if args.out is not None and Path(args.out).exists() and not Path(args.out).is_dir():
-        raise SindyshipInputError(f"{args.out}: exists and is not a folder; give a folder.")
+    _check_order(args.model, args.captive)
+    if args.out is not None:
+        check_output(args.out, inputs=[args.model, args.captive, *(args.training or [])],
+                     kind="folder", label=f"--out {args.out}", replaceable="forces.json")
     ship = load_ship(args.ship) if args.ship else None
     model = AbkowitzModel.load(args.model, ship=ship)
     captive = read_captive_csv(args.captive)
     training = [read_csv(p) for p in args.training] if args.training else None
-    result = compare_forces(model, captive, training_records=training)
+    try:
+        result = compare_forces(model, captive, training_records=training)
+    except SindyshipInputError as exc:
+        raise SindyshipInputError(f"{args.captive}: {exc}") from None
     if args.out is not None:
-        folder = Path(args.out)
-        folder.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(folder / "forces.json", result.to_json() + "\n")
-        save_figure(plot_captive_forces(result), folder / "captive-forces.png", dpi=120)
+        with output_folder(args.out) as folder:
+            write_text_atomic(folder / "forces.json", result.to_json() + "\n")
+            save_figure(plot_captive_forces(result), folder / "captive-forces.png", dpi=120)
     if args.json:
         emit(result.to_dict())
     else:
