@@ -443,6 +443,10 @@ def test_equations_text_lists_every_active_term(model):
     blocks = " ".join(lines[1:]).replace("      ", " ")
     assert blocks.count("u_dot'") == 1 and blocks.count("r_dot'") == 2
     assert "- 1.994 v^3" in blocks and "- 0.008853 (1 + du) r" in blocks
+    # the Coriolis terms start a line of their own, one per equation, after every fitted term
+    marked = [x for x in lines if x.lstrip().startswith("(Coriolis) ")]
+    assert len(marked) == 3 and "(1 + du) r" in marked[1]
+    assert lines.index(marked[0]) < [i for i, x in enumerate(lines) if x.startswith("Y:")][0]
     with pytest.raises(SindyshipInputError, match="precision"):
         equations_text(model, precision=0)
 

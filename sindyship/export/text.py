@@ -123,7 +123,9 @@ def equations_text(model: AbkowitzModel, precision: int = 4, *, width: int = 100
 
     Each block reads ``mass-matrix row . accelerations = hydrodynamic terms + Coriolis
     terms`` with the library's term spelling (``du``, ``v^2 r``, ...) and u' written as
-    ``(1 + du)`` in the Coriolis terms.  Meant for ``str(model)``.
+    ``(1 + du)`` in the Coriolis terms, which start a line of their own marked
+    ``(Coriolis)``: a fitted ``v r`` and the Coriolis ``v r`` are two terms.  Meant for
+    ``str(model)``.
 
     Parameters
     ----------
@@ -146,9 +148,16 @@ def equations_text(model: AbkowitzModel, precision: int = 4, *, width: int = 100
     for dof in DOFS:
         lhs, pieces = _equation_pieces(model, dof, latex=False, numeric=True,
                                        precision=precision)
+        n_coriolis = sum(1 for _, value in _coriolis_polynomials(model.ship)[dof].terms()
+                         if float(value) != 0.0)
+        words = _join(pieces)
+        first_coriolis = len(words) - n_coriolis if n_coriolis else None
         line = f"{dof}: {lhs} ="
-        for word in _join(pieces):
-            if len(line) + 1 + len(word) > width:
+        for k, word in enumerate(words):
+            if k == first_coriolis:
+                lines.append(line)
+                line = "      (Coriolis) " + word
+            elif len(line) + 1 + len(word) > width:
                 lines.append(line)
                 line = "      " + word
             else:
