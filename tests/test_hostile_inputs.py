@@ -64,6 +64,10 @@ DATA = {"data.csv": "@csv"}
 MODEL = {"model.json": "@model", "data.csv": "@csv"}
 DIAG = ["diagnose", "data.csv", "other.csv"]
 DIAG_FILES = {"data.csv": "@csv", "other.csv": "@csv"}
+CAPTIVE = ["captive", "--test", "rudder", "--points", "3", "--out"]
+FORCES = ["forces", "model.json", "captive.csv"]
+FORCES_FILES = {**MODEL, "captive.csv": "u,v,r,delta,X,Y,N\n12.3,0,0,0.1,-1e4,2e5,-3e7\n"
+                "12.3,0,0,-0.1,-1e4,-2e5,3e7\n12.3,0,0,0,0,0,0\n"}
 
 # Output targets that are not a plain new file: (files, target, fragment).
 BAD_FILE_TARGETS = [
@@ -89,6 +93,8 @@ def _output_cases() -> list[dict]:
         "fit": (FIT + ["--out"], DATA),
         "export --latex": (["export", "model.json", "--latex"], MODEL),
         "export --python": (["export", "model.json", "--python"], MODEL),
+        "captive": (CAPTIVE, {}),
+        "discover": (["discover", "data.csv", "other.csv", "--out"], DIAG_FILES),
     }
     for verb, (argv, base) in verbs.items():
         for files, target, fragment in BAD_FILE_TARGETS:
@@ -112,6 +118,12 @@ def _output_cases() -> list[dict]:
          {**MODEL, "alias.json": "hard:model.json"}, "also an input"),
         (["export", "model.json", "--latex", "same.tex", "--python", "same.tex"], MODEL,
          "two different files"),
+        (["captive", "--ship", "ship.toml", "--out", "ship.toml"],
+         {"ship.toml": ship_edit("servo", "T_R", "1.0")}, "also an input"),
+        (["discover", "data.csv", "other.csv", "--out", "other.csv"], DIAG_FILES,
+         "also an input"),
+        (FORCES + ["--out", "captive.csv"], FORCES_FILES, "is a file"),
+        (FORCES + ["--out", "."], FORCES_FILES, "holds the input"),
     ]
     cases += [case("output is an input", argv, 2, fragment, files)
                   for argv, files, fragment in same]
@@ -130,9 +142,11 @@ def _output_cases() -> list[dict]:
     for files, target, fragment in folders:
         cases.append(case("output folder: reproduce", ["reproduce", "--out", target], 2,
                           fragment, files))
-        if target != ".":  # holds the inputs first: the case below
+        if target != ".":  # holds the inputs first: the cases above and below
             cases.append(case("output folder: diagnose", DIAG + ["--out", target], 2,
                               fragment, {**DIAG_FILES, **files}))
+            cases.append(case("output folder: forces", FORCES + ["--out", target], 2,
+                              fragment, {**FORCES_FILES, **files}))
     cases.append(case("output folder: diagnose", ["diagnose", "d/data.csv", "d/other.csv",
                                                    "--out", "d"], 2, "holds the input",
                       {"d/data.csv": "@csv", "d/other.csv": "@csv"}))
@@ -503,7 +517,8 @@ def _params():
 
 def test_the_corpus_covers_every_verb_with_enough_cases():
     verbs = {c["argv"][0] for c in CASES}
-    assert verbs == {"simulate", "fit", "evaluate", "reproduce", "diagnose", "export"}
+    assert verbs == {"simulate", "fit", "evaluate", "reproduce", "diagnose", "export",
+                     "captive", "discover", "forces"}
     assert len(CASES) >= 150
     assert len({json.dumps(c, sort_keys=True) for c in CASES}) == len(CASES)  # no repeats
 

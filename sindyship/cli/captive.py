@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._common import add_ship, progress
+from ._common import add_ship, progress, ship_file
 
 
 def add_parser(sub) -> None:
@@ -29,9 +29,11 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    from .._io import check_output
     from ..captive import captive_tests, write_captive_csv
     from ..ships import load_ship
 
+    check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}")
     ship = load_ship(args.ship)
     frame = captive_tests(ship, args.test, points=args.points, speed=args.speed)
     write_captive_csv(frame, args.out)
