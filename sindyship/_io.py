@@ -191,8 +191,15 @@ def _check_writable_folder(path: Path, label: str) -> None:
     os.unlink(probe)
 
 
+#: Suffixes of the kinds of file sindyship reads and writes, and what each names.
+DATA_SUFFIXES = {".csv": "a CSV table", ".parquet": "a Parquet table", ".pq": "a Parquet table",
+                 ".json": "a JSON document", ".py": "a Python module", ".tex": "a LaTeX file",
+                 ".toml": "a TOML file", ".png": "an image", ".pdf": "a PDF document"}
+
+
 def check_output(path: str | os.PathLike, *, inputs: Iterable = (), kind: str = "file",
-                 label: str | None = None, replaceable: str | None = None) -> Path:
+                 label: str | None = None, replaceable: str | None = None,
+                 suffixes: tuple[str, ...] = ()) -> Path:
     """Refuse an output before any work starts; return it as a :class:`Path`.
 
     Refused (:class:`SindyshipInputError`, one sentence): an empty name; a symbolic link, a
@@ -215,6 +222,10 @@ def check_output(path: str | os.PathLike, *, inputs: Iterable = (), kind: str = 
     replaceable : str, optional
         For a folder: an existing non-empty folder is replaced at the end only when it holds
         this file (the verb's own result file, so it is a previous output); otherwise refused.
+    suffixes : tuple of str, optional
+        For a file: the suffixes that fit what is written (the first is the usual one).  A name
+        ending in the suffix of another kind of file (:data:`DATA_SUFFIXES`: a model written
+        to ``run.csv``, a simulator to ``data.json``) is refused; other names are taken.
 
     Examples
     --------
@@ -253,6 +264,13 @@ def check_output(path: str | os.PathLike, *, inputs: Iterable = (), kind: str = 
     if kind == "folder" and target.is_dir():
         _check_replaceable(target, label, replaceable)
     _check_writable_folder(target.absolute(), label)
+    suffix = target.suffix.lower()
+    if kind == "file" and suffixes and suffix in DATA_SUFFIXES and suffix not in suffixes:
+        raise SindyshipInputError(
+            f"{label}: the name ends in {suffix}, the suffix of {DATA_SUFFIXES[suffix]}, but "
+            f"this output is {DATA_SUFFIXES[suffixes[0]]}; give a name ending in "
+            f"{suffixes[0]}."
+        )
     return target
 
 

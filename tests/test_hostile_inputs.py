@@ -127,6 +127,18 @@ def _output_cases() -> list[dict]:
     ]
     cases += [case("output is an input", argv, 2, fragment, files)
                   for argv, files, fragment in same]
+    # an output named as another kind of file: a user's table is not overwritten with code
+    other_kind = [
+        (FIT + ["--out", "other.csv"], {**DATA, "other.csv": "@csv"}, "ends in .csv"),
+        (["export", "model.json", "--python", "data.csv"], MODEL, "ends in .csv"),
+        (["export", "model.json", "--latex", "notes.py"], {**MODEL, "notes.py": "x = 1\n"},
+         "ends in .py"),
+        (SIM + ["--out", "model.json"], MODEL, "ends in .json"),
+        (CAPTIVE + ["model.json"], MODEL, "ends in .json"),
+        (["discover", "data.csv", "other.csv", "--out", "lib.py"], DIAG_FILES, "ends in .py"),
+    ]
+    cases += [case("output of another kind", argv, 2, fragment, files)
+              for argv, files, fragment in other_kind]
     # folder outputs
     folders = [
         ({"out": "link:real", "real": "dir:"}, "out", "symbolic link"),

@@ -33,7 +33,8 @@ def run(args) -> int:
     from ..captive import captive_tests, write_captive_csv
     from ..ships import load_ship
 
-    check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}")
+    check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}",
+                 suffixes=(".csv",))
     ship = load_ship(args.ship)
     frame = captive_tests(ship, args.test, points=args.points, speed=args.speed)
     write_captive_csv(frame, args.out)

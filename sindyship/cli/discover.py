@@ -55,7 +55,8 @@ def run(args) -> int:
 
     args.data = expand_paths(args.data)
     if args.out is not None:
-        check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}")
+        check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}",
+                     suffixes=(".toml",))
     check_inputs(fit_inputs(args))
     ship = load_ship(args.ship)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,

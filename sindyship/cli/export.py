@@ -77,17 +77,18 @@ def _check(args) -> None:
     from .._io import check_output
 
     inputs = [args.model, *ship_file(args.ship)]
-    for option in ("latex", "python"):
-        target = getattr(args, option)
-        if target is not None:
-            check_output(target, inputs=inputs, label=f"--{option} {target}")
-    check_inputs(inputs)
-    if args.compile and not args.python:
-        raise SindyshipInputError("--compile applies to the simulator; give --python FILE too.")
     if args.latex and args.python and Path(args.latex).resolve() == Path(args.python).resolve():
         raise SindyshipInputError(
             f"--latex and --python both name {args.latex}; give two different files."
         )
+    for option in ("latex", "python"):
+        target = getattr(args, option)
+        if target is not None:
+            check_output(target, inputs=inputs, label=f"--{option} {target}",
+                         suffixes=(".tex",) if option == "latex" else (".py",))
+    check_inputs(inputs)
+    if args.compile and not args.python:
+        raise SindyshipInputError("--compile applies to the simulator; give --python FILE too.")
 
 
 def run(args) -> int:

@@ -90,7 +90,8 @@ def run(args) -> int:
 
     args.data = expand_paths(args.data)
     params = optimizer_params(args)
-    check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}")
+    check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}",
+                 suffixes=(".json",))
     check_inputs(fit_inputs(args))
     ship = load_ship(args.ship)
     if args.stream or args.scheduler:

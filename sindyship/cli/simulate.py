@@ -112,7 +112,7 @@ def run(args) -> int:
     from ..ships import load_ship
 
     check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}",
-                 kind="folder" if args.protocol else "file")
+                 kind="folder" if args.protocol else "file", suffixes=(".csv",))
     check_inputs(ship_file(args.ship))
     ship = load_ship(args.ship)
     check_rudder(args.rudder, ship, "--rudder")
