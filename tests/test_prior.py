@@ -318,6 +318,35 @@ def test_raises_stop_at_the_largest_strength_and_the_advice_fits(
     assert "a larger --prior-strength" not in err  # 1 is the largest there is
 
 
+def test_the_identifiability_ensemble_uses_the_strength_the_fit_ended_with(
+        kcs, protocol_runs, monkeypatch, tmp_path):
+    import sindyship.identifiability as identifiability
+    import sindyship.stability as stability
+    from sindyship.cli import main
+    from sindyship.measurements import write_csv
+
+    real = stability.straight_run_stability
+    seen = []
+
+    def unstable_at_first(model):
+        result = real(model)
+        weak = model.optimizer["params"]["strength"] < 1e-4
+        return type(result)(result.eigenvalues, result.jacobian, not weak, 1.0)
+
+    def recorded(*args, **kwargs):
+        seen.append(kwargs["params"])
+        raise SystemExit("recorded")
+
+    monkeypatch.setattr(stability, "straight_run_stability", unstable_at_first)
+    monkeypatch.setattr(identifiability, "identifiability", recorded)
+    paths = [str(write_csv(r, tmp_path / f"{r.name}.csv")) for r in protocol_runs["train"]
+             if r.name.startswith("zz")]
+    with pytest.raises(SystemExit, match="recorded"):
+        main(["fit", *paths, "--optimizer", "prior", "--library", "abkowitz-vr", "--out",
+              str(tmp_path / "m.json")])
+    assert seen == [{"strength": pytest.approx(1e-4)}]
+
+
 def test_make_optimizer_knows_prior():
     assert isinstance(make_optimizer("prior", strength=1e-4), PriorRidge)
 

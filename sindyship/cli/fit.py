@@ -113,8 +113,10 @@ def run(args) -> int:
     report_prior_fit(model)
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
+    state = model.info.get("straight_run")  # a raised prior strength is the fit's strength
+    fitted_params = params if state is None else {**params, "strength": state["strength"]}
     report = None if args.no_identifiability else _identifiability(args, records, ship, effects,
-                                                                   params)
+                                                                   fitted_params)
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
               "library": model.library.name, "optimizer": model.optimizer["name"],
