@@ -20,7 +20,8 @@ lengths (paper Table 10), ``sindyship.evaluation.distance_errors`` for every fli
 2. **sindyship**: least squares on the paper's Abkowitz library (``sindyship.identify.fit``),
    and the library the iterative diagnosis reaches, run as ``sindyship reproduce`` runs it
    (``diagnose_iteratively(train, ship, test=test, max_rounds=3)``; its last round's model is
-   reproduce's last row), both flown by ``sindyship.evaluation.evaluate``.
+   reproduce's last row), and the physics-consistent fit (``optimizer="prior"`` on the library
+   ``abkowitz-vr``, as ``reproduce`` fits it), all flown by ``sindyship.evaluation.evaluate``.
 3. A check that the hand-written simulator is not what makes the difference: fed the MMG
    accelerations it reproduces the MMG records, fed sindyship's identified models it
    reproduces sindyship's flights, each to better than 1e-3 L.
@@ -53,6 +54,7 @@ from sindyship.flights import fly_like_batch
 from sindyship.identify import fit
 from sindyship.manoeuvres import Manoeuvre, fly, protocol_manoeuvres
 from sindyship.mmg import MMGModel
+from sindyship.reproduce import METHOD_LIBRARIES
 from sindyship.ships import Ship, load_ship
 from sindyship.trajectory import Trajectory
 
@@ -461,7 +463,8 @@ def run_pysindy(train, test, test_plan, ship, *, thresholds=THRESHOLDS, alpha=AL
 
 
 def run_sindyship(train, test, ship, *, rounds: int = 3) -> dict:
-    """sindyship's workflows: least squares on the Abkowitz library and the diagnosed library.
+    """sindyship's workflows: least squares on the Abkowitz library, the diagnosed library, and
+    the physics-consistent fit (``prior`` on the library ``reproduce`` gives it).
 
     The diagnosis runs as ``sindyship reproduce`` runs it (held-out records flown every round,
     never used to choose); its last round's model is reproduce's last row.
@@ -476,8 +479,9 @@ def run_sindyship(train, test, ship, *, rounds: int = 3) -> dict:
     Returns
     -------
     dict
-        ``{"ls": {...}, "diagnosed": {...}}``, each with ``library``, ``fit_s`` (one fit of
-        the final library), ``selection_s`` (the diagnosis; None for least squares),
+        ``{"ls": {...}, "diagnosed": {...}, "prior": {...}}``, each with ``library``,
+        ``fit_s`` (one fit of the final library), ``selection_s`` (the diagnosis; None for the
+        others),
         ``active_terms``, ``errors`` (``evaluate`` on the held-out records) and ``model``.
     """
     from sindyship.diagnose import diagnose_iteratively
@@ -485,6 +489,9 @@ def run_sindyship(train, test, ship, *, rounds: int = 3) -> dict:
     t0 = time.perf_counter()
     ls = fit(train, ship)
     ls_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    prior = fit(train, ship, library=METHOD_LIBRARIES["prior"], optimizer="prior")
+    prior_s = time.perf_counter() - t0
     t0 = time.perf_counter()
     iterative = diagnose_iteratively(train, ship, test=test, max_rounds=rounds)
     diagnosis_s = time.perf_counter() - t0
@@ -496,7 +503,8 @@ def run_sindyship(train, test, ship, *, rounds: int = 3) -> dict:
                            for d, terms in final.coefficients.items() for k, c in terms.items())
     out = {}
     for key, model, fit_s, selection_s in (("ls", ls, ls_s, None),
-                                           ("diagnosed", final, refit_s, diagnosis_s)):
+                                           ("diagnosed", final, refit_s, diagnosis_s),
+                                           ("prior", prior, prior_s, None)):
         out[key] = {"library": model.library.name, "fit_s": fit_s, "selection_s": selection_s,
                     "active_terms": int(sum(model.n_active().values())),
                     "errors": evaluate(model, test), "model": model}
@@ -645,12 +653,13 @@ def run(variants: bool = True) -> dict:
                             f"{pysindy_run['threshold']:g} by CV)")
     for key, row in sindyship_run.items():
         row.pop("model")
-        row["label"] = ("least squares, " if key == "ls" else "least squares, diagnosed ") \
-            + row["library"]
+        row["label"] = {"ls": "least squares, ", "diagnosed": "least squares, diagnosed ",
+                        "prior": "least squares with the ship's prior, "}[key] + row["library"]
     recommended = sindyship_run["diagnosed"]
     return {
         "workflows": {"pysindy": pysindy_run, "sindyship_ls": sindyship_run["ls"],
-                      "sindyship_diagnosed": recommended},
+                      "sindyship_diagnosed": recommended,
+                      "sindyship_prior": sindyship_run["prior"]},
         "recommended": "sindyship_diagnosed",
         "beats": {n: beats(recommended["errors"][n], pysindy_run["errors"][n])
                   for n in TEST_NAMES},

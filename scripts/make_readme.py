@@ -356,10 +356,12 @@ def _pysindy(n: dict) -> str:
     names = list(work["pysindy"]["errors"])
     wins = [name for name in names if work["sindyship_diagnosed"]["errors"][name][
         "mean_distance_L"] < work["pysindy"]["errors"][name]["mean_distance_L"]]
+    prior = (f", sindyship with the ship's prior {errors('sindyship_prior')}"
+             if "sindyship_prior" in work else "")
     return (f"Held-out mean distance ({' / '.join(names)}): pysindy {errors('pysindy')}, "
             f"sindyship least squares {errors('sindyship_ls')}, sindyship diagnosed "
-            f"{errors('sindyship_diagnosed')} ship lengths; the diagnosed model is better on "
-            f"{len(wins)} of {len(names)} ({', '.join(wins)}).")
+            f"{errors('sindyship_diagnosed')}{prior} ship lengths; the diagnosed model is "
+            f"better on {len(wins)} of {len(names)} ({', '.join(wins)}).")
 
 
 BLOCKS = {
