@@ -268,10 +268,11 @@ def test_unstable_fit_raises_the_prior_strength(kcs, protocol_runs, monkeypatch)
     assert model.optimizer["params"]["strength"] == pytest.approx(1e-3)
 
 
-def test_an_unstable_fit_at_strength_zero_raises_from_a_floor_and_says_how_it_ended(
-        kcs, protocol_runs, monkeypatch, capsys):
+@pytest.fixture
+def never_stable(monkeypatch):
+    """Every straight-run stability check finds the model unstable; the strengths of the
+    models it checked, in order."""
     import sindyship.stability as stability
-    from sindyship.cli.fit import report_prior_fit
 
     real = stability.straight_run_stability
     calls = []
@@ -282,6 +283,14 @@ def test_an_unstable_fit_at_strength_zero_raises_from_a_floor_and_says_how_it_en
         return type(result)(result.eigenvalues, result.jacobian, False, 1.0)
 
     monkeypatch.setattr(stability, "straight_run_stability", always_unstable)
+    return calls
+
+
+def test_an_unstable_fit_at_strength_zero_raises_from_a_floor_and_says_how_it_ended(
+        kcs, protocol_runs, never_stable, capsys):
+    from sindyship.cli.fit import report_prior_fit
+
+    calls = never_stable
     zigzags = [r for r in protocol_runs["train"] if r.name.startswith("zz")]
     model = fit(zigzags, kcs, optimizer="prior", params={"strength": 0.0})
     assert calls == pytest.approx([0.0, 1e-7, 1e-6, 1e-5])
@@ -294,19 +303,10 @@ def test_an_unstable_fit_at_strength_zero_raises_from_a_floor_and_says_how_it_en
 
 @pytest.mark.parametrize(("start", "tried"), [(0.1, [0.1, 1.0]), (1.0, [1.0])])
 def test_raises_stop_at_the_largest_strength_and_the_advice_fits(
-        kcs, protocol_runs, monkeypatch, capsys, start, tried):
-    import sindyship.stability as stability
+        kcs, protocol_runs, never_stable, capsys, start, tried):
     from sindyship.cli.fit import report_prior_fit
 
-    real = stability.straight_run_stability
-    calls = []
-
-    def always_unstable(model):
-        calls.append(model.optimizer["params"]["strength"])
-        result = real(model)
-        return type(result)(result.eigenvalues, result.jacobian, False, 1.0)
-
-    monkeypatch.setattr(stability, "straight_run_stability", always_unstable)
+    calls = never_stable
     zigzags = [r for r in protocol_runs["train"] if r.name.startswith("zz")]
     model = fit(zigzags, kcs, optimizer="prior", library="abkowitz-vr",
                 params={"strength": start})
