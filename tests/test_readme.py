@@ -46,6 +46,9 @@ def test_the_first_hour_runs_as_written(tmp_path):
                               capture_output=True, text=True, timeout=600)
         assert done.returncode == 0, f"{block}\n{done.stderr[-2000:]}"
     assert (tmp_path / "equations.tex").exists() and (tmp_path / "kcs_model.py").exists()
+    forces = json.loads((tmp_path / "forces" / "forces.json").read_text())
+    assert min(forces["by_test"][t]["Y"]["correlation"] for t in forces["by_test"]
+               if t != "straight" and forces["by_test"][t]["Y"]["correlation"] is not None) > 0.9
     assert len(list((tmp_path / "diagnosis").glob("*.png"))) > 10
 
 
