@@ -34,7 +34,7 @@ FUNCTION_CODES = {None: 0, "abs": 1, "sign": 2, "sin": 3, "cos": 4}
 
 
 def _forces(variables, base_variable, base_function, factor_base, factor_power, slots,
-            weights):
+            weights, weight_set):
     """Forces (3, B) of eq. 15 from the variables (n_variables, B) of B states.
 
     Parameters
@@ -47,8 +47,10 @@ def _forces(variables, base_variable, base_function, factor_base, factor_power, 
         Each distinct factor: its base and its power.
     slots : ndarray of int, shape (width, n_terms)
         Each term's factors, padded with ``n_factors`` (a factor of one).
-    weights : ndarray, shape (3, n_terms)
-        The coefficients of the terms in X, Y and N.
+    weights : ndarray, shape (3, n_terms, n_sets)
+        Sets of coefficients of the terms in X, Y and N (one set for a model).
+    weight_set : ndarray of int, shape (B,)
+        The set each state takes.
     """
     n_states = variables.shape[1]
     n_bases = base_variable.shape[0]
@@ -76,13 +78,14 @@ def _forces(variables, base_variable, base_function, factor_base, factor_power, 
             for _ in range(factor_power[f] - 1):
                 value *= x
             factor[f] = value
+        w = weight_set[b]
         for j in range(n_terms):
             column = factor[slots[0, j]]
             for s in range(1, width):
                 column *= factor[slots[s, j]]
-            out[0, b] += weights[0, j] * column
-            out[1, b] += weights[1, j] * column
-            out[2, b] += weights[2, j] * column
+            out[0, b] += weights[0, j, w] * column
+            out[1, b] += weights[1, j, w] * column
+            out[2, b] += weights[2, j, w] * column
     return out
 
 
@@ -93,7 +96,7 @@ N_STATE_VARIABLES = len(STATE_VARIABLES)
 
 
 def _accelerations(u, v, r, delta, psi, extra, base_variable, base_function, factor_base,
-                   factor_power, slots, weights, inertia, inverse_mass, U0, L):
+                   factor_power, slots, weights, weight_set, inertia, inverse_mass, U0, L):
     """Accelerations (3, B) in SI of eq. 14 at SI states (1-D arrays of B states).
 
     ``extra`` (n_extra, B) holds the variables beyond the state's (library
@@ -111,7 +114,7 @@ def _accelerations(u, v, r, delta, psi, extra, base_variable, base_function, fac
         variables[4, b] = psi[b]
     variables[N_STATE_VARIABLES:] = extra
     out = forces(variables, base_variable, base_function, factor_base, factor_power, slots,
-                 weights)
+                 weights, weight_set)
     scale = U0 * U0 / L
     for b in range(n_states):
         un = variables[0, b] + 1.0
@@ -166,8 +169,26 @@ def run_accelerations(dynamics, u, v, r, delta, psi, t, members, position, rudde
     names, integer_tables = model._compiled
     extra = _extra_variables(dynamics, names[N_STATE_VARIABLES:], u.shape[0], t, members,
                              position, rudder_rate)
-    a = accelerations(u, v, r, delta, psi, extra, *integer_tables, model._weights,
-                      model._inertia, model.inverse_mass, model.ship.U0, model.ship.L)
+    a = accelerations(u, v, r, delta, psi, extra, *integer_tables, model._weights[:, :, None],
+                      np.zeros(u.shape[0], dtype=np.int64), model._inertia,
+                      model.inverse_mass, model.ship.U0, model.ship.L)
+    return a[0], a[1], a[2]
+
+
+def run_accelerations_of_sets(sets, u, v, r, delta, psi, t, members, position, rudder_rate):
+    """:meth:`sindyship.flights.CoefficientSetsDynamics.accelerations` through
+    :func:`accelerations`, or None when the state values are not 1-D float64 arrays."""
+    for a in (u, v, r, delta, psi):
+        if type(a) is not np.ndarray or a.ndim != 1 or a.dtype.char != "d":
+            return None
+    dynamics = sets.dynamics
+    model = dynamics.model
+    names, integer_tables = model._compiled
+    extra = _extra_variables(dynamics, names[N_STATE_VARIABLES:], u.shape[0], t,
+                             members % sets.n_records, position, rudder_rate)
+    a = accelerations(u, v, r, delta, psi, extra, *integer_tables, sets.weights,
+                      (members // sets.n_records).astype(np.int64), model._inertia,
+                      model.inverse_mass, model.ship.U0, model.ship.L)
     return a[0], a[1], a[2]
 
 

@@ -12,18 +12,23 @@ directly if that is all it has.  Every flight starts from the record's first row
 
 Many records fly together: :func:`fly_like_batch` in one integration of the kernel where they
 share a sampling grid, :func:`fly_jobs_like` several models of one ship side by side
-(stacked).  :mod:`sindyship.evaluation` measures how far a flight ends from its record.
+(stacked), :func:`fly_coefficient_sets` one model with several sets of its coefficients (the
+sensitivities :mod:`sindyship.refine` needs).  :mod:`sindyship.evaluation` measures how far a
+flight ends from its record.
 """
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from .manoeuvres import result_to_trajectory
+from .model import AbkowitzDynamics
 from .simulation import (
     PrescribedRudder,
     SimulationResult,
@@ -31,6 +36,7 @@ from .simulation import (
     ZigZagCommand,
     simulate_batch,
 )
+from .targets import DOFS
 from .trajectory import Trajectory
 from .trials import recognise_zigzag, trim, zigzag_levels
 
@@ -220,6 +226,86 @@ def fly_jobs_like(jobs: Sequence[tuple[object, Sequence[Trajectory]]], *,
         for (i, k, _, record), res in zip(batch, results, strict=True):
             out[i][k] = result_to_trajectory(_cut(res, len(record.t)), record.name)
     return out
+
+
+def fly_coefficient_sets(model, sets: Sequence[dict], records: Sequence[Trajectory], *,
+                         step: float | None = None) -> list[list[Trajectory]]:
+    """Fly a fitted model with each of several sets of its active coefficients the way each
+    record was flown (as :func:`fly_like_batch`), all sets in one integration per sampling
+    grid (:class:`CoefficientSetsDynamics`).
+
+    Parameters
+    ----------
+    model : AbkowitzModel
+    sets : sequence of dict
+        Per set, ``{(dof, term): value}`` for the coefficients that differ from the model's.
+    records : sequence of Trajectory
+
+    Returns
+    -------
+    list of list of Trajectory
+        Per set, in the order of the records.
+    """
+    weights = model.weights_of(sets)
+    aligned = _aligned(model, records)
+    out: list[list] = [[None] * len(records) for _ in sets]
+    for grid, idx in _common_grids(aligned):
+        held = [_held_to(aligned[i], grid) for i in idx]
+        dynamics = CoefficientSetsDynamics(model.dynamics(records=held), weights, len(idx))
+        state0 = np.tile(np.column_stack([h.state()[:, 0] for h in held]), len(sets))
+        recognised = [_command_on(aligned[i], grid) for i in idx]  # recognised once
+        commands = [copy.deepcopy(command) for _ in sets for command in recognised]
+        results = simulate_batch(dynamics, commands, grid, state0, step=step)
+        for m, result in enumerate(results):
+            k, j = divmod(m, len(idx))
+            record = aligned[idx[j]]
+            out[k][idx[j]] = result_to_trajectory(_cut(result, len(record.t)), record.name)
+    return out
+
+
+@dataclass(frozen=True)
+class CoefficientSetsDynamics:
+    """Simulator dynamics of one model flown with several sets of its active coefficients
+    side by side (paper eq. 14-15 with each set's weights), for the sensitivities of its
+    flights to the coefficients.
+
+    Member ``m`` of a batch flies set ``m // n_records`` on record ``m % n_records``.
+
+    Parameters
+    ----------
+    dynamics : AbkowitzDynamics
+        The model's dynamics for the ``n_records`` records (their recorded channels).
+    weights : ndarray, shape (3, n_active_terms, n_sets)
+        Each set's coefficients in the layout of :meth:`AbkowitzModel.weights_of`.
+    n_records : int
+    """
+
+    dynamics: AbkowitzDynamics
+    weights: np.ndarray
+    n_records: int
+    time_varying = True  # the integrator then passes the members, which select the sets
+
+    def __getattr__(self, name):  # ship, rudder_input, uses_position, uses_rudder_rate
+        return getattr(self.dynamics, name)
+
+    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None,
+                      position=None, rudder_rate=None):
+        """Each member's accelerations (SI) with its own coefficient set."""
+        members = np.arange(np.size(u)) if members is None else np.asarray(members)
+        if self.dynamics.model._compiled is not None:
+            from ._forces_compiled import run_accelerations_of_sets
+
+            a = run_accelerations_of_sets(self, u, v, r, delta, psi, t, members, position,
+                                          rudder_rate)
+            if a is not None:
+                return a
+        records = members % self.n_records
+        values = self.dynamics.variables_at(u, v, r, delta, psi, t, records, position,
+                                            rudder_rate)
+        columns = self.dynamics.model.term_columns(values)
+        forces = np.einsum("dtb,tb->db", self.weights[:, :, members // self.n_records],
+                           columns)
+        return self.dynamics.accelerations_from(dict(zip(DOFS, forces, strict=True)), values)
 
 
 def _command_on(record: Trajectory, grid: np.ndarray):

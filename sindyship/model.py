@@ -13,7 +13,7 @@ import importlib.util
 import json
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -90,13 +90,18 @@ class AbkowitzDynamics:
         flight's ``position`` (x, y) [m] and ``rudder_rate`` [rad/s] when terms use them
         (the origin and a still rudder when not given, as for a stability analysis)."""
         model = self.model
-        ship = model.ship
-        U0, L = ship.U0, ship.L
         if model._compiled is not None:
             a = model._run_compiled(self, u, v, r, delta, psi, t, members, position,
                                     rudder_rate)
             if a is not None:
                 return a
+        values = self.variables_at(u, v, r, delta, psi, t, members, position, rudder_rate)
+        return self.accelerations_from(model.forces_from_values(values), values)
+
+    def variables_at(self, u, v, r, delta, psi, t=None, members=None, position=None,
+                     rudder_rate=None) -> dict:
+        """The library's non-dimensional variables at SI states (as :meth:`accelerations`)."""
+        U0, L = self.ship.U0, self.ship.L
         un = u / U0
         values = {"du": un - 1.0, "v": v / U0, "r": r * L / U0, "delta": delta, "psi": psi}
         values.update(self.channels)
@@ -107,9 +112,15 @@ class AbkowitzDynamics:
         if self.uses_rudder_rate:
             rate = 0.0 * un if rudder_rate is None else rudder_rate
             values["delta_rate"] = rate * L / U0
-        forces = model.forces_from_values(values)
-        X_C, Y_C, N_C = coriolis(ship, un, values["v"], values["r"])
-        Minv = model.inverse_mass
+        return values
+
+    def accelerations_from(self, forces: Mapping[str, np.ndarray], values: Mapping) -> tuple:
+        """Accelerations (SI) of eq. 14 from the hydrodynamic forces of eq. 15 (Prime I):
+        the Coriolis terms added, the mass matrix inverted."""
+        ship = self.ship
+        U0, L = ship.U0, ship.L
+        X_C, Y_C, N_C = coriolis(ship, values["du"] + 1.0, values["v"], values["r"])
+        Minv = self.model.inverse_mass
         X = forces["X"] + X_C
         Y = forces["Y"] + Y_C
         N = forces["N"] + N_C
@@ -210,6 +221,10 @@ class AbkowitzModel:
                 if c != 0.0:
                     weights[row, index[term.text]] += c
         self._weights = weights
+        self._weight_slots = {(dof, term.text): (row, index[term.text])
+                              for row, dof in enumerate(DOFS)
+                              for term in self.library.terms[dof]
+                              if self.coefficients[dof][term.text] != 0.0}
         self._compiled = _compiled_tables(self._bases, factors, slots)
         if self._compiled is not None:
             from ._forces_compiled import run_accelerations
@@ -222,6 +237,23 @@ class AbkowitzModel:
     def coefficient_vector(self, dof: str) -> np.ndarray:
         """Coefficients of one degree of freedom in the library's term order."""
         return np.array([self.coefficients[dof][t.text] for t in self.library.terms[dof]])
+
+    def weights_of(self, sets: Sequence[Mapping[tuple[str, str], float]]) -> np.ndarray:
+        """Coefficient sets (3, n_active_terms, n_sets) to fly side by side
+        (:func:`sindyship.flights.fly_coefficient_sets`):
+        this model's coefficients with each set's ``{(dof, term): value}`` in their place
+        (active terms only: the set of terms flown is this model's)."""
+        out = np.repeat(self._weights[:, :, None], len(sets), axis=2)
+        for k, changes in enumerate(sets):
+            for key, value in changes.items():
+                if key not in self._weight_slots:
+                    raise SindyshipInputError(
+                        f"coefficient {key[0]}[{key[1]!r}] is not active in this model; "
+                        "only its non-zero coefficients can be changed."
+                    )
+                row, column = self._weight_slots[key]
+                out[row, column, k] += value - self.coefficients[key[0]][key[1]]
+        return out
 
     def n_active(self) -> dict[str, int]:
         """Number of non-zero coefficients per degree of freedom."""
@@ -246,9 +278,17 @@ class AbkowitzModel:
                     stacked[k] = np.ravel(values[name])
             from ._forces_compiled import forces as compiled_forces
 
-            forces = compiled_forces(stacked, *tables, self._weights)
+            forces = compiled_forces(stacked, *tables, self._weights[:, :, None],
+                                     np.zeros(base.size, dtype=np.int64))
             return {dof: forces[row].reshape(base.shape) for row, dof in enumerate(DOFS)}
-        rows = np.ones((len(self._factors) + 1, base.size))
+        forces = self._weights @ self.term_columns(values)
+        return {dof: forces[row].reshape(base.shape) for row, dof in enumerate(DOFS)}
+
+    def term_columns(self, values: Mapping[str, np.ndarray]) -> np.ndarray:
+        """The active terms' values (n_active_terms, n_states) at non-dimensional variables,
+        each the product of its factors' rows; the columns of :attr:`_weights`."""
+        size = np.asarray(values["du"], dtype=float).size
+        rows = np.ones((len(self._factors) + 1, size))
         for factor, where, powers in self._bases:
             column = np.ravel(evaluate_factor(factor, values))
             rows[where] = column if len(where) == 1 and powers[0, 0] == 1.0 else column**powers
@@ -256,8 +296,7 @@ class AbkowitzModel:
         columns = rows[slots[0]]
         for slot in slots[1:]:
             columns *= rows[slot]
-        forces = self._weights @ columns
-        return {dof: forces[row].reshape(base.shape) for row, dof in enumerate(DOFS)}
+        return columns
 
     def variables(self, traj: Trajectory) -> dict[str, np.ndarray]:
         """The library's non-dimensional variables of a record (with this model's rudder)."""

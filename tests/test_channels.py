@@ -140,3 +140,29 @@ def test_a_closed_loop_flight_does_not_depend_on_a_replayed_record_beside_it(kcs
     (alone,) = fly_like_batch(model, [zigzag])
     together = fly_like_batch(model, [zigzag, replayed])
     np.testing.assert_array_equal(together[0].state(), alone.state())
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_coefficient_sets_fly_each_records_own_channel(kcs, depth_model, compiled,
+                                                       monkeypatch):
+    from sindyship.flights import fly_coefficient_sets
+
+    if not compiled:
+        monkeypatch.setenv("SINDYSHIP_NO_COMPILE", "1")
+    model = AbkowitzModel(kcs, depth_model.library,
+                          {d: dict(c) for d, c in depth_model.coefficients.items()})
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=20, duration=600)])
+    ramp = _with_depth(run, np.linspace(0.0, 200.0, run.n_samples))
+    flat = _with_depth(run, np.full(run.n_samples, 100.0)).with_name("flat")
+    stronger = {("Y", "depth"): 2.2e-5}
+    together = fly_coefficient_sets(model, [{}, stronger], [ramp, flat])
+    coefficients = {d: dict(c) for d, c in model.coefficients.items()}
+    coefficients["Y"]["depth"] = 2.2e-5
+    changed = AbkowitzModel(kcs, model.library, coefficients)
+    for flown, alone in ((together[0], fly_like_batch(model, [ramp, flat])),
+                         (together[1], fly_like_batch(changed, [ramp, flat]))):
+        for a, b in zip(flown, alone, strict=True):
+            np.testing.assert_allclose(a["x"], b["x"], rtol=0, atol=1e-8)
+            np.testing.assert_allclose(a["y"], b["y"], rtol=0, atol=1e-8)
+    gap = np.hypot(*(together[1][0][k] - together[0][0][k] for k in ("x", "y"))) / kcs.L
+    assert gap[-1] > 0.01  # the stronger channel term flies elsewhere
