@@ -33,6 +33,7 @@ _EXPORTS = {
     "write_csv": "sindyship.measurements",
     "fit": "sindyship.identify",
     "design": "sindyship.identify",
+    "refine": "sindyship.refine",
     "make_optimizer": "sindyship.optimizers",
     "evaluate": "sindyship.evaluation",
     "compare": "sindyship.diagnose",

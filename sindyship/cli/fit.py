@@ -7,6 +7,7 @@ from ._common import (
     SEED,
     add_training_options,
     bounded_float,
+    bounded_int,
     check_inputs,
     emit,
     progress,
@@ -32,6 +33,12 @@ def add_parser(sub) -> None:
                    help="with --optimizer prior: the weight of the ship's prior, in [0, 1], as "
                    "a share of the force's sum of squares that one prior standard deviation "
                    "costs (default 1e-5; smaller follows the data, larger the prior)")
+    p.add_argument("--refine", type=bounded_int(0, 1000, "a whole number of flights"),
+                   default=0, metavar="N",
+                   help="refine the fitted coefficients by the error of the records' flights "
+                   "(output error; each record flown as evaluate flies it), at most N flights "
+                   "of every non-zero coefficient (10 is typical; a minute on 8 records of "
+                   "3200 s); 0 does not refine (default)")
     p.add_argument("--out", required=True, metavar="FILE",
                    help=f"output model JSON ({OUT_NOTE})")
     p.add_argument("--no-identifiability", action="store_true",
@@ -95,6 +102,11 @@ def run(args) -> int:
     check_inputs(fit_inputs(args))
     ship = load_ship(args.ship)
     if args.stream or args.scheduler:
+        if args.refine:
+            from ..errors import SindyshipInputError
+
+            raise SindyshipInputError("--refine flies the records, which a streamed fit does "
+                                      "not hold in memory; drop --stream or --refine.")
         return _run_streamed(args, ship, params)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
@@ -111,6 +123,8 @@ def run(args) -> int:
     if smoothing is not None:
         model.info["smoothing"] = smoothing.as_dict()
     report_prior_fit(model)
+    if args.refine:
+        model = _refined(model, records, args.refine)
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
     state = model.info.get("straight_run")  # a raised prior strength is the fit's strength
@@ -120,8 +134,34 @@ def run(args) -> int:
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
               "library": model.library.name, "optimizer": model.optimizer["name"],
-              "identifiability": None if report is None else report.to_dict()})
+              "identifiability": None if report is None else report.to_dict(),
+              "refined": model.info.get("refined")})
     return 0
+
+
+def _refined(model, records, evaluations: int):
+    """The model refined by its records' flights (:func:`sindyship.refine.refine`), with
+    what the refinement did on stderr."""
+    import sys
+
+    from ..refine import refine
+
+    progress(f"refining by the records' flights (at most {evaluations} flights of every "
+             "non-zero coefficient)")
+    refined = refine(model, records, max_evaluations=evaluations, progress=sys.stderr.isatty())
+    done = refined.info["refined"]
+    if done["cost_after"] < done["cost_before"]:
+        change = done["largest_change"]
+        progress(f"refined: flight error (half the sum of squares) {done['cost_before']:.4g} -> "
+                 f"{done['cost_after']:.4g} in {done['evaluations']} flights; "
+                 f"{change['coefficient']} moved most ({change['relative']:+.0%}).")
+    else:
+        progress(f"not refined: no step lowered the flight error ({done['cost_before']:.4g}); "
+                 "the fitted coefficients are kept.")
+    if not done["straight_run_stable"]:
+        progress("warning: the refined model is unstable in straight running; a disturbance "
+                 "grows in its flights (fly it on records it was not refined on before use).")
+    return refined
 
 
 def _run_streamed(args, ship, params: dict) -> int:
