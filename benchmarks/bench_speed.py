@@ -16,7 +16,8 @@ The steps, each timed in a fresh process of the checkout (``PYTHONPATH``), best 
     Skipped when the shared data folder is absent.
 ``reproduce``
     ``sindyship reproduce`` end to end in a fresh process, figures and files included
-    (target below 15 s).
+    (target below 120 s: the refinement of the diagnosed model by its training flights takes
+    about a minute of it; the fits, diagnosis and figures took 14 s before it was added).
 
 The exported simulator's right-hand side is timed against the library's by
 ``benchmarks/bench_export.py`` (the plain module, which is what ``export`` wrote before
@@ -47,7 +48,7 @@ from sindyship.marin import default_marin_dir  # noqa: E402
 
 OUT = Path(__file__).parent / "results" / "speed.json"
 TARGETS = {"protocol_flights": 0.3, "diagnose_protocol": 4.0, "diagnose_10hz": 30.0,
-           "reproduce": 15.0}
+           "reproduce": 120.0}
 
 _BEST_OF = """
 import json, sys, time

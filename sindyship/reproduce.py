@@ -34,6 +34,8 @@ METHOD_LIBRARIES = {"prior": "abkowitz-vr"}
 #: The captive tests the models' forces are compared with (:func:`captive_agreement`).
 CAPTIVE_TESTS = ("static-drift", "rudder", "pure-yaw", "drift-yaw")
 TEST_NAMES = ("tc15_port", "tc15_stbd", "zz10_10")
+#: Most flights of the refinement of the diagnosed model (:func:`sindyship.refine.refine`).
+REFINE_EVALUATIONS = 10
 
 
 def _progress(message: str) -> None:
@@ -96,6 +98,29 @@ def _diagnosis_rounds(train, test, ship, rounds, progress):
     return diagnosis, results, models, iterative
 
 
+def _refined_row(iterative, train, test, ship, evaluations, progress):
+    """The last diagnosed model refined by the error of its training flights
+    (:func:`sindyship.refine.refine`): its result row, its key and model, its held-out
+    flights."""
+    from .refine import refine
+
+    final = iterative.rounds[-1].diagnosis.model
+    progress(f"refining the last diagnosed model by its training flights "
+             f"(at most {evaluations} flights of every coefficient)")
+    t0 = time.perf_counter()
+    model = refine(final, train, max_evaluations=evaluations, progress=sys.stderr.isatty())
+    flown = fly_like_batch(model, test)
+    errors = {rec.name: distance_errors(f, rec, ship.L) for f, rec in zip(flown, test,
+                                                                          strict=True)}
+    effects = list(model.library.effects)
+    progress(f"  refined in {time.perf_counter() - t0:5.1f} s: "
+             + ", ".join(f"{k} {v['mean_distance_L']:.3f} L" for k, v in errors.items()))
+    row = {"method": "ls", "library": model.library.name, "effects": effects,
+           "refined": True, "errors": errors, "active_terms": model.n_active(),
+           "selected": {}, "refinement": model.info["refined"]}
+    return row, "ls+" + "+".join(effects) + "+refined", model, flown
+
+
 def _held_out_flights(iterative, test) -> dict:
     """The held-out flights of every diagnosed model (after the plain round), keyed as the
     models of :func:`_diagnosis_rounds`, in the order of ``test``."""
@@ -147,8 +172,13 @@ def _trajectory_figures(test, flights: dict, ship) -> list:
 
 
 def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
-        figures: bool = True, diagnose_rounds: int = 3, progress=_progress) -> dict:
+        figures: bool = True, diagnose_rounds: int = 3,
+        refine_evaluations: int = REFINE_EVALUATIONS, progress=_progress) -> dict:
     """Run the protocol; return the JSON-ready results (and write files when ``out_dir``).
+
+    The last diagnosed model is also refined by the error of its training flights
+    (:mod:`sindyship.refine`, at most ``refine_evaluations`` flights; 0 skips it): the
+    workflow the README recommends for flying.
 
     Returns
     -------
@@ -174,6 +204,11 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
             flights[key] = round_flights  # flown by the diagnosis, not again
         if figures:
             drawn.append(("diagnosis-rounds.png", iterative.figure()))
+        if refine_evaluations:
+            row, key, model, flights[key] = _refined_row(iterative, train, test, ship,
+                                                         refine_evaluations, progress)
+            results.append(row)
+            models[key] = model
     agreement = ls_agreement(models["ls"].coefficients) if "ls" in models else None
     paper_ls = paper_model(ship, "LS")
     paper_flown = fly_like_batch(paper_ls.dynamics(), test)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -151,7 +152,23 @@ def test_reproduce_json_contract(tmp_path):
     from sindyship.reports import reproduce_report
 
     assert "prior on abkowitz-vr " in reproduce_report(doc)
-    assert doc["seconds"] < 120
+    # the last diagnosed model, refined by its training flights, is the last row
+    refined = doc["results"][-1]
+    assert refined["refined"] is True and refined["effects"] == doc["results"][-2]["effects"]
+    assert refined["refinement"]["records"] == ["straight", "tc35_stbd", "tc35_port", "zz35_10",
+                                                "zz20_20", "zz15_15", "spiral_stbd",
+                                                "spiral_port"]
+    assert ", refined " in reproduce_report(doc)
+    # the README's refined row is what reproduce flies (docs/readme-numbers.json, made by
+    # scripts/make_readme.py); the Gauss-Newton path may round differently on another machine
+    readme = json.loads((Path(__file__).resolve().parents[1] / "docs" / "readme-numbers.json")
+                        .read_text(encoding="utf-8"))
+    (saved,) = [r for r in readme["table10"] if r.get("refined")]
+    for name, error in refined["errors"].items():
+        assert error["completed"], name
+        assert error["mean_distance_L"] == pytest.approx(saved["errors"][name]["mean_distance_L"],
+                                                         rel=1e-3), name
+    assert (tmp_path / "rep" / f"model-ls+{'+'.join(refined['effects'])}+refined.json").exists()
     assert (tmp_path / "rep" / "results.json").exists()
     assert (tmp_path / "rep" / "trajectory-zz10_10.png").exists()
 
@@ -165,3 +182,20 @@ def test_fit_with_smoothing_records_the_setting(records, tmp_path):
     assert info["smoothing"] == {"method": "savgol", "window_s": 21.0, "order": 3}
     assert main(["fit", str(train[0]), "--ship", "kcs", "--smoothing", "bogus:x",
                  "--out", str(tmp_path / "x.json")]) == 2
+
+
+def test_fit_refine_flies_the_records_and_says_what_it_did(records, tmp_path, capsys):
+    model = tmp_path / "refined.json"
+    train = [str(records[k]) for k in ("tc35", "zz20")]
+    assert main(["fit", *train, "--ship", "kcs", "--refine", "8", "--no-identifiability",
+                 "--out", str(model), "--json"]) == 0
+    out, err = capsys.readouterr()
+    refined = json.loads(model.read_text())["info"]["refined"]
+    assert refined["records"] == ["tc35", "zz20"]
+    assert refined["evaluations"] <= 8
+    assert refined["cost_after"] < 0.5 * refined["cost_before"]
+    assert json.loads(out)["refined"]["cost_after"] == pytest.approx(refined["cost_after"])
+    assert "refined: flight error" in err
+    assert main(["fit", *train, "--ship", "kcs", "--refine", "3", "--stream",
+                 "--out", str(tmp_path / "streamed.json")]) == 2
+    assert "drop --stream or --refine" in capsys.readouterr().err
