@@ -168,7 +168,7 @@ def _table10(n: dict) -> str:
         if row["effects"]:
             label += " + " + " + ".join(f"`{e}`" for e in row["effects"]) + " (diagnosed)"
         if row.get("refined"):
-            label += ", refined by its training flights (recommended)"
+            label += ", refined by its training flights (recommended for flights)"
         paper = {} if row["effects"] else n["paper_table_10"].get(row["method"], {})
         cells = []
         for name in TEST_NAMES:
@@ -324,7 +324,7 @@ def _captive(n: dict) -> str:
     rows = {"least squares": captive["ls"], "`prior`": captive["prior"],
             diagnosed: captive[diagnosed]}
     if refined in captive:
-        rows[f"{diagnosed}, refined (recommended)"] = captive[refined]
+        rows[f"{diagnosed}, refined (recommended for flights)"] = captive[refined]
     lines = ["| model | " + " | ".join(CAPTIVE_LABELS.values()) + " |",
              "|---|" + "---|" * len(CAPTIVE_LABELS)]
     lines += [f"| {label} | " + " | ".join(_correlations(row)) + " |"

@@ -285,8 +285,21 @@ class CoefficientSetsDynamics:
     n_records: int
     time_varying = True  # the integrator then passes the members, which select the sets
 
-    def __getattr__(self, name):  # ship, rudder_input, uses_position, uses_rudder_rate
-        return getattr(self.dynamics, name)
+    @property
+    def ship(self):
+        return self.dynamics.ship
+
+    @property
+    def rudder_input(self) -> str:
+        return self.dynamics.rudder_input
+
+    @property
+    def uses_position(self) -> bool:
+        return self.dynamics.uses_position
+
+    @property
+    def uses_rudder_rate(self) -> bool:
+        return self.dynamics.uses_rudder_rate
 
     def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None,
                       position=None, rudder_rate=None):

@@ -34,7 +34,8 @@ METHOD_LIBRARIES = {"prior": "abkowitz-vr"}
 #: The captive tests the models' forces are compared with (:func:`captive_agreement`).
 CAPTIVE_TESTS = ("static-drift", "rudder", "pure-yaw", "drift-yaw")
 TEST_NAMES = ("tc15_port", "tc15_stbd", "zz10_10")
-#: Most flights of the refinement of the diagnosed model (:func:`sindyship.refine.refine`).
+#: Most trial steps of the refinement of the diagnosed model (``max_evaluations`` of
+#: :func:`sindyship.refine.refine`).
 REFINE_EVALUATIONS = 10
 
 
@@ -106,7 +107,7 @@ def _refined_row(iterative, train, test, ship, evaluations, progress):
 
     final = iterative.rounds[-1].diagnosis.model
     progress(f"refining the last diagnosed model by its training flights "
-             f"(at most {evaluations} flights of every coefficient)")
+             f"(at most {evaluations} trial steps)")
     t0 = time.perf_counter()
     model = refine(final, train, max_evaluations=evaluations, progress=sys.stderr.isatty())
     flown = fly_like_batch(model, test)

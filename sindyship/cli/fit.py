@@ -33,12 +33,13 @@ def add_parser(sub) -> None:
                    help="with --optimizer prior: the weight of the ship's prior, in [0, 1], as "
                    "a share of the force's sum of squares that one prior standard deviation "
                    "costs (default 1e-5; smaller follows the data, larger the prior)")
-    p.add_argument("--refine", type=bounded_int(0, 1000, "a whole number of flights"),
+    p.add_argument("--refine", type=bounded_int(0, 1000, "a whole number of steps"),
                    default=0, metavar="N",
                    help="refine the fitted coefficients by the error of the records' flights "
-                   "(output error; each record flown as evaluate flies it), at most N flights "
-                   "of every non-zero coefficient (10 is typical; a minute on 8 records of "
-                   "3200 s); 0 does not refine (default)")
+                   "(output error; each record flown as evaluate flies it), at most N trial "
+                   "steps, each accepted one with a Jacobian that flies the model once per "
+                   "non-zero coefficient (10 is typical: a minute on 8 records of 3200 s; 1 or "
+                   "2 may refine nothing); 0 does not refine (default)")
     p.add_argument("--out", required=True, metavar="FILE",
                    help=f"output model JSON ({OUT_NOTE})")
     p.add_argument("--no-identifiability", action="store_true",
@@ -105,8 +106,9 @@ def run(args) -> int:
         if args.refine:
             from ..errors import SindyshipInputError
 
-            raise SindyshipInputError("--refine flies the records, which a streamed fit does "
-                                      "not hold in memory; drop --stream or --refine.")
+            raise SindyshipInputError("--refine flies the records, which a streamed fit "
+                                      "(--stream or --scheduler) does not hold in memory; fit "
+                                      "in memory or drop --refine.")
         return _run_streamed(args, ship, params)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
@@ -146,21 +148,22 @@ def _refined(model, records, evaluations: int):
 
     from ..refine import refine
 
-    progress(f"refining by the records' flights (at most {evaluations} flights of every "
-             "non-zero coefficient)")
+    progress(f"refining by the records' flights (at most {evaluations} trial steps)")
     refined = refine(model, records, max_evaluations=evaluations, progress=sys.stderr.isatty())
     done = refined.info["refined"]
     if done["cost_after"] < done["cost_before"]:
         change = done["largest_change"]
         progress(f"refined: flight error (half the sum of squares) {done['cost_before']:.4g} -> "
-                 f"{done['cost_after']:.4g} in {done['evaluations']} flights; "
-                 f"{change['coefficient']} moved most ({change['relative']:+.0%}).")
+                 f"{done['cost_after']:.4g} in {done['evaluations']} trial steps and "
+                 f"{done['jacobians']} Jacobians; {change['coefficient']} moved most "
+                 f"({change['relative']:+.1%}).")
     else:
         progress(f"not refined: no step lowered the flight error ({done['cost_before']:.4g}); "
-                 "the fitted coefficients are kept.")
+                 "the fitted coefficients are kept (a larger --refine allows more steps).")
     if not done["straight_run_stable"]:
-        progress("warning: the refined model is unstable in straight running; a disturbance "
-                 "grows in its flights (fly it on records it was not refined on before use).")
+        progress("warning: the refined model is unstable in straight running, so a disturbance "
+                 "grows in its flights; refine a --optimizer prior fit, which starts stable, "
+                 "or fewer steps, and fly it on records it was not refined on.")
     return refined
 
 
