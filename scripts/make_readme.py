@@ -81,6 +81,7 @@ def _marin() -> dict | None:
     change = before_after(train, ship, effects=[top.effect.name], test=test, **settings)
     rows = {row["manoeuvre"]: row for row in change.rows}
     return {
+        "refined": _marin_refined(train, test, ship, settings),
         "measured_turns": measured,
         "model_revolutions_rps": model_n,
         "ranking": {s.effect.name: {"explained": s.explained, "signal": s.explained_signal,
@@ -92,6 +93,34 @@ def _marin() -> dict | None:
         "turns": {name: {"before": rows[name]["before"], "after": rows[name]["after"],
                          "common": rows[name]["common"]} for name in ("tc_35", "tc_-35")},
     }
+
+
+def _marin_refined(train, test, ship, settings: dict) -> dict:
+    """Least squares and the prior fit on the MARIN zig-zags, before and after refining by
+    their flights: the held-out turns and the mean over the training zig-zags."""
+    from sindyship.evaluation import evaluate
+    from sindyship.identify import fit
+    from sindyship.refine import refine
+    from sindyship.reproduce import REFINE_EVALUATIONS
+
+    def flights(model) -> dict:
+        held_out = evaluate(model, test)
+        training = evaluate(model, train)
+        return {"turns": {k: {"mean_distance_L": v["mean_distance_L"],
+                              "diverged_at_s": v["diverged_at_s"]} for k, v in held_out.items()},
+                "training_mean_L": sum(v["mean_distance_L"] for v in training.values())
+                / len(training)}
+
+    out = {}
+    for key, options in (("ls", {}), ("prior", {"optimizer": "prior",
+                                                 "library": "abkowitz-vr"})):
+        model = fit(train, ship, **options, **settings)
+        refined = refine(model, train, max_evaluations=REFINE_EVALUATIONS)
+        out[key] = {"before": flights(model), "after": flights(refined),
+                    "straight_run_stable": refined.info["refined"]["straight_run_stable"],
+                    "kept_stable": refined.info["refined"]["stopped"].startswith(
+                        "the refined model was unstable")}
+    return out
 
 
 def compute() -> dict:
@@ -261,7 +290,34 @@ def _marin_text(n: dict) -> str:
         "that a flight diverging where the other does not is the worse one, the effect does not "
         "carry over from zig-zags to turns: the zig-zags sweep about 70 deg of heading, over "
         "which heading terms can stand in for slow drift (the report says so)."
+        + _marin_refined_text(m.get("refined"))
     )
+
+
+def _marin_refined_text(refined: dict | None) -> str:
+    if refined is None:
+        return ""
+
+    def turns(row):
+        return " / ".join(_cell(row["turns"][k]) for k in ("tc_35", "tc_-35"))
+
+    parts = []
+    for key, label in (("ls", "least squares"), ("prior", "the `prior` fit")):
+        r = refined[key]
+        if r.get("kept_stable"):
+            parts.append(f"{label} is kept as fitted (turns {turns(r['before'])}): refined, "
+                         "it was unstable in straight running, which the prior's stability "
+                         "requirement refuses")
+            continue
+        unstable = ("" if r["straight_run_stable"]
+                    else ", and the refined model is unstable in straight running")
+        parts.append(f"{label} goes from {r['before']['training_mean_L']:.3f} to "
+                     f"{r['after']['training_mean_L']:.3f} L on the zig-zags and flies the "
+                     f"turns (port / starboard) {turns(r['before'])} before and "
+                     f"{turns(r['after'])} after{unstable}")
+    return (" Refining by the zig-zags' flights (`fit --refine 10`) does not carry over to the "
+            f"turns either: {parts[0]}; {parts[1]}. A refinement fits the manoeuvres it "
+            "flies and extrapolates no better than they span.")
 
 
 def _kvlcc2_table(n: dict) -> str:

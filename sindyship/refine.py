@@ -119,9 +119,10 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *, max_evaluatio
         the search stopped, the coefficient that moved most (relative to its fitted value;
         None when nothing moved) and whether
         the refined model is stable in straight running
-        (:func:`sindyship.stability.straight_run_stability`; a ``prior`` fit's
-        ``info["straight_run"]["stable"]`` is updated too).  A refinement that does not lower
-        the cost returns the fitted coefficients.
+        (:func:`sindyship.stability.straight_run_stability`).  A refinement that does not
+        lower the cost returns the fitted coefficients, and so does one that makes a
+        straight-run-stable ``prior`` fit (``info["straight_run"]["stable"]``) unstable: its
+        stability requirement holds for the refined model too.
     """
     if max_evaluations < 1:
         raise SindyshipInputError(
@@ -182,16 +183,18 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *, max_evaluatio
     bar.close()
     if not cost_after < cost_before:
         p, cost_after = start, cost_before
-    refined = {dof: dict(terms) for dof, terms in model.coefficients.items()}
-    for (dof, term), value in coefficients(p).items():
-        refined[dof][term] = value
-    moved = int(np.argmax(np.abs(p))) if np.any(p) else None
     info = dict(model.info)
-    model_refined = AbkowitzModel(model.ship, model.library, refined, dict(model.optimizer),
-                                  model.rudder_signal, info)
-    stable = straight_run_stability(model_refined).stable
+    candidate = _with_changes(model, coefficients(p), info)
+    stable = straight_run_stability(candidate).stable
+    promised = bool(info.get("straight_run", {}).get("stable"))
+    if promised and not stable:  # a prior fit is straight-run stable; so is its refinement
+        p, cost_after, stable = start, cost_before, True
+        stopped = ("the refined model was unstable in straight running, which the fit it "
+                   "started from is not; the fitted coefficients are kept")
+        candidate = _with_changes(model, coefficients(p), info)
     if "straight_run" in info:  # the prior fit's record describes the model saved
         info["straight_run"] = {**info["straight_run"], "stable": stable}
+    moved = int(np.argmax(np.abs(p))) if np.any(p) else None
     info["refined"] = {
         "records": [r.name for r in records], "sample_interval_s": float(sample_interval_s),
         "cost_before": cost_before, "cost_after": cost_after, "evaluations": evaluations,
@@ -202,4 +205,13 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *, max_evaluatio
             "relative": float(p[moved])},
         "straight_run_stable": stable,
     }
-    return model_refined
+    return candidate
+
+
+def _with_changes(model: AbkowitzModel, changes: dict, info: dict) -> AbkowitzModel:
+    """The model with the coefficients ``{(dof, term): value}`` in place, and ``info``."""
+    coefficients = {dof: dict(terms) for dof, terms in model.coefficients.items()}
+    for (dof, term), value in changes.items():
+        coefficients[dof][term] = value
+    return AbkowitzModel(model.ship, model.library, coefficients, dict(model.optimizer),
+                         model.rudder_signal, info)

@@ -347,3 +347,23 @@ def test_a_logged_zigzag_is_flown_from_its_execute_and_scores_like_a_clean_one(
     reference = evaluate(model, [clean])["clean"]
     assert reference["flown_as"] == "zigzag" and "execute_s" not in reference
     assert errors["mean_distance_L"] == pytest.approx(reference["mean_distance_L"], rel=0.10)
+
+
+def test_refinement_flies_a_logged_zigzag_from_its_execute(logged_trial, kcs, protocol_runs):
+    """Refining by flights judges the flights evaluate judges: a logged zig-zag's lead-in is
+    cut, and the cost is that of the closed-loop flight from the execute."""
+    from sindyship.cli._records import read_records
+    from sindyship.flights import fly_like_batch, from_execute
+    from sindyship.identify import fit
+    from sindyship.refine import flight_residuals, refine
+
+    model = fit(protocol_runs["train"], kcs)
+    (logged,) = read_records([logged_trial], ship=kcs)
+    kept = refine(model, [logged], max_evaluations=1)  # the starting point only
+    cut = from_execute(logged)
+    assert cut.t[0] == 350.0
+    residuals = flight_residuals(fly_like_batch(model, [cut]), [cut], kcs.L, kcs.U0, 20.0)
+    assert kept.info["refined"]["cost_before"] == pytest.approx(0.5 * residuals @ residuals,
+                                                                rel=1e-12)
+    whole = flight_residuals(fly_like_batch(model, [logged]), [logged], kcs.L, kcs.U0, 20.0)
+    assert 0.5 * whole @ whole != pytest.approx(kept.info["refined"]["cost_before"], rel=1e-3)

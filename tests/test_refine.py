@@ -132,3 +132,24 @@ def test_a_refined_prior_fit_records_its_own_stability(runs, kcs):
     assert refined.info["straight_run"]["stable"] is refined.info["refined"][
         "straight_run_stable"]
     assert refined.info["straight_run"]["strength"] == prior.info["straight_run"]["strength"]
+
+
+def test_a_prior_fit_stays_stable_in_straight_running(runs, kcs, fitted, monkeypatch):
+    """A refinement that would make a straight-run-stable prior fit unstable keeps the fit;
+    a least-squares fit, which promises nothing, is refined and reported unstable."""
+    import sindyship.refine as refining
+    from sindyship.stability import Stability
+
+    prior = fit(runs, kcs, library="abkowitz-vr", optimizer="prior")
+    assert prior.info["straight_run"]["stable"]
+    unstable = Stability(eigenvalues=(0.1, -1.0), jacobian=np.eye(2), stable=False,
+                         doubling_time_L_over_U=6.9)
+    monkeypatch.setattr(refining, "straight_run_stability", lambda model: unstable)
+    kept = refine(prior, runs, max_evaluations=4)
+    assert kept.coefficients == prior.coefficients
+    assert kept.info["refined"]["stopped"].startswith("the refined model was unstable")
+    assert kept.info["refined"]["largest_change"] is None
+    assert kept.info["straight_run"]["stable"] and kept.info["refined"]["straight_run_stable"]
+    refined_ls = refine(fitted, runs, max_evaluations=4)
+    assert refined_ls.coefficients != fitted.coefficients
+    assert refined_ls.info["refined"]["straight_run_stable"] is False

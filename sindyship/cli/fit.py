@@ -151,7 +151,9 @@ def _refined(model, records, evaluations: int):
     progress(f"refining by the records' flights (at most {evaluations} trial steps)")
     refined = refine(model, records, max_evaluations=evaluations, progress=sys.stderr.isatty())
     done = refined.info["refined"]
-    if done["cost_after"] < done["cost_before"]:
+    if done["stopped"].startswith("the refined model was unstable"):
+        progress(f"not refined: {done['stopped']} (the prior fit's stability requirement).")
+    elif done["cost_after"] < done["cost_before"]:
         change = done["largest_change"]
         progress(f"refined: flight error (half the sum of squares) {done['cost_before']:.4g} -> "
                  f"{done['cost_after']:.4g} in {done['evaluations']} trial steps and "
