@@ -118,8 +118,7 @@ def _marin_refined(train, test, ship, settings: dict) -> dict:
         refined = refine(model, train, max_evaluations=REFINE_EVALUATIONS)
         out[key] = {"before": flights(model), "after": flights(refined),
                     "straight_run_stable": refined.info["refined"]["straight_run_stable"],
-                    "kept_stable": refined.info["refined"]["stopped"].startswith(
-                        "the refined model was unstable")}
+                    "kept_stable": refined.info["refined"]["refused_unstable"]}
     return out
 
 

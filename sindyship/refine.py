@@ -117,12 +117,12 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *, max_evaluatio
         The refined model.  ``info["refined"]`` holds the records flown, the cost (half the
         sum of squared residuals) before and after, the evaluations and Jacobians used, why
         the search stopped, the coefficient that moved most (relative to its fitted value;
-        None when nothing moved) and whether
-        the refined model is stable in straight running
-        (:func:`sindyship.stability.straight_run_stability`).  A refinement that does not
-        lower the cost returns the fitted coefficients, and so does one that makes a
-        straight-run-stable ``prior`` fit (``info["straight_run"]["stable"]``) unstable: its
-        stability requirement holds for the refined model too.
+        None when nothing moved), whether the refined model is stable in straight running
+        (:func:`sindyship.stability.straight_run_stability`) and whether a refinement was
+        refused for making a stable ``prior`` fit unstable (``refused_unstable``).  A
+        refinement that does not lower the cost returns the fitted coefficients, and so does
+        one that makes a straight-run-stable ``prior`` fit (``info["straight_run"]["stable"]``)
+        unstable: its stability requirement holds for the refined model too.
     """
     if max_evaluations < 1:
         raise SindyshipInputError(
@@ -187,7 +187,8 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *, max_evaluatio
     candidate = _with_changes(model, coefficients(p), info)
     stable = straight_run_stability(candidate).stable
     promised = bool(info.get("straight_run", {}).get("stable"))
-    if promised and not stable:  # a prior fit is straight-run stable; so is its refinement
+    refused_unstable = promised and not stable
+    if refused_unstable:  # a prior fit is straight-run stable; so is its refinement
         p, cost_after, stable = start, cost_before, True
         stopped = ("the refined model was unstable in straight running, which the fit it "
                    "started from is not; the fitted coefficients are kept")
@@ -204,6 +205,7 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *, max_evaluatio
             "coefficient": f"{keys[moved][0]}[{keys[moved][1]}]",
             "relative": float(p[moved])},
         "straight_run_stable": stable,
+        "refused_unstable": refused_unstable,
     }
     return candidate
 

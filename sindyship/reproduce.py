@@ -178,7 +178,7 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
     """Run the protocol; return the JSON-ready results (and write files when ``out_dir``).
 
     The last diagnosed model is also refined by the error of its training flights
-    (:mod:`sindyship.refine`, at most ``refine_evaluations`` flights; 0 skips it): the
+    (:mod:`sindyship.refine`, at most ``refine_evaluations`` trial steps; 0 skips it): the
     workflow the README recommends for flying.
 
     Returns

@@ -148,8 +148,10 @@ def test_a_prior_fit_stays_stable_in_straight_running(runs, kcs, fitted, monkeyp
     kept = refine(prior, runs, max_evaluations=4)
     assert kept.coefficients == prior.coefficients
     assert kept.info["refined"]["stopped"].startswith("the refined model was unstable")
+    assert kept.info["refined"]["refused_unstable"]
     assert kept.info["refined"]["largest_change"] is None
     assert kept.info["straight_run"]["stable"] and kept.info["refined"]["straight_run_stable"]
     refined_ls = refine(fitted, runs, max_evaluations=4)
     assert refined_ls.coefficients != fitted.coefficients
     assert refined_ls.info["refined"]["straight_run_stable"] is False
+    assert refined_ls.info["refined"]["refused_unstable"] is False

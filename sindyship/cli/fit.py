@@ -151,7 +151,7 @@ def _refined(model, records, evaluations: int):
     progress(f"refining by the records' flights (at most {evaluations} trial steps)")
     refined = refine(model, records, max_evaluations=evaluations, progress=sys.stderr.isatty())
     done = refined.info["refined"]
-    if done["stopped"].startswith("the refined model was unstable"):
+    if done["refused_unstable"]:
         progress(f"not refined: {done['stopped']} (the prior fit's stability requirement).")
     elif done["cost_after"] < done["cost_before"]:
         change = done["largest_change"]
