@@ -73,12 +73,12 @@ class StepCommand(RudderCommand):
         self.times = times[keep]
         self.angles = angles[keep]
 
-    def value(self, t, state):
-        k = int(np.searchsorted(self.times, t + 1e-9, side="right")) - 1
+    def value(self, t, state):  # the method, not np.searchsorted: called per member and step
+        k = int(self.times.searchsorted(t + 1e-9, side="right")) - 1
         return float(self.angles[max(k, 0)])
 
     def next_change(self, t):
-        k = int(np.searchsorted(self.times, t + 1e-9, side="right"))
+        k = int(self.times.searchsorted(t + 1e-9, side="right"))
         return float(self.times[k]) if k < len(self.times) else math.inf
 
 
@@ -140,12 +140,12 @@ class PrescribedRudder(RudderCommand):
         return float(np.interp(t, self.times, self.angles))
 
     def rate(self, t: float) -> float:
-        k = int(np.clip(np.searchsorted(self.times, t + 1e-9, side="right") - 1, 0,
+        k = int(np.clip(self.times.searchsorted(t + 1e-9, side="right") - 1, 0,
                         len(self._rate) - 1))
         return float(self._rate[k])
 
     def next_change(self, t):
-        k = int(np.searchsorted(self.times, t + 1e-9, side="right"))
+        k = int(self.times.searchsorted(t + 1e-9, side="right"))
         return float(self.times[k]) if k < len(self.times) else math.inf
 
 
