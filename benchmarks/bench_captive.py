@@ -118,11 +118,12 @@ def run() -> dict:
     for name, records in sets.items():
         problems = design(records, ship, library)
         paper_problems = design(records, ship, paper)
-        rows = {"ls": evaluate(fit(records, ship, library=paper, problems=paper_problems),
-                               test, ship)}
+        fitted = {"ls": fit(records, ship, library=paper, problems=paper_problems)}
+        rows = {"ls": evaluate(fitted["ls"], test, ship)}
         for strength in STRENGTHS:
             model = fit(records, ship, library=library, optimizer="prior",
                         params={"strength": strength}, problems=problems)
+            fitted[f"prior {strength:.0e}"] = model
             rows[f"prior {strength:.0e}"] = evaluate(model, test, ship)
         model = fit(records, ship, library=paper, optimizer="prior",
                     params={"strength": default}, problems=paper_problems)
@@ -131,11 +132,8 @@ def run() -> dict:
             rows[f"prior {strength:.0e} taylor"] = evaluate(
                 taylor_prior_fit(ship, library, problems, strength), test, ship)
         if name == "zigzags":  # each fit refined by the error of its training flights
-            for key, optimizer, lib, prob in (("ls", "ls", paper, paper_problems),
-                                              (f"prior {default:.0e}", "prior", library,
-                                               problems)):
-                model = fit(records, ship, library=lib, optimizer=optimizer, problems=prob)
-                refined = refine(model, records, max_evaluations=REFINE_EVALUATIONS)
+            for key in ("ls", f"prior {default:.0e}"):
+                refined = refine(fitted[key], records, max_evaluations=REFINE_EVALUATIONS)
                 rows[f"{key} refined"] = {**evaluate(refined, test, ship),
                                           "refinement": refined.info["refined"]}
         out["sets"][name] = {"training": [r.name for r in records], "fits": rows}

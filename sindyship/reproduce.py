@@ -43,6 +43,12 @@ def _progress(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
+def _distances(flown, test, ship) -> dict:
+    """The Table-10 distances of flights of the held-out records, by record name."""
+    return {rec.name: distance_errors(f, rec, ship.L) for f, rec in zip(flown, test,
+                                                                        strict=True)}
+
+
 def _fit_and_fly(train, test, ship, methods, progress) -> tuple[list, dict, dict]:
     """Fit every method on the training set and fly the held-out manoeuvres."""
     libraries, problems = {}, {}
@@ -56,8 +62,7 @@ def _fit_and_fly(train, test, ship, methods, progress) -> tuple[list, dict, dict
         library = libraries[name]
         model = fit(train, ship, library=library, optimizer=method, problems=problems[name])
         flown = fly_like_batch(model.dynamics(), test)
-        errors = {rec.name: distance_errors(f, rec, ship.L) for f, rec in zip(flown, test,
-                                                                              strict=True)}
+        errors = _distances(flown, test, ship)
         models[method] = model
         flights[method] = flown
         results.append({"method": method, "library": library.name, "effects": [],
@@ -111,8 +116,7 @@ def _refined_row(iterative, train, test, ship, evaluations, progress):
     t0 = time.perf_counter()
     model = refine(final, train, max_evaluations=evaluations, progress=sys.stderr.isatty())
     flown = fly_like_batch(model, test)
-    errors = {rec.name: distance_errors(f, rec, ship.L) for f, rec in zip(flown, test,
-                                                                          strict=True)}
+    errors = _distances(flown, test, ship)
     effects = list(model.library.effects)
     progress(f"  refined in {time.perf_counter() - t0:5.1f} s: "
              + ", ".join(f"{k} {v['mean_distance_L']:.3f} L" for k, v in errors.items()))
@@ -213,8 +217,7 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
     agreement = ls_agreement(models["ls"].coefficients) if "ls" in models else None
     paper_ls = paper_model(ship, "LS")
     paper_flown = fly_like_batch(paper_ls.dynamics(), test)
-    paper_errors = {rec.name: distance_errors(f, rec, ship.L)
-                    for f, rec in zip(paper_flown, test, strict=True)}
+    paper_errors = _distances(paper_flown, test, ship)
     table = coefficient_table(models, ship)
     progress("comparing every model's forces with the MMG's virtual captive tests")
     output = {
