@@ -175,23 +175,6 @@ def run_accelerations(dynamics, u, v, r, delta, psi, t, members, position, rudde
     return a[0], a[1], a[2]
 
 
-def run_accelerations_of_sets(sets, u, v, r, delta, psi, t, members, position, rudder_rate):
-    """:meth:`sindyship.flights.CoefficientSetsDynamics.accelerations` through
-    :func:`accelerations`, or None when the state values are not 1-D float64 arrays."""
-    for a in (u, v, r, delta, psi):
-        if type(a) is not np.ndarray or a.ndim != 1 or a.dtype.char != "d":
-            return None
-    dynamics = sets.dynamics
-    model = dynamics.model
-    names, integer_tables = model._compiled
-    extra = _extra_variables(dynamics, names[N_STATE_VARIABLES:], u.shape[0], t,
-                             members % sets.n_records, position, rudder_rate)
-    a = accelerations(u, v, r, delta, psi, extra, *integer_tables, sets.weights,
-                      (members // sets.n_records).astype(np.int64), model._inertia,
-                      model.inverse_mass, model.ship.U0, model.ship.L)
-    return a[0], a[1], a[2]
-
-
 def _extra_variables(dynamics, names, n_states, t, members, position, rudder_rate):
     """The variables beyond the state's (library scaling), one row each, as
     :meth:`sindyship.model.AbkowitzDynamics.accelerations` forms them."""

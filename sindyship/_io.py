@@ -83,8 +83,24 @@ def clean_json(value):
     return str(value)
 
 
+#: Longest file name most file systems allow [bytes].
+NAME_MAX = 255
+
+
+def _temporary_prefix(name: str) -> str:
+    """The prefix of a hidden temporary sibling of ``name``: its name, shortened (with a
+    digest) so that the temporary name stays within :data:`NAME_MAX` bytes."""
+    encoded = os.fsencode(name)
+    if len(encoded) <= NAME_MAX - 32:
+        return f".{name}."
+    import hashlib
+
+    return f".{hashlib.sha256(encoded).hexdigest()[:16]}."
+
+
 def _temporary_sibling(path: Path) -> tuple[int, str]:
-    return tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    return tempfile.mkstemp(prefix=_temporary_prefix(path.name), suffix=".tmp",
+                            dir=path.parent)
 
 
 def _publish(tmp: str, path: Path) -> None:
@@ -241,6 +257,12 @@ def check_output(path: str | os.PathLike, *, inputs: Iterable = (), kind: str = 
     if not text.strip():
         raise SindyshipInputError(f"the output name {text!r} is empty; give a file or folder name.")
     target = Path(text)
+    long = [part for part in target.parts if len(os.fsencode(part)) > NAME_MAX]
+    if long:
+        raise SindyshipInputError(
+            f"{label}: the name {long[0][:40]!r}... is {len(os.fsencode(long[0]))} bytes long, "
+            f"more than the {NAME_MAX} a file system allows; give a shorter name."
+        )
     if kind == "file" and text.endswith(("/", os.sep)):
         raise SindyshipInputError(
             f"{label}: ends with '/', which names a folder; give the name of a file to write."
@@ -294,19 +316,45 @@ def _check_inputs(target: Path, inputs: list[Path], kind: str, label: str) -> No
         )
 
 
+#: The file an output folder lists the names it wrote in (:func:`output_folder`).
+MANIFEST = ".sindyship-output"
+
+
 def _check_replaceable(target: Path, label: str, marker: str | None) -> None:
+    """A folder may be replaced only when it is empty, or an output folder of the same verb
+    (``marker`` among its files) holding nothing but what that output wrote (its manifest
+    lists them): never a file of the user's."""
     try:
-        entries = [entry.name for entry in os.scandir(target)]
+        entries = {entry.name for entry in os.scandir(target)}
     except OSError as exc:
         raise SindyshipInputError(
             f"{label}: cannot read the folder ({exc.strerror or exc}); choose another folder."
         ) from None
-    if entries and (marker is None or marker not in entries):
+    if not entries:
+        return
+    written = _manifest(target)
+    if marker is None or marker not in entries or written is None:
         hint = f" (it has no {marker})" if marker else ""
         raise SindyshipInputError(
             f"{label}: is a folder that holds other files{hint} and would be replaced; give a "
             "new or empty folder, or a previous output folder of the same command."
         )
+    foreign = sorted(entries - written - {MANIFEST})
+    if foreign:
+        raise SindyshipInputError(
+            f"{label}: the previous output folder also holds {foreign[0]!r}, which this "
+            "command did not write and replacing the folder would delete; move it away or "
+            "give another folder."
+        )
+
+
+def _manifest(folder: Path) -> set[str] | None:
+    """The names an output folder's manifest lists, or None without a readable one."""
+    try:
+        text = (folder / MANIFEST).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+    return {line for line in text.splitlines() if line}
 
 
 @contextlib.contextmanager
@@ -327,12 +375,18 @@ def output_folder(path: str | os.PathLike) -> Iterator[Path]:
     ...         _ = (tmp / "a.txt").write_text("a")
     ...     sorted(p.name for p in Path(folder).iterdir()), (Path(folder) / "out").is_dir()
     (['out'], True)
+
+    The folder lists what it holds in a hidden manifest (:data:`MANIFEST`), so that a later
+    run replaces it only while it holds nothing else.
     """
     target = Path(path).absolute()
     target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+    tmp = Path(tempfile.mkdtemp(prefix=_temporary_prefix(target.name), suffix=".tmp",
+                                dir=target.parent))
     try:
         yield tmp
+        names = sorted(entry.name for entry in os.scandir(tmp))
+        (tmp / MANIFEST).write_text("".join(f"{name}\n" for name in names), encoding="utf-8")
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o777 & ~umask)
@@ -346,7 +400,8 @@ def _swap_in(tmp: Path, target: Path) -> None:
     if not os.path.lexists(target):
         os.replace(tmp, target)
         return
-    old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=target.parent))
+    old = Path(tempfile.mkdtemp(prefix=_temporary_prefix(target.name), suffix=".old",
+                                dir=target.parent))
     os.rmdir(old)
     os.replace(target, old)
     try:

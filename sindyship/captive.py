@@ -57,7 +57,6 @@ from __future__ import annotations
 import csv
 import io
 import os
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -118,8 +117,9 @@ def rigid_body_forces(ship: Ship, u, v, r) -> tuple:
     """Rigid-body Coriolis and centrifugal terms of the ship's own mass, SI (paper eq. 11).
 
     The part of a steady captive reading that is inertia, not water:
-    (m v r + m x_G r^2, -m u r, -m x_G u r) [N, N, N m] at u, v [m/s] and r [rad/s].
-    Evaluated by :func:`sindyship.mmg.force_components` of the ship with rigid-body Coriolis.
+    (m v r + m x_G r^2, -m u r, -m x_G u r) [N, N, N m] at u, v [m/s] and r [rad/s], the
+    rigid-body Coriolis terms of the MMG model (paper eq. 11), from the ship's mass and centre
+    of gravity alone (a ship file made for identification has them).
 
     Examples
     --------
@@ -130,12 +130,10 @@ def rigid_body_forces(ship: Ship, u, v, r) -> tuple:
     >>> round(float(Y / (-mass * 12.0 * 0.01)), 2)  # -m u r with m = rho * volume
     1.0
     """
-    rigid = replace(ship, coriolis="rigid-body")
-    U0, L = ship.U0, ship.L
-    parts = force_components(rigid, np.asarray(u) / U0, np.asarray(v) / U0,
-                             np.asarray(r) * L / U0, 0.0 * np.asarray(u))
-    scale = force_scales(ship, "prime-II")
-    return tuple(scale[i] * np.asarray(parts["coriolis"][i], dtype=float) for i in range(3))
+    p = ship.particulars
+    mass = ship.mass.m * 0.5 * p.rho * p.L**2 * p.d  # Prime II -> kg
+    u, v, r = (np.asarray(a, dtype=float) for a in (u, v, r))
+    return (mass * v * r + mass * p.x_G * r * r, -mass * u * r, -mass * p.x_G * u * r)
 
 
 def _mmg_hydrodynamic(ship: Ship, u, v, r, delta) -> tuple:
@@ -163,6 +161,12 @@ def _sweep(test: str, points: int, beta_max: float, delta_max: float, r_max: flo
         return zero, yaw, zero
     grid_beta, grid_r = np.meshgrid(np.radians(beta), yaw, indexing="ij")
     return grid_beta.ravel(), grid_r.ravel(), np.zeros(grid_beta.size)
+
+
+#: Most conditions of one sweep (a drift-yaw grid holds its square).
+MAX_POINTS = 201
+#: Fastest carriage, as a multiple of the design speed.
+MAX_SPEED_RATIO = 3.0
 
 
 def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: float | None = None,
@@ -210,11 +214,22 @@ def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: flo
         raise SindyshipInputError(
             f"unknown captive test {test!r}; choose one of {', '.join(TESTS)} or all."
         )
-    if not (isinstance(points, int | np.integer) and points >= 2):
-        raise SindyshipInputError(f"a captive sweep needs at least 2 points, not {points!r}.")
+    if not ship.has_mmg:
+        raise SindyshipInputError(
+            f"ship {ship.name!r} has no MMG hull, propeller and rudder coefficients, so it has no "
+            "virtual captive tests; give a ship file with [hull], [propeller] and [rudder], or "
+            "compare a model with measured captive tests (sindyship forces MODEL CAPTIVE.csv)."
+        )
+    if isinstance(points, bool) or not (isinstance(points, int | np.integer)
+                                        and 2 <= points <= MAX_POINTS):
+        raise SindyshipInputError(f"a captive sweep takes 2 to {MAX_POINTS} points, not "
+                                  f"{points!r}.")
     U = ship.U0 if speed is None else float(speed)
-    if not (np.isfinite(U) and U > 0):
-        raise SindyshipInputError(f"the carriage speed must be positive, not {speed!r} m/s.")
+    if not (np.isfinite(U) and 0 < U <= MAX_SPEED_RATIO * ship.U0):
+        raise SindyshipInputError(
+            f"the carriage speed must be positive and at most {MAX_SPEED_RATIO:g} times the "
+            f"ship's design speed ({MAX_SPEED_RATIO * ship.U0:.4g} m/s), not {speed!r} m/s."
+        )
     beta, r_nd, delta = _sweep(test, int(points), beta_max, delta_max, r_max)
     u = U * np.cos(beta)
     v = -U * np.sin(beta)

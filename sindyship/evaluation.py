@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .flights import flown_as, fly_like_batch, from_execute
+from .flights import flown_as, flown_part, fly_like_batch
 from .trajectory import Trajectory
 
 
@@ -22,6 +22,21 @@ def _before_divergence(flown: Trajectory) -> np.ndarray:
     if diverged_at is not None:
         ok &= flown.t < diverged_at
     return ok
+
+
+def matching_part(reference: Trajectory, flown: Trajectory) -> Trajectory:
+    """The samples of ``reference`` a flight covers: the flight starts at the record's flight
+    start (:func:`sindyship.flights.flight_start`), so a record with an approach before its
+    execute is longer than its flight; the record as it is when the two have equal length."""
+    if reference.n_samples == flown.n_samples:
+        return reference
+    t0 = float(flown.t[0]) if flown.n_samples else float(reference.t[0])
+    first = int(np.searchsorted(reference.t, t0 - 1e-9 * max(1.0, abs(t0))))
+    part = reference.data.iloc[first:first + flown.n_samples].reset_index(drop=True)
+    if len(part) != flown.n_samples:
+        raise ValueError(f"the flight of {reference.name!r} ({flown.n_samples} samples from "
+                         f"t = {t0:g} s) is not a part of its record")
+    return Trajectory(part, name=reference.name, meta=reference.meta)
 
 
 def flown_seconds(flown: Trajectory) -> float:
@@ -45,6 +60,7 @@ def distance_errors(flown: Trajectory, reference: Trajectory, L: float) -> dict:
         ``mean_distance_L``, ``max_distance_L``, ``diverged_at_s`` (None if it did not),
         ``completed`` (bool) and ``flown_s`` [s].
     """
+    reference = matching_part(reference, flown)
     dist = np.hypot(flown["x"] - reference["x"], flown["y"] - reference["y"]) / L
     diverged_at = flown.meta.get("diverged_at")
     valid = _before_divergence(flown) & np.isfinite(dist)
@@ -82,6 +98,7 @@ def compare_flights(before: Trajectory, after: Trajectory, reference: Trajectory
     >>> result["worse"], result["window_s"]
     ('after', 50.0)
     """
+    reference = matching_part(reference, before)
     common = _before_divergence(before) & _before_divergence(after)
     means = {}
     for when, flown in (("before", before), ("after", after)):
@@ -108,6 +125,7 @@ def compare_flights(before: Trajectory, after: Trajectory, reference: Trajectory
 def error_summary(flown: Trajectory, reference: Trajectory, L: float) -> dict:
     """Distance errors plus RMS heading [deg] and speed [m/s] errors."""
     out = distance_errors(flown, reference, L)
+    reference = matching_part(reference, flown)
     dpsi = np.degrees(flown["psi"] - reference["psi"])
     du = np.hypot(flown["u"], flown["v"]) - np.hypot(reference["u"], reference["v"])
     ok = np.isfinite(dpsi)
@@ -119,10 +137,11 @@ def error_summary(flown: Trajectory, reference: Trajectory, L: float) -> dict:
 def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None) -> dict:
     """Fly a model like each record and report the Table-10 distances per record name.
 
-    Zig-zags are flown from their execute (:func:`from_execute`).  Each entry is
-    :func:`distance_errors` plus :func:`flown_as` (with ``execute_s`` where a lead-in was cut).
+    A zig-zag or a turn is flown and scored from its rudder execute
+    (:func:`sindyship.flights.flight_start`).  Each entry is :func:`distance_errors` plus
+    :func:`flown_as` (``start_s`` and ``start_reason`` say where the flight started and why).
     """
-    cut = [from_execute(record) for record in records]
+    cut = [flown_part(record) for record in records]
     flown = fly_like_batch(model, cut, step=step)
     out = {}
     for rec, short, f in zip(records, cut, flown, strict=True):

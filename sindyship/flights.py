@@ -8,27 +8,25 @@ lead-in, plateaus a degree or two off nominal: :func:`sindyship.trials.recognise
 flown from its execute, as a zig-zag test is defined (:func:`from_execute`; replaying a
 zig-zag's rudder open loop is not a zig-zag test: small heading errors grow without bound).
 Any other record replays its commanded rudder through the servo, or its actual rudder
-directly if that is all it has.  Every flight starts from the record's first row.
+directly if that is all it has.  A zig-zag or a turn starts from its rudder execute, with the
+measured state there, any other record from its first row (:func:`flight_start`): a manual
+approach before an execute is neither flown nor scored.
 
 Many records fly together: :func:`fly_like_batch` in one integration of the kernel where they
 share a sampling grid, :func:`fly_jobs_like` several models of one ship side by side
-(stacked), :func:`fly_coefficient_sets` one model with several sets of its coefficients (the
-sensitivities :mod:`sindyship.refine` needs).  :mod:`sindyship.evaluation` measures how far a
+(stacked).  :mod:`sindyship.evaluation` measures how far a
 flight ends from its record.
 """
 
 from __future__ import annotations
 
-import copy
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from .manoeuvres import result_to_trajectory
-from .model import AbkowitzDynamics
 from .simulation import (
     PrescribedRudder,
     SimulationResult,
@@ -36,57 +34,16 @@ from .simulation import (
     ZigZagCommand,
     simulate_batch,
 )
-from .targets import DOFS
 from .trajectory import Trajectory
-from .trials import recognise_zigzag, trim, zigzag_levels
-
-
-def detect_zigzag(record: Trajectory) -> tuple[float, float, int] | None:
-    """``(rudder_deg, check_deg, first_sign)`` if the record is a zig-zag, else None.
-
-    Examples
-    --------
-    >>> from sindyship import MMGModel, Manoeuvre, fly, load_ship
-    >>> plan = [Manoeuvre("zigzag", rudder=20, check=20, duration=600)]
-    >>> (run,) = fly(MMGModel(load_ship("kcs")), plan)
-    >>> detect_zigzag(run)
-    (20.0, 20.0, 1)
-    """
-    command = record["delta_c"] if record.has("delta_c") else record.rudder
-    cmd = np.degrees(command)
-    moving = np.flatnonzero(np.abs(cmd) >= 1.0)
-    if moving.size == 0:
-        return None
-    values = cmd[moving[0]:]
-    magnitude = np.abs(values)
-    if magnitude.min() < 1.0 or magnitude.max() - magnitude.min() > 0.5:
-        return None
-    sign = np.sign(values)
-    reversals = np.flatnonzero(np.diff(sign) != 0) + 1 + moving[0]
-    if len(reversals) < 2:
-        return None
-    psi = np.degrees(record["psi"] - record["psi"][0])
-    at_reversal = np.abs(psi[reversals])
-    before = np.abs(psi[reversals - 1])
-    if at_reversal.max() - at_reversal.min() > 2.0:
-        return None
-    rudder = round(float(magnitude.mean()), 1)
-    return rudder, _check_angle(before.max(), at_reversal.min()), int(sign[0])
-
-
-def _check_angle(low: float, high: float) -> float:
-    """The check angle the samples allow: the roundest value in (low, high], to 0.1 deg.
-
-    The rudder reverses at the first sample past the check angle C, so C lies between the
-    heading change one sample before each reversal and the one at it.
-    """
-    if high <= low:
-        return round(0.5 * (low + high), 1)
-    for step in (5.0, 1.0, 0.5, 0.1):
-        candidate = math.ceil(low / step + 1e-9) * step
-        if candidate <= high:
-            return round(candidate, 1)
-    return round(0.5 * (low + high), 1)
+from .trials import (  # noqa: F401  (detect_zigzag and recognised_zigzag are used here)
+    FlightStart,
+    detect_zigzag,
+    flight_start,
+    recognise_zigzag,
+    recognised_zigzag,
+    trim,
+    zigzag_levels,
+)
 
 
 class RecordedZigZag(ZigZagCommand):
@@ -117,20 +74,6 @@ class RecordedZigZag(ZigZagCommand):
         self._leg += 1
 
 
-def recognised_zigzag(record: Trajectory) -> tuple[float, float, int, float] | None:
-    """``(rudder_deg, check_deg, first_sign, execute_time)`` of a zig-zag record, else None.
-
-    The strict recognition (:func:`detect_zigzag`, a zig-zag from the first row) first, then
-    the tolerant one of logged trials (:func:`sindyship.trials.recognise_zigzag`: a manual
-    lead-in, plateaus a degree or two off the nominal angle).
-    """
-    strict = detect_zigzag(record)
-    if strict is not None:
-        return (*strict, float(record.t[0]))
-    found = recognise_zigzag(record)
-    return None if found is None else tuple(found)
-
-
 def command_for(record: Trajectory):
     """The rudder command that re-flies a record (see the module docstring)."""
     strict = detect_zigzag(record)
@@ -148,11 +91,13 @@ def command_for(record: Trajectory):
 
 
 def _aligned(flier, records: Sequence[Trajectory]) -> list[Trajectory]:
-    """The records as a fitted model reads them: the channels its library delays moved to the
-    physics' time (:meth:`sindyship.library.TermLibrary.aligned`), so that a replayed rudder
-    is the one the water saw."""
+    """The parts of the records a flight covers (:func:`flown_part`), as a fitted model reads
+    them: the channels its library delays moved to the physics' time
+    (:meth:`sindyship.library.TermLibrary.aligned`), so that a replayed rudder is the one the
+    water saw."""
     library = getattr(flier, "library", None)
-    return [library.aligned(r) for r in records] if library is not None else list(records)
+    parts = [flown_part(r) for r in records]
+    return [library.aligned(r) for r in parts] if library is not None else parts
 
 
 def _dynamics_for(flier, records: Sequence[Trajectory]):
@@ -166,7 +111,7 @@ def _dynamics_for(flier, records: Sequence[Trajectory]):
 def fly_like(dynamics, records: Sequence[Trajectory], *, step: float | None = None
              ) -> list[Trajectory]:
     """Fly ``dynamics`` (or a fitted model, with its records' channels) the way each record
-    was flown, from each record's first row."""
+    was flown, from each record's flight start (:func:`flight_start`)."""
     out = []
     for record in _aligned(dynamics, records):
         state0 = record.state()[:, 0]
@@ -226,99 +171,6 @@ def fly_jobs_like(jobs: Sequence[tuple[object, Sequence[Trajectory]]], *,
         for (i, k, _, record), res in zip(batch, results, strict=True):
             out[i][k] = result_to_trajectory(_cut(res, len(record.t)), record.name)
     return out
-
-
-def fly_coefficient_sets(model, sets: Sequence[dict], records: Sequence[Trajectory], *,
-                         step: float | None = None) -> list[list[Trajectory]]:
-    """Fly a fitted model with each of several sets of its active coefficients the way each
-    record was flown (as :func:`fly_like_batch`), all sets in one integration per sampling
-    grid (:class:`CoefficientSetsDynamics`).
-
-    Parameters
-    ----------
-    model : AbkowitzModel
-    sets : sequence of dict
-        Per set, ``{(dof, term): value}`` for the coefficients that differ from the model's.
-    records : sequence of Trajectory
-
-    Returns
-    -------
-    list of list of Trajectory
-        Per set, in the order of the records.
-    """
-    weights = model.weights_of(sets)
-    aligned = _aligned(model, records)
-    out: list[list] = [[None] * len(records) for _ in sets]
-    for grid, idx in _common_grids(aligned):
-        held = [_held_to(aligned[i], grid) for i in idx]
-        dynamics = CoefficientSetsDynamics(model.dynamics(records=held), weights, len(idx))
-        state0 = np.tile(np.column_stack([h.state()[:, 0] for h in held]), len(sets))
-        recognised = [_command_on(aligned[i], grid) for i in idx]  # recognised once
-        commands = [copy.deepcopy(command) for _ in sets for command in recognised]
-        results = simulate_batch(dynamics, commands, grid, state0, step=step)
-        for m, result in enumerate(results):
-            k, j = divmod(m, len(idx))
-            record = aligned[idx[j]]
-            out[k][idx[j]] = result_to_trajectory(_cut(result, len(record.t)), record.name)
-    return out
-
-
-@dataclass(frozen=True)
-class CoefficientSetsDynamics:
-    """Simulator dynamics of one model flown with several sets of its active coefficients
-    side by side (paper eq. 14-15 with each set's weights), for the sensitivities of its
-    flights to the coefficients.
-
-    Member ``m`` of a batch flies set ``m // n_records`` on record ``m % n_records``.
-
-    Parameters
-    ----------
-    dynamics : AbkowitzDynamics
-        The model's dynamics for the ``n_records`` records (their recorded channels).
-    weights : ndarray, shape (3, n_active_terms, n_sets)
-        Each set's coefficients in the layout of :meth:`AbkowitzModel.weights_of`.
-    n_records : int
-    """
-
-    dynamics: AbkowitzDynamics
-    weights: np.ndarray
-    n_records: int
-    time_varying = True  # the integrator then passes the members, which select the sets
-
-    @property
-    def ship(self):
-        return self.dynamics.ship
-
-    @property
-    def rudder_input(self) -> str:
-        return self.dynamics.rudder_input
-
-    @property
-    def uses_position(self) -> bool:
-        return self.dynamics.uses_position
-
-    @property
-    def uses_rudder_rate(self) -> bool:
-        return self.dynamics.uses_rudder_rate
-
-    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None,
-                      position=None, rudder_rate=None):
-        """Each member's accelerations (SI) with its own coefficient set."""
-        members = np.arange(np.size(u)) if members is None else np.asarray(members)
-        if self.dynamics.model._compiled is not None:
-            from ._forces_compiled import run_accelerations_of_sets
-
-            a = run_accelerations_of_sets(self, u, v, r, delta, psi, t, members, position,
-                                          rudder_rate)
-            if a is not None:
-                return a
-        records = members % self.n_records
-        values = self.dynamics.variables_at(u, v, r, delta, psi, t, records, position,
-                                            rudder_rate)
-        columns = self.dynamics.model.term_columns(values)
-        forces = np.einsum("dtb,tb->db", self.weights[:, :, members // self.n_records],
-                           columns)
-        return self.dynamics.accelerations_from(dict(zip(DOFS, forces, strict=True)), values)
 
 
 def _command_on(record: Trajectory, grid: np.ndarray):
@@ -427,6 +279,18 @@ def _cut(result: SimulationResult, n: int) -> SimulationResult:
                             delta_c=result.delta_c[:n], diverged_at=diverged_at)
 
 
+def flown_part(record: Trajectory) -> Trajectory:
+    """The record from its flight start on (:func:`flight_start`), the part a flight covers
+    and is scored on; the record itself when it starts there."""
+    start = flight_start(record)
+    if start.time <= record.t[0] + 1e-9:
+        return record
+    part = trim(record, (start.time, float(record.t[-1])))
+    meta = {**part.meta, "flight_start": {"time": start.time, "kind": start.kind,
+                                           "reason": start.reason}}
+    return Trajectory(part.data, name=part.name, meta=meta)
+
+
 def flown_as(record: Trajectory) -> dict:
     """How :func:`fly_like` flies a record, for reports.
 
@@ -435,20 +299,15 @@ def flown_as(record: Trajectory) -> dict:
     dict
         ``{"flown_as": "zigzag", "amplitude_deg": A, "check_deg": C}`` for a recognised
         zig-zag (closed loop), else ``{"flown_as": "replay-commanded"}`` (the commanded rudder
-        through the servo) or ``{"flown_as": "replay-actual"}`` (the recorded actual rudder).
+        through the servo) or ``{"flown_as": "replay-actual"}`` (the recorded actual rudder);
+        with ``start_s`` (the first flown and scored sample, :func:`flight_start`) and
+        ``start_reason``.
     """
-    zigzag = recognised_zigzag(record)
+    start = flight_start(record)
+    zigzag = recognised_zigzag(flown_part(record))
     if zigzag is not None:
         out = {"flown_as": "zigzag", "amplitude_deg": zigzag[0], "check_deg": zigzag[1]}
-        if zigzag[3] > record.t[0] + 1e-9:
-            out["execute_s"] = zigzag[3]
-        return out
-    return {"flown_as": "replay-commanded" if record.has("delta_c") else "replay-actual"}
-
-
-def from_execute(record: Trajectory) -> Trajectory:
-    """A zig-zag record from its execute on (a manual lead-in cut off); any other record as is."""
-    zigzag = recognised_zigzag(record)
-    if zigzag is None or zigzag[3] <= record.t[0] + 1e-9:
-        return record
-    return trim(record, (zigzag[3], float(record.t[-1])))
+    else:
+        out = {"flown_as": "replay-commanded" if record.has("delta_c") else "replay-actual"}
+    out.update(start_s=start.time, start_reason=start.reason)
+    return out

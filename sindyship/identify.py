@@ -15,7 +15,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import SindyshipInputError
-from .library import TermLibrary, load_effect, load_library, record_variables
+from .library import (
+    SPEED_FACTOR,
+    Effect,
+    TermLibrary,
+    load_effect,
+    load_library,
+    record_variables,
+)
 from .model import AbkowitzModel
 from .ships import Ship
 from .targets import DOFS, regression_targets
@@ -44,13 +51,21 @@ class Design:
     terms: tuple[str, ...]
 
 
-def resolve_library(library: str | TermLibrary = "abkowitz", effects: Sequence[str] = ()
-                    ) -> TermLibrary:
-    """A library by name or path, extended by named effects of the catalogue."""
+def resolve_library(library: str | TermLibrary = "abkowitz", effects: Sequence[str] = (),
+                    speed: str | None = None) -> TermLibrary:
+    """A library by name or path, extended by named effects of the catalogue, in the speed
+    form ``speed`` (``"design"`` or ``"instantaneous"``; None keeps the library's own,
+    :attr:`sindyship.library.TermLibrary.speed`)."""
+    if isinstance(effects, str):
+        raise TypeError(f"effects must be a list of effect names such as [{effects!r}], not a "
+                        "string.")
+    if not isinstance(library, TermLibrary | str):
+        raise TypeError(f"library must be a library name, a file or a TermLibrary, not "
+                        f"{type(library).__name__}.")
     lib = library if isinstance(library, TermLibrary) else load_library(library)
     if effects:
-        lib = lib.extended(*[load_effect(name) for name in effects])
-    return lib
+        lib = lib.extended(*[e if isinstance(e, Effect) else load_effect(e) for e in effects])
+    return lib if speed is None else lib.with_speed(speed)
 
 
 def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
@@ -81,10 +96,11 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
     for index, record in enumerate(records):
         stop = start + record.n_samples
         values = record_variables(record, library, ship.L, ship.U0, rudder_signal)
+        factor = values.get(SPEED_FACTOR, 1.0)  # (U/U0)^2 of the instantaneous form
         forces = regression_targets(record, ship, method=derivative, window=window)
         for dof in DOFS:
             for j, term in enumerate(library.terms[dof]):
-                features[dof][start:stop, j] = term.evaluate(values)
+                features[dof][start:stop, j] = term.evaluate(values) * factor
             target[dof][start:stop] = forces[dof]
         group_array[start:stop] = index
         start = stop
@@ -139,7 +155,7 @@ def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
         freedom, the term, the channel and the record.
     """
     from .library import available_effects
-    from .terms import describe_variable
+    from .terms import describe_variable, sources_of
 
     origin = {}
     for name in library.effects:
@@ -152,8 +168,8 @@ def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
     for record in records:
         for dof in DOFS:
             for term in library.terms[dof]:
-                for variable in sorted(term.variables):
-                    column = describe_variable(variable).column
+                for column in sorted({describe_variable(source).column for variable
+                                      in term.variables for source in sources_of(variable)}):
                     if column in ("rudder", "rudder_rate") or record.has(column):
                         continue
                     where = origin.get((dof, term.text),
@@ -168,7 +184,8 @@ def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
 def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary = "abkowitz",
         effects: Sequence[str] = (), optimizer: str = "ls", params: dict | None = None,
         rudder_signal: str = "actual", derivative: str = "five-point", window: float = 21.0,
-        problems: dict[str, Design] | None = None) -> AbkowitzModel:
+        problems: dict[str, Design] | None = None, speed: str | None = None
+        ) -> AbkowitzModel:
     """Identify an Abkowitz model from records.
 
     The ``prior`` optimizer also requires a model that is stable in straight running: it
@@ -197,12 +214,15 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
     problems : dict, optional
         Precomputed :func:`design` output for the same records and library (saves time when
         several optimizers are fitted to one data set).
+    speed : {"design", "instantaneous"}, optional
+        The speed form of the library (:attr:`sindyship.library.TermLibrary.speed`); default
+        the library's own.
 
     Returns
     -------
     AbkowitzModel
     """
-    lib = resolve_library(library, effects)
+    lib = resolve_library(library, effects, speed)
     if problems is None:
         problems = design(records, ship, lib, rudder_signal=rudder_signal,
                           derivative=derivative, window=window)
@@ -214,12 +234,15 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
         "selected": None,  # filled in by fitted_model
         "envelope": training_envelope(records, ship),
     }
+    if ship.assumptions:  # what an identification-only ship file left to sindyship
+        info["ship_assumptions"] = list(ship.assumptions)
     terms = {dof: problems[dof].terms for dof in DOFS}
 
     def fitted_with(strength: float | None) -> AbkowitzModel:
         chosen = dict(params or {}) if strength is None else {**(params or {}),
                                                              "strength": strength}
-        return fitted_model(ship, lib, _fit_each(problems, optimizer, chosen, ship), terms,
+        return fitted_model(ship, lib, _fit_each(problems, optimizer, chosen, ship, lib.speed),
+                            terms,
                             optimizer=optimizer, rudder_signal=rudder_signal, info=info)
 
     model = fitted_with(None)
@@ -240,7 +263,7 @@ def _note_prior_coverage(ship: Ship, library: TermLibrary) -> None:
 
 
 def _fit_each(problems: dict[str, Design], optimizer: str, params: dict | None,
-              ship: Ship) -> dict:
+              ship: Ship, speed: str = "design") -> dict:
     """One fitted estimator per degree of freedom."""
     from .optimizers import make_optimizer
 
@@ -248,7 +271,7 @@ def _fit_each(problems: dict[str, Design], optimizer: str, params: dict | None,
     for dof in DOFS:
         problem = problems[dof]
         estimator = make_optimizer(optimizer, **dof_params(optimizer, params, ship, dof,
-                                                            problem.terms))
+                                                            problem.terms, speed))
         fitted[dof] = estimator.fit(problem.features, problem.target, groups=problem.groups)
     return fitted
 
@@ -303,14 +326,14 @@ PRIOR_ARRAYS = ("mean", "scale", "relations")
 
 
 def dof_params(optimizer: str, params: dict | None, ship: Ship, dof: str,
-                terms: Sequence[str]) -> dict:
+                terms: Sequence[str], speed: str = "design") -> dict:
     """The optimizer's parameters for one degree of freedom: the ship's prior for ``prior``
-    (:func:`sindyship.priors.prior_parameters`) unless given."""
+    (:func:`sindyship.priors.prior_parameters`, in the library's speed form) unless given."""
     out = dict(params or {})
     if optimizer == "prior":
         from .priors import prior_parameters
 
-        for key, value in prior_parameters(ship, dof, terms).items():
+        for key, value in prior_parameters(ship, dof, terms, speed=speed).items():
             out.setdefault(key, value)
     return out
 

@@ -11,9 +11,8 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -23,15 +22,35 @@ import pandas as pd
 
 from . import __version__
 from ._io import write_text_atomic
+from ._saved_checks import (
+    FORMAT_VERSION,
+    MAX_COEFFICIENT,  # noqa: F401  (part of the model's documented limits)
+    _check_format,
+    _check_nondim,
+    _coefficients_of,
+    _jsonable,
+    _no_duplicate_keys,
+    _optimizer_of,
+    _ship_of,
+)
 from .errors import SindyshipInputError
-from .library import TermLibrary, nondimensional_variables, record_variables
-from .ships import Ship, load_ship, ship_digest, ship_from_dict, ship_to_dict
+from .library import (
+    SPEED_FACTOR,
+    TermLibrary,
+    derived_variables,
+    motion_variables,
+    nondimensional_variables,
+    record_variables,
+    rescaled_to_speed,
+)
+from .ships import Ship, ship_digest, ship_to_dict
 from .simulation.kernels import ChannelSeries
 from .targets import DOFS, abkowitz_mass_matrix, coriolis, coriolis_factors
-from .terms import Factor, evaluate_factor
+from .terms import DERIVED_SOURCES, Factor, evaluate_factor, sources_of
 from .trajectory import Trajectory
 
-FORMAT_VERSION = 2
+#: The variables :func:`motion_variables` makes (not rescaled again to the speed).
+_MOTION = ("du", "v", "r", "delta", "psi", SPEED_FACTOR)
 
 
 def channel_series(records, names, L: float, U0: float) -> ChannelSeries:
@@ -90,7 +109,7 @@ class AbkowitzDynamics:
         flight's ``position`` (x, y) [m] and ``rudder_rate`` [rad/s] when terms use them
         (the origin and a still rudder when not given, as for a stability analysis)."""
         model = self.model
-        if model._compiled is not None:
+        if model._compiled_flights:
             a = model._run_compiled(self, u, v, r, delta, psi, t, members, position,
                                     rudder_rate)
             if a is not None:
@@ -101,25 +120,22 @@ class AbkowitzDynamics:
     def variables_at(self, u, v, r, delta, psi, t=None, members=None, position=None,
                      rudder_rate=None) -> dict:
         """The library's non-dimensional variables at SI states (as :meth:`accelerations`)."""
-        U0, L = self.ship.U0, self.ship.L
-        un = u / U0
-        values = {"du": un - 1.0, "v": v / U0, "r": r * L / U0, "delta": delta, "psi": psi}
-        values.update(self.channels)
+        channels = dict(self.channels)
         if self.series is not None:
-            values.update(self.series.at(t, members))
-        if self.uses_position:
-            values["x"], values["y"] = (0.0 * un, 0.0 * un) if position is None else position
-        if self.uses_rudder_rate:
-            rate = 0.0 * un if rudder_rate is None else rudder_rate
-            values["delta_rate"] = rate * L / U0
-        return values
+            channels.update(self.series.at(t, members))
+        return self.model.flight_variables(u, v, r, delta, psi, channels, position,
+                                           rudder_rate)
 
     def accelerations_from(self, forces: Mapping[str, np.ndarray], values: Mapping) -> tuple:
         """Accelerations (SI) of eq. 14 from the hydrodynamic forces of eq. 15 (Prime I):
-        the Coriolis terms added, the mass matrix inverted."""
+        the Coriolis terms added, the mass matrix inverted.  The Coriolis terms take the
+        motion over U0 (``values`` of the instantaneous form hold v/U and r L/U, so they are
+        turned back with the speed factor)."""
         ship = self.ship
         U0, L = ship.U0, ship.L
-        X_C, Y_C, N_C = coriolis(ship, values["du"] + 1.0, values["v"], values["r"])
+        ratio = np.sqrt(values[SPEED_FACTOR]) if SPEED_FACTOR in values else 1.0
+        X_C, Y_C, N_C = coriolis(ship, values["du"] + 1.0, values["v"] * ratio,
+                                 values["r"] * ratio)
         Minv = self.model.inverse_mass
         X = forces["X"] + X_C
         Y = forces["Y"] + Y_C
@@ -226,6 +242,9 @@ class AbkowitzModel:
                               for term in self.library.terms[dof]
                               if self.coefficients[dof][term.text] != 0.0}
         self._compiled = _compiled_tables(self._bases, factors, slots)
+        # the compiled flights make the design form's variables from the state themselves
+        self._compiled_flights = self._compiled is not None and self.library.speed == "design" \
+            and not (set(DERIVED_SOURCES) & set(self.library.variables))
         if self._compiled is not None:
             from ._forces_compiled import run_accelerations
 
@@ -237,23 +256,6 @@ class AbkowitzModel:
     def coefficient_vector(self, dof: str) -> np.ndarray:
         """Coefficients of one degree of freedom in the library's term order."""
         return np.array([self.coefficients[dof][t.text] for t in self.library.terms[dof]])
-
-    def weights_of(self, sets: Sequence[Mapping[tuple[str, str], float]]) -> np.ndarray:
-        """Coefficient sets (3, n_active_terms, n_sets) to fly side by side
-        (:func:`sindyship.flights.fly_coefficient_sets`):
-        this model's coefficients with each set's ``{(dof, term): value}`` in their place
-        (active terms only: the set of terms flown is this model's)."""
-        out = np.repeat(self._weights[:, :, None], len(sets), axis=2)
-        for k, changes in enumerate(sets):
-            for key, value in changes.items():
-                if key not in self._weight_slots:
-                    raise SindyshipInputError(
-                        f"coefficient {key[0]}[{key[1]!r}] is not active in this model; "
-                        "only its non-zero coefficients can be changed."
-                    )
-                row, column = self._weight_slots[key]
-                out[row, column, k] += value - self.coefficients[key[0]][key[1]]
-        return out
 
     def n_active(self) -> dict[str, int]:
         """Number of non-zero coefficients per degree of freedom."""
@@ -280,13 +282,16 @@ class AbkowitzModel:
 
             forces = compiled_forces(stacked, *tables, self._weights[:, :, None],
                                      np.zeros(base.size, dtype=np.int64))
+            if SPEED_FACTOR in values:  # the instantaneous form: forces scale with U^2
+                forces = forces * np.ravel(values[SPEED_FACTOR])
             return {dof: forces[row].reshape(base.shape) for row, dof in enumerate(DOFS)}
         forces = self._weights @ self.term_columns(values)
         return {dof: forces[row].reshape(base.shape) for row, dof in enumerate(DOFS)}
 
     def term_columns(self, values: Mapping[str, np.ndarray]) -> np.ndarray:
         """The active terms' values (n_active_terms, n_states) at non-dimensional variables,
-        each the product of its factors' rows; the columns of :attr:`_weights`."""
+        each the product of its factors' rows (times the speed factor (U/U0)^2 of the
+        ``instantaneous`` form); the columns of :attr:`_weights`."""
         size = np.asarray(values["du"], dtype=float).size
         rows = np.ones((len(self._factors) + 1, size))
         for factor, where, powers in self._bases:
@@ -296,6 +301,8 @@ class AbkowitzModel:
         columns = rows[slots[0]]
         for slot in slots[1:]:
             columns *= rows[slot]
+        if SPEED_FACTOR in values:  # the instantaneous form: every term carries (U/U0)^2
+            columns *= np.ravel(values[SPEED_FACTOR])
         return columns
 
     def variables(self, traj: Trajectory) -> dict[str, np.ndarray]:
@@ -310,8 +317,32 @@ class AbkowitzModel:
     @property
     def recorded_channels(self) -> list[str]:
         """The channels the library uses that a flight takes from the record (all but the
-        heading, the position and the rudder rate, which the flight makes itself)."""
-        return sorted(set(self.library.channels) - {"psi", "x", "y", "delta_rate"})
+        heading, the position and the rudder rate, which the flight makes itself; the sources
+        of a variable made from the motion, such as the true wind of the apparent wind)."""
+        return sorted({source for name in self.library.channels for source in sources_of(name)}
+                      - {"psi", "x", "y", "delta_rate"})
+
+    def flight_variables(self, u, v, r, delta, psi, channels: Mapping, position=None,
+                         rudder_rate=None) -> dict:
+        """The library's variables in a flight: the motion's (:func:`motion_variables`, in the
+        library's speed form), the recorded ``channels`` (library scaling, over U0), the
+        variables made from the flown motion (the apparent wind), the flown position (x, y)
+        [m] and the servo's ``rudder_rate`` [rad/s] (the origin and a still rudder when not
+        given)."""
+        ship, library = self.ship, self.library
+        values = motion_variables(u, v, r, delta, psi, ship.L, ship.U0, library.speed)
+        values.update(channels)
+        derived_variables(values, library.variables, u, v, psi, ship.U0)
+        zero = 0.0 * values["du"]
+        if {"x", "y"} & library.variables:
+            values["x"], values["y"] = (zero, zero) if position is None else position
+        if "delta_rate" in library.variables:
+            values["delta_rate"] = (zero if rudder_rate is None else rudder_rate) \
+                * ship.L / ship.U0
+        if library.speed == "instantaneous":
+            rescaled_to_speed(values, [n for n in values if n not in _MOTION],
+                              np.sqrt(values[SPEED_FACTOR]))
+        return values
 
     def dynamics(self, channels: Mapping[str, float] | None = None, *, records=None
                  ) -> AbkowitzDynamics:
@@ -433,140 +464,6 @@ class AbkowitzModel:
                 f"{path}: the JSON is nested too deeply to be a sindyship model."
             ) from None
         return cls.from_dict(data, source=str(path), ship=ship)
-
-
-# -------------------------------------------------------------------------- saved-model checks
-#: Coefficients beyond this magnitude (Prime I) are no hydrodynamic derivative of any ship: a
-#: model that holds one was edited or corrupted, and would diverge at once.
-MAX_COEFFICIENT = 1e6
-
-
-def _check_format(data: Mapping, source: str) -> None:
-    version = data.get("format_version")
-    if not isinstance(version, int) or isinstance(version, bool):
-        raise SindyshipInputError(f"{source}: not a sindyship model (no format_version).")
-    if version > FORMAT_VERSION:
-        raise SindyshipInputError(
-            f"{source}: saved by a newer sindyship (format {version}); upgrade sindyship "
-            "to load it."
-        )
-    if version < 1:
-        raise SindyshipInputError(
-            f"{source}: format_version {version} does not exist (1 to {FORMAT_VERSION} are "
-            "known); the file was edited or is not a sindyship model."
-        )
-    for key in ("ship", "library", "coefficients", "nondim"):
-        if key not in data:
-            raise SindyshipInputError(f"{source}: the saved model lacks {key!r}.")
-    for key in ("optimizer", "info"):
-        if not isinstance(data.get(key, {}), Mapping):
-            raise SindyshipInputError(f"{source}: {key!r} must be a JSON object.")
-
-
-def _optimizer_of(data: Mapping, source: str) -> dict:
-    optimizer = dict(data.get("optimizer", {"name": "given", "params": {}}))
-    if not isinstance(optimizer.get("name", "given"), str) or not isinstance(
-            optimizer.get("params", {}), Mapping):
-        raise SindyshipInputError(
-            f"{source}: 'optimizer' needs a text 'name' and an object 'params'."
-        )
-    return optimizer
-
-
-def _ship_of(data: Mapping, source: str, ship: Ship | None) -> Ship:
-    """The model's own ship (format 2), checked against ``ship`` when one is given."""
-    definition = data.get("ship_definition")
-    if definition is not None:
-        if not isinstance(definition, Mapping):
-            raise SindyshipInputError(f"{source}: 'ship_definition' must be a JSON object.")
-        own = ship_from_dict(dict(definition), source=f"{source} (its ship)")
-        if data.get("ship_digest") != ship_digest(own) or data["ship"] != own.name:
-            raise SindyshipInputError(
-                f"{source}: the ship definition does not match its digest; the file was edited "
-                "(refit the model rather than editing it)."
-            )
-        if ship is not None and ship_digest(ship) != ship_digest(own):
-            raise SindyshipInputError(
-                f"{source}: the model was fitted for ship {own.name!r}, whose particulars differ "
-                f"from those of the ship given ({ship.name!r}); leave out --ship to use the "
-                "model's own ship."
-            )
-        return own
-    if ship is not None:
-        return ship
-    if not isinstance(data["ship"], str):
-        raise SindyshipInputError(f"{source}: 'ship' must be a ship name or file.")
-    try:
-        return load_ship(data["ship"])
-    except SindyshipInputError as error:
-        raise SindyshipInputError(
-            f"{source}: the model's ship {data['ship']!r} cannot be loaded ({error}); "
-            "pass the ship with --ship."
-        ) from None
-
-
-def _check_nondim(nondim, ship: Ship, source: str) -> None:
-    try:
-        L, U0 = float(nondim["L"]), float(nondim["U0"])
-    except (KeyError, TypeError, ValueError):
-        raise SindyshipInputError(f"{source}: 'nondim' needs numbers L and U0.") from None
-    if not (math.isclose(L, ship.L) and math.isclose(U0, ship.U0)):
-        raise SindyshipInputError(
-            f"{source}: the model was made for L = {L} m, U0 = {U0} m/s but ship "
-            f"{ship.name!r} has L = {ship.L} m, U0 = {ship.U0} m/s; pass the matching ship."
-        )
-
-
-def _coefficients_of(coefficients, library: TermLibrary, source: str
-                     ) -> dict[str, dict[str, float]]:
-    """Finite, plausible coefficients keyed by exactly the library's terms."""
-    if not isinstance(coefficients, Mapping) or set(coefficients) != set(DOFS):
-        raise SindyshipInputError(f"{source}: 'coefficients' needs the keys X, Y and N.")
-    clean: dict[str, dict[str, float]] = {}
-    for dof in DOFS:
-        if not isinstance(coefficients[dof], Mapping):
-            raise SindyshipInputError(
-                f"{source}: coefficients {dof!r} must be an object of term: value pairs."
-            )
-        known = {t.text for t in library.terms[dof]}
-        unknown = sorted(set(coefficients[dof]) - known)
-        if unknown:
-            raise SindyshipInputError(
-                f"{source}: coefficient {dof}[{unknown[0]!r}] is not a term of the model's "
-                f"library {library.name!r}; the file was edited."
-            )
-        clean[dof] = {}
-        for term, value in coefficients[dof].items():
-            if isinstance(value, bool) or not isinstance(value, int | float) \
-                    or not math.isfinite(value) or abs(value) > MAX_COEFFICIENT:
-                raise SindyshipInputError(
-                    f"{source}: coefficient {dof}[{term!r}] must be a finite number of "
-                    f"magnitude at most {MAX_COEFFICIENT:g}, not {value!r}."
-                )
-            clean[dof][term] = float(value)
-    return clean
-
-
-def _no_duplicate_keys(pairs: list[tuple[str, object]]) -> dict:
-    keys = [key for key, _ in pairs]
-    repeated = sorted({key for key in keys if keys.count(key) > 1})
-    if repeated:
-        raise SindyshipInputError(f"the key {repeated[0]!r} appears twice in one JSON object")
-    return dict(pairs)
-
-
-def _jsonable(value):
-    if isinstance(value, Mapping):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.generic | np.ndarray):  # through the float rule below
-        return _jsonable(value.tolist())
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if value is None or isinstance(value, str | int | float | bool):
-        return value
-    return str(value)
 
 
 def paper_model(ship: Ship, method: str = "LS", csv_path: str | Path | None = None

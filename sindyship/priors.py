@@ -212,7 +212,7 @@ def prior_widths(ship: Ship, *, relative_width: float = RELATIVE_WIDTH
 
 
 def prior_parameters(ship: Ship, dof: str, terms: Sequence[str], *,
-                     relative_width: float = RELATIVE_WIDTH) -> dict:
+                     relative_width: float = RELATIVE_WIDTH, speed: str = "design") -> dict:
     """The ``mean``, ``scale`` and ``relations`` of :class:`~sindyship.optimizers.PriorRidge`
     for one degree of freedom of a library.
 
@@ -225,6 +225,11 @@ def prior_parameters(ship: Ship, dof: str, terms: Sequence[str], *,
     relative_width : float
         Standard deviation of a semi-empirical derivative as a share of its value
         (:func:`prior_widths`).
+    speed : {"design", "instantaneous"}
+        The library's speed form.  The semi-empirical derivatives are those of forces over
+        U^2 in v/U and r L/U, which both forms share at the design speed; only the design
+        form needs the speed relations (:func:`speed_relations`): in the instantaneous form
+        every term already carries (U/U0)^2, so a term ``du^k m`` is drawn toward zero.
 
     Returns
     -------
@@ -240,9 +245,10 @@ def prior_parameters(ship: Ship, dof: str, terms: Sequence[str], *,
         canonical = Term(text).canonical()
         if canonical in means:
             mean[j], scale[j] = means[canonical], widths[canonical]
+    relations = speed_relations(terms) if speed == "design" else []
     return {"mean": mean.tolist(),
             "scale": [float(x) if np.isfinite(x) else None for x in scale],
-            "relations": [list(r) for r in speed_relations(terms)]}
+            "relations": [list(r) for r in relations]}
 
 
 def estimates_outside(ship: Ship, terms: dict[str, Sequence[str]]) -> dict[str, list[str]]:

@@ -163,7 +163,7 @@ def read_record(path: str | os.PathLike, *, name: str | None = None, ship=None,
         keeps fewer than two samples.
     """
     from .measurements import PlausibilityNote, read_csv
-    from .trials import trim, underway_window
+    from .trials import flight_start, trim, underway_window
 
     path = Path(path)
     name = path.stem if name is None else name
@@ -180,10 +180,20 @@ def read_record(path: str | os.PathLike, *, name: str | None = None, ship=None,
     notes = list(record.meta.get("notes", ()))
     cut = None
     if time_range == "auto" and ship is not None:
+        # the manoeuvre is recognised on all the rows, before any cut: a cut never takes its
+        # rudder execute and heading reference away
+        start = flight_start(record)
         window = underway_window(record, ship)
-        if window.start > record.t[0] + 1e-9 or window.stop < record.t[-1] - 1e-9:
-            cut = (window.start, window.stop, window.reason)
-            record = trim(record, window)
+        begin, reason = window.start, window.reason
+        if start.kind != "record" and start.time < begin <= window.stop:
+            begin = start.time
+            reason += f"; from t = {begin:.6g} s, the execute of {start.reason.split(',')[0]}"
+        if begin > record.t[0] + 1e-9 or window.stop < record.t[-1] - 1e-9:
+            cut = (begin, window.stop, reason)
+            record = trim(record, (begin, window.stop))
+        record = Trajectory(record.data, name=record.name, meta={
+            **record.meta, "flight_start": {"time": start.time, "kind": start.kind,
+                                            "reason": start.reason}})
     elif time_range not in ("auto", "all"):
         record = trim(record, time_range)
         if record.n_samples < 2:

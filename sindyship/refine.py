@@ -1,4 +1,5 @@
-"""Refine a fitted model's coefficients by the error of its flights (output error).
+"""Refine a fitted model's coefficients by the error of its flights (regularised output error,
+by multiple shooting).
 
 The fit of :func:`sindyship.identify.fit` is an equation-error fit: it matches the forces of
 paper eq. 16 sample by sample, so it weighs every sample's force equally, whatever that force
@@ -7,23 +8,24 @@ percent off in a turning circle, a sway force that delays a zig-zag's overshoot)
 equation-error fit almost nothing and the flight ship lengths.  The output-error method of
 flight-vehicle identification (Jategaonkar 2015, *Flight Vehicle System Identification*,
 2nd ed., ch. 4) takes those flights as the measure instead: starting from the fitted
-coefficients, Gauss-Newton steps (:func:`scipy.optimize.least_squares`, trust region)
-minimise the differences between the records and the model's flights of them.
+coefficients, Levenberg-Marquardt steps (:func:`sindyship.levenberg_marquardt`) minimise the
+differences between the records and the model's flights of them.
 
-Here a flight is the one :func:`sindyship.evaluation.evaluate` judges: each record flown as
-it was flown (a zig-zag closed loop from its execute, any other record replaying its rudder;
-:mod:`sindyship.flights`), from its first row.  The differences are u', v', r' (Prime II,
-over U0 and L/U0) and x/L, y/L at every ``sample_interval_s``; a sample after a flight
-diverged counts as :data:`DIVERGED_RESIDUAL`.  Only the model's non-zero coefficients move
-(the library and the sparsity pattern stay), each relative to its fitted value.  The Jacobian
-is taken by forward differences, every perturbed coefficient set flown in one integration
-(:func:`sindyship.flights.fly_coefficient_sets`).  A sample after a divergence costs the same
-whatever the coefficients, so a model whose training flights diverge early has little to be
-refined by: refine a fit that flies its training records, such as a ``prior`` fit.
+The flights are those of multiple shooting (:mod:`sindyship.shooting`): every record from its
+flight start (a zig-zag or a turn from its rudder execute; a manual approach is never flown)
+cut into segments of ``segment_s`` seconds, each flown from the state measured at its start
+with the recorded rudder, and compared in u', v', r' (over U0 and L/U0), x/L, y/L and psi at
+every step.  A model whose whole flights would diverge still gives a gradient on every
+segment, and the Jacobian is exact: the sensitivities are integrated beside the flights.
+Only the model's non-zero coefficients move (the library and the sparsity pattern stay).
 
-Nothing pulls the refined coefficients toward the fitted ones: terms the records do not
-separate can move far (check the forces, :mod:`sindyship.forces`, when the coefficients are
-to be read as derivatives).
+A fit keeps its own objective inside the refinement (regularised output error): the force
+error of eq. 16 and, for a ``prior`` fit, the prior of :mod:`sindyship.priors`, weighted by
+``prior_weight`` against the mean squared flight error.  Combinations of coefficients the
+flights cannot tell apart stay where the fit put them: for a ``prior`` fit, where the prior
+put them, so the refined model's forces keep agreeing with captive tests.  With
+``prior_weight=0`` the flights alone decide, and terms the records do not separate can move
+far (check the forces, :mod:`sindyship.forces`, before reading them as derivatives).
 
 Nothing but the given records is flown: refine on training records only, and judge the
 refined model on records it has not seen.
@@ -35,63 +37,133 @@ Examples
 >>> from sindyship.ships import load_ship
 >>> from sindyship.identify import fit
 >>> kcs = load_ship("kcs")
->>> runs = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=300)])
+>>> runs = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=300),
+...                            Manoeuvre("turning-circle", rudder=-20, duration=300)])
 >>> refined = refine(fit(runs, kcs), runs, max_evaluations=10)
 >>> report = refined.info["refined"]
 >>> report["records"], report["cost_after"] < 0.5 * report["cost_before"]
-(['zz20_20'], True)
+(['zz20_20', 'tc20_port'], True)
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from .errors import SindyshipInputError
-from .flights import fly_coefficient_sets, from_execute
+from .levenberg_marquardt import levenberg_marquardt
 from .model import AbkowitzModel
+from .shooting import (
+    CHANNEL_SCALES,
+    active_keys,
+    fly_segments,
+    make_segments,
+    model_slots,
+)
 from .stability import straight_run_stability
+from .targets import DOFS
 from .trajectory import Trajectory
 
-__all__ = ["DIVERGED_RESIDUAL", "refine", "flight_residuals"]
+__all__ = ["DIVERGED_RESIDUAL", "PRIOR_WEIGHT", "SEGMENT_TIMES", "default_segments", "refine"]
 
-#: The residual of every channel at a sample after a flight diverged (non-dimensional: ten
+#: The residual of every channel at a sample after a segment diverged (non-dimensional: ten
 #: ship lengths of position, ten times the design speed).
 DIVERGED_RESIDUAL = 10.0
-#: Forward-difference step of the Jacobian, relative to each coefficient.
-RELATIVE_STEP = 1e-4
-#: Scale of the relative coefficient changes for the trust region (``x_scale`` of
-#: :func:`scipy.optimize.least_squares`): the first trial step may change the coefficients by
-#: up to about their own size in norm.  A tenth needs more steps: from the KCS zig-zags, 10
-#: evaluations refine the prior fit to a flight error of 0.076 with it, 0.023 with 1.
-STEP_SCALE = 1.0
+#: Default lengths of the shooting segments, stage by stage, in units of L/U0 (for the KCS
+#: 93, 279 and 838 s; for the KVLCC2 model 30, 89 and 267 s).
+SEGMENT_TIMES = (5.0, 15.0, 45.0)
+#: Relative fall of the cost below which a stage before the last stops (it only brings the
+#: coefficients near enough for the next, longer segments), and the last one (converged: the
+#: refined coefficients no longer move, whatever the machine's rounding).
+STAGE_TOLERANCE = 1e-3
+TOLERANCE = 1e-7
+#: Most evaluations of a stage before the last.
+EARLY_EVALUATIONS = 5
+#: Default weight of a ``prior`` fit's objective against the mean squared flight error.
+PRIOR_WEIGHT = 0.01
+#: Default most evaluations of the flight error.
+MAX_EVALUATIONS = 60
 
 
-def flight_residuals(flights: Sequence[Trajectory], records: Sequence[Trajectory], L: float,
-                     U0: float, sample_interval_s: float) -> np.ndarray:
-    """Differences between flights and their records, non-dimensional, one vector.
+def default_segments(ship, records: Sequence[Trajectory]) -> list[float | None]:
+    """The default segment lengths [s], one stage each: :data:`SEGMENT_TIMES` times L/U0
+    (None: whole flights), none longer than the longest record.
 
-    Per record, at the samples ``sample_interval_s`` apart from its first: u'/U0, v'/U0,
-    r' L/U0, x/L and y/L of the flight minus the record's; :data:`DIVERGED_RESIDUAL` where the
-    flight has no value (it diverged).
+    Short segments first: every segment starts from a measured state, so a fit that flies
+    far off still gives a gradient; then longer ones, which weigh the slow drifts a long
+    flight integrates (a steady yaw rate a little off in a turn).  Whole flights, as
+    :func:`sindyship.evaluation.evaluate` flies them (a zig-zag closed loop), are a stage of
+    their own on request (``segment_s="whole"``): on the KCS they fly the held-out turns
+    closer from the zig-zags alone and bend the forces of captive tests further
+    (``benchmarks/bench_captive.py``).
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> [round(s, 1) for s in default_segments(load_ship("kcs"), [])]
+    [93.1, 279.4, 838.2]
     """
+    longest = max((r.duration for r in records), default=math.inf)
     out = []
-    for flown, record in zip(flights, records, strict=True):
-        t = np.asarray(record.t, dtype=float)
-        every = max(1, int(round(sample_interval_s / float(np.median(np.diff(t))))))
-        rows = np.arange(0, len(t), every)
-        for channel, scale in (("u", 1 / U0), ("v", 1 / U0), ("r", L / U0), ("x", 1 / L),
-                               ("y", 1 / L)):
-            error = (np.asarray(flown[channel])[rows] - np.asarray(record[channel])[rows]) * scale
-            out.append(np.where(np.isfinite(error), error, DIVERGED_RESIDUAL))
-    return np.concatenate(out)
+    for factor in SEGMENT_TIMES:
+        length = None if factor is None else factor * ship.time_scale
+        if length is not None and out and length > longest:
+            continue
+        out.append(length)
+    return out
 
 
-def refine(model: AbkowitzModel, records: Sequence[Trajectory], *, max_evaluations: int = 8,
-           sample_interval_s: float = 20.0, progress: bool = False) -> AbkowitzModel:
+def _stages(ship, records, segment_s) -> list[float | None]:
+    """The refinement's stages: the default ones, or those ``segment_s`` names (seconds, or
+    ``"whole"`` for whole flights; one, or a sequence)."""
+    if segment_s is None:
+        return default_segments(ship, records)
+    given = [segment_s] if isinstance(segment_s, str | numbers.Real) else list(segment_s)
+    return [None if value == "whole" else float(value) for value in given]
+
+
+def _cost(residuals: np.ndarray) -> float:
+    return 0.5 * float(residuals @ residuals)
+
+
+def _check_arguments(model, records, max_evaluations, segment_s, prior_weight) -> None:
+    if not isinstance(model, AbkowitzModel):
+        raise TypeError(f"model must be an AbkowitzModel (sindyship.fit makes one), not "
+                        f"{type(model).__name__}.")
+    if isinstance(records, Trajectory | str) or not isinstance(records, Sequence) \
+            or not all(isinstance(r, Trajectory) for r in records):
+        raise TypeError("records must be a list of Trajectory (sindyship.read_csv reads one).")
+    if not records:
+        raise SindyshipInputError("refine needs at least one record to fly; pass the "
+                                  "training records.")
+    if isinstance(max_evaluations, bool) or not isinstance(max_evaluations, numbers.Integral) \
+            or not 1 <= max_evaluations <= 10_000:
+        raise ValueError(f"max_evaluations must be a whole number from 1 to 10000, not "
+                         f"{max_evaluations!r}.")
+    stages = [] if segment_s is None else (
+        [segment_s] if isinstance(segment_s, str | numbers.Real) else list(segment_s))
+    for value in stages:
+        if value != "whole" and not _positive(value):
+            raise ValueError(f"segment_s must be a positive number of seconds or 'whole' (or a "
+                             f"list of them), not {segment_s!r}.")
+    if not stages and segment_s is not None:
+        raise ValueError("segment_s must name at least one stage.")
+    if prior_weight is not None and not (_positive(prior_weight) or prior_weight == 0):
+        raise ValueError(f"prior_weight must be a non-negative number, not {prior_weight!r}.")
+
+
+def _positive(value) -> bool:
+    return (not isinstance(value, bool) and isinstance(value, numbers.Real)
+            and math.isfinite(value) and value > 0)
+
+
+def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
+           max_evaluations: int = MAX_EVALUATIONS, segment_s: float | None = None,
+           prior_weight: float | None = None, progress: bool = False,
+           n_jobs: int | None = 1) -> AbkowitzModel:
     """The model with its non-zero coefficients refined by the error of its flights.
 
     Parameters
@@ -100,114 +172,282 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *, max_evaluatio
         A fitted model (its library, ship and rudder signal are kept).
     records : sequence of Trajectory
         The records to fly (the training records; never the ones the model is judged on).
+        For a ``prior`` fit, the records it was fitted on (its objective is rebuilt on them).
     max_evaluations : int
-        Most evaluations of the flight error (``max_nfev`` of
-        :func:`scipy.optimize.least_squares`): every trial step flies the model once, and
-        every accepted point adds a Jacobian, which flies it once per non-zero coefficient
-        (all in one integration).  A trial step the error does not accept counts too, so a
-        budget of 1 or 2 may refine nothing.
-    sample_interval_s : float
-        Seconds between the samples compared (:func:`flight_residuals`).
+        Most evaluations of the flight error; the search stops earlier once it converges
+        (:func:`sindyship.levenberg_marquardt.levenberg_marquardt`).  Every accepted step
+        adds a Jacobian, which costs a few flights of the segments whatever the number of
+        coefficients.
+    segment_s : float, "whole" or sequence of them, optional
+        Length of the shooting segments [s], or ``"whole"`` for whole flights as
+        :func:`sindyship.evaluation.evaluate` flies them; a sequence is a stage each, each
+        started from the coefficients the last ended with; default the stages of
+        :func:`default_segments`.
+    prior_weight : float, optional
+        Weight of the fit's own objective (the force error of eq. 16 over the targets' sum
+        of squares, and the prior of a ``prior`` fit) against the mean squared flight error;
+        default :data:`PRIOR_WEIGHT`; 0 refines by the flights alone.
     progress : bool
-        A progress bar over the evaluations on stderr.
+        Report each step on stderr (the flight error, the step's number).
+    n_jobs : int or None
+        joblib workers the segments are split across (``None``: from a
+        ``joblib.parallel_config`` block, such as a Dask cluster's); the result does not
+        depend on it.
 
     Returns
     -------
     AbkowitzModel
-        The refined model.  ``info["refined"]`` holds the records flown, the cost (half the
-        sum of squared residuals) before and after, the evaluations and Jacobians used, why
-        the search stopped, the coefficient that moved most (relative to its fitted value;
-        None when nothing moved), whether the refined model is stable in straight running
+        The refined model.  ``info["refined"]`` holds the records flown, the segments, the
+        cost (half the sum of squared residuals, flights and penalty) before and after, the
+        flight error alone (root mean square over the compared samples) before and after, the
+        evaluations and Jacobians used, why the search stopped and whether it converged, the
+        coefficient that moved most, whether the refined model is stable in straight running
         (:func:`sindyship.stability.straight_run_stability`) and whether a refinement was
         refused for making a stable ``prior`` fit unstable (``refused_unstable``).  A
-        refinement that does not lower the cost returns the fitted coefficients, and so does
-        one that makes a straight-run-stable ``prior`` fit (``info["straight_run"]["stable"]``)
-        unstable: its stability requirement holds for the refined model too.
+        refinement that does not lower the cost returns the fitted coefficients.
     """
-    if max_evaluations < 1:
-        raise SindyshipInputError(
-            f"max_evaluations must be at least 1, not {max_evaluations}; pass a positive "
-            "number of flights."
-        )
-    if not math.isfinite(sample_interval_s) or sample_interval_s <= 0.0:
-        raise SindyshipInputError(
-            f"sample_interval_s must be a positive number of seconds, not {sample_interval_s}."
-        )
-    if not records:
-        raise SindyshipInputError("refine needs at least one record to fly; pass the "
-                                  "training records.")
-    from tqdm.auto import tqdm
-
-    flown = [from_execute(record) for record in records]
-    keys = [(dof, term) for dof, terms in model.coefficients.items()
-            for term, value in terms.items() if value != 0.0]
-    fitted = np.array([model.coefficients[dof][term] for dof, term in keys])
-    L, U0 = model.ship.L, model.ship.U0
-
-    def coefficients(p: np.ndarray) -> dict:
-        return dict(zip(keys, (fitted * (1.0 + p)).tolist(), strict=True))
-
-    bar = tqdm(total=max_evaluations, desc="refining by flights", unit="flight",
-               disable=not progress, leave=False)
-
-    last: dict[bytes, np.ndarray] = {}  # the residuals of the last point flown
-
-    def residuals(p: np.ndarray) -> np.ndarray:
-        key = p.tobytes()
-        if key not in last:
-            (flights,) = fly_coefficient_sets(model, [coefficients(p)], flown)
-            last.clear()
-            last[key] = flight_residuals(flights, flown, L, U0, sample_interval_s)
-        return last[key]
-
-    def jacobian(p: np.ndarray) -> np.ndarray:
-        base = residuals(p)  # scipy asks for the Jacobian where it has just flown
-        steps = p + RELATIVE_STEP * np.eye(len(p))
-        flights = fly_coefficient_sets(model, [coefficients(row) for row in steps], flown)
-        bar.update(1)
-        return np.column_stack([
-            (flight_residuals(f, flown, L, U0, sample_interval_s) - base) / RELATIVE_STEP
-            for f in flights])
-
-    start = np.zeros(len(keys))
-    before = residuals(start)
-    cost_before = 0.5 * float(before @ before)
-    if keys:
-        result = least_squares(residuals, start, jac=jacobian, max_nfev=max_evaluations,
-                               x_scale=STEP_SCALE)
-        p, cost_after, stopped = result.x, float(result.cost), result.message
-        evaluations, jacobians = int(result.nfev), int(result.njev or 0)
-    else:
-        p, cost_after, stopped = start, cost_before, "no active coefficient"
-        evaluations = jacobians = 0
-    bar.close()
+    _check_arguments(model, records, max_evaluations, segment_s, prior_weight)
+    stages = _stages(model.ship, records, segment_s)
+    if prior_weight is None:
+        prior_weight = PRIOR_WEIGHT
+    penalty = _penalty_rows(model, records) if prior_weight > 0 else None
+    p = np.zeros(len(active_keys(model)))
+    done, budget, evaluations, jacobians = [], int(max_evaluations), 0, 0
+    # a stage before the last takes at most its share of half the evaluations
+    early = max(2, min(EARLY_EVALUATIONS,
+                       int(max_evaluations) // (2 * max(len(stages) - 1, 1))))
+    for stage, length in enumerate(stages):
+        final = stage == len(stages) - 1
+        problem = _Problem(model, list(records), length, float(prior_weight), penalty, n_jobs)
+        start_cost = _cost(problem.residuals(np.zeros_like(p)))
+        start_rms = problem.flight_rms
+        entry_cost = _cost(problem.residuals(p))
+        entry_rms = problem.flight_rms
+        allowed = budget if final else min(budget, early)
+        search = levenberg_marquardt(problem.residuals, problem.normal, p,
+                                     max_evaluations=max(allowed, 1),
+                                     tolerance=TOLERANCE if final else STAGE_TOLERANCE,
+                                     on_step=problem.report if progress else None) \
+            if len(p) and allowed > 0 else None
+        if search is not None and search.cost < entry_cost:
+            p = search.x
+        budget -= 0 if search is None else search.evaluations
+        evaluations += 0 if search is None else search.evaluations
+        jacobians += 0 if search is None else search.jacobians
+        problem.residuals(p)
+        done.append({"segment_s": length, "segments": problem.n_segments,
+                     "cost_fitted": start_cost, "flight_rms_fitted": start_rms,
+                     "cost_before": entry_cost,
+                     "cost_after": _cost(problem.residuals(p)),
+                     "flight_rms_before": entry_rms, "flight_rms_after": problem.flight_rms,
+                     "evaluations": 0 if search is None else search.evaluations,
+                     "stopped": "no active coefficient" if not len(p) else (
+                         "no evaluations left" if search is None else search.message),
+                     "converged": search is not None and search.converged})
+    last = done[-1]
+    cost_before, cost_after = last["cost_fitted"], last["cost_after"]
     if not cost_after < cost_before:
-        p, cost_after = start, cost_before
+        p, cost_after = np.zeros_like(p), cost_before
+    flight_before, flight_after = last["flight_rms_fitted"], last["flight_rms_after"]
+    stopped, converged = last["stopped"], last["converged"]
+    start = np.zeros_like(p)
     info = dict(model.info)
-    candidate = _with_changes(model, coefficients(p), info)
+    candidate = _with_changes(model, problem.coefficients(p), info)
     stable = straight_run_stability(candidate).stable
     promised = bool(info.get("straight_run", {}).get("stable"))
     refused_unstable = promised and not stable
     if refused_unstable:  # a prior fit is straight-run stable; so is its refinement
-        p, cost_after, stable = start, cost_before, True
+        p, cost_after, stable, flight_after = start, cost_before, True, flight_before
         stopped = ("the refined model was unstable in straight running, which the fit it "
                    "started from is not; the fitted coefficients are kept")
-        candidate = _with_changes(model, coefficients(p), info)
+        candidate = _with_changes(model, problem.coefficients(p), info)
     if "straight_run" in info:  # the prior fit's record describes the model saved
         info["straight_run"] = {**info["straight_run"], "stable": stable}
     moved = int(np.argmax(np.abs(p))) if np.any(p) else None
+    keys = problem.keys
     info["refined"] = {
-        "records": [r.name for r in records], "sample_interval_s": float(sample_interval_s),
-        "cost_before": cost_before, "cost_after": cost_after, "evaluations": evaluations,
-        "jacobians": jacobians,
-        "stopped": stopped,
+        "method": "multiple shooting", "records": [r.name for r in records],
+        "segment_s": last["segment_s"], "segments": last["segments"], "stages": done,
+        "prior_weight": float(prior_weight) if penalty else 0.0,
+        "cost_before": cost_before, "cost_after": cost_after,
+        "flight_rms_before": flight_before, "flight_rms_after": flight_after,
+        "evaluations": evaluations, "jacobians": jacobians, "stopped": stopped,
+        "converged": bool(converged),
         "largest_change": None if moved is None else {
             "coefficient": f"{keys[moved][0]}[{keys[moved][1]}]",
             "relative": float(p[moved])},
         "straight_run_stable": stable,
         "refused_unstable": refused_unstable,
     }
+    candidate.info = info
     return candidate
+
+
+class _Problem:
+    """The least-squares problem of a refinement: the flight residuals of the segments and
+    the penalty rows, as functions of the relative changes ``p`` of the active coefficients
+    (coefficient = fitted x (1 + p))."""
+
+    def __init__(self, model, records, segment_s, prior_weight, penalty, n_jobs):
+        self.model = model
+        self.keys = active_keys(model)
+        self.fitted = np.array([model.coefficients[d][t] for d, t in self.keys])
+        self.slots = model_slots(model)
+        self.batches = make_segments(model, records, segment_s)
+        if not self.batches:
+            raise SindyshipInputError("the records are too short to fly: each needs at least "
+                                      "two samples from its flight start.")
+        self.n_segments = sum(b.n_segments for b in self.batches)
+        L, U0 = model.ship.L, model.ship.U0
+        self.scales = np.array([L**a * U0**b for a, b in CHANNEL_SCALES])
+        self.n_compared = sum(int(b.valid.sum()) * 6 for b in self.batches)
+        self.penalty = penalty
+        self.n_jobs = n_jobs
+        self.flight_rms = math.nan
+        # both parts relative to their values at the fitted coefficients: the flights' mean
+        # squared error, and the fit's own objective, each 1 there
+        self.flight_norm = self.penalty_norm = 1.0
+        start = np.zeros(len(self.keys))
+        flights, _, _ = self._flight_part(self._flights(start, False))
+        self.flight_norm = 1.0 / math.sqrt(max(float(flights @ flights), 1e-300))
+        self.weight = 1.0
+        if penalty is not None:  # the objective's value: its rows and what no row reaches
+            rows, _ = self._penalty_part(start, False)
+            value = float(rows @ rows) + sum(part[5] for part in penalty.values())
+            self.weight = math.sqrt(prior_weight / max(value, 1e-12))
+
+    def coefficients(self, p: np.ndarray) -> dict:
+        return dict(zip(self.keys, (self.fitted * (1.0 + p)).tolist(), strict=True))
+
+    def weights(self, p: np.ndarray) -> np.ndarray:
+        weights = self.model._weights.copy()
+        weights[self.slots] = self.fitted * (1.0 + p)
+        return weights
+
+    def _flights(self, p: np.ndarray, sensitivities: bool):
+        return _fly_batches(self.model, self.batches, self.weights(p), self.slots,
+                            sensitivities, self.n_jobs)
+
+    def _flight_part(self, flown) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+        """The flights' residuals and, from their sensitivities, their part of J^T J and
+        J^T r (with respect to the relative changes ``p``)."""
+        norm = self.flight_norm / math.sqrt(max(self.n_compared, 1))
+        residuals, gram, gradient = [], None, None
+        for batch, (states, jac) in zip(self.batches, flown, strict=True):
+            error = (states - batch.measured) * self.scales
+            error = np.where(np.isfinite(error), error, DIVERGED_RESIDUAL)
+            error[~batch.valid] = 0.0
+            residuals.append(error[batch.valid].ravel() * norm)
+            if jac is None:
+                continue
+            jac[~batch.valid] = 0.0
+            jac *= (self.scales * norm)[None, None, :, None]
+            flat = jac.reshape(-1, jac.shape[-1])
+            part = flat.T @ flat
+            step = flat.T @ (error.reshape(-1) * norm)
+            gram = part if gram is None else gram + part
+            gradient = step if gradient is None else gradient + step
+        r = np.concatenate(residuals)
+        unscaled = r / norm
+        self.flight_rms = float(np.sqrt(np.sum(unscaled**2) / max(self.n_compared, 1)))
+        if gram is None:
+            return r, None, None
+        outer = np.outer(self.fitted, self.fitted)  # d/dp = d/dtheta x fitted coefficient
+        return r, gram * outer, gradient * self.fitted
+
+    def _penalty_part(self, p: np.ndarray, with_jacobian: bool):
+        if self.penalty is None:
+            return np.empty(0), np.empty((0, len(self.keys)))
+        values, jac = [], []
+        theta = self.fitted * (1.0 + p)
+        for lhs, rhs, norm, positions, fixed, _ in self.penalty.values():
+            w = fixed.copy()
+            for k, j in positions:
+                w[j] = theta[k]
+            values.append(self.weight * (lhs @ w - rhs) / norm)
+            if with_jacobian:
+                block = np.zeros((lhs.shape[0], len(self.keys)))
+                for k, j in positions:
+                    block[:, k] = self.weight * lhs[:, j] * self.fitted[k] / norm
+                jac.append(block)
+        return np.concatenate(values), (np.vstack(jac) if with_jacobian else None)
+
+    def residuals(self, p: np.ndarray) -> np.ndarray:
+        flights, _, _ = self._flight_part(self._flights(p, False))
+        penalty, _ = self._penalty_part(p, False)
+        return np.concatenate([flights, penalty])
+
+    def normal(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """J^T J and J^T r of the residuals at ``p``: the flights' from their sensitivities,
+        the penalty's from its rows."""
+        _, gram, gradient = self._flight_part(self._flights(p, True))
+        penalty, jac = self._penalty_part(p, True)
+        return gram + jac.T @ jac, gradient + jac.T @ penalty
+
+    def report(self, step: int, cost: float) -> None:
+        """One line on stderr per accepted step of the search."""
+        import sys
+
+        print(f"refining by flights: step {step}, cost {cost:.6g}, flight error (rms) "
+              f"{self.flight_rms:.4g}", file=sys.stderr, flush=True)
+
+
+def _fly_batches(model, batches, weights, slots, sensitivities, n_jobs):
+    """Every batch of segments flown (split in chunks across joblib workers when asked)."""
+    if n_jobs == 1:
+        return [fly_segments(model, b, weights, slots, sensitivities=sensitivities)
+                for b in batches]
+    from joblib import Parallel, delayed
+
+    payload = model.to_dict()  # JSON-ready: a worker rebuilds the model from it
+    out = []
+    for batch in batches:
+        chunks = np.array_split(np.arange(batch.n_segments), max(2, min(batch.n_segments, 8)))
+        parts = Parallel(n_jobs=n_jobs)(
+            delayed(_fly_chunk)(payload, batch.take(idx), weights, slots, sensitivities)
+            for idx in chunks if len(idx))
+        states = np.concatenate([s for s, _ in parts])
+        jac = np.concatenate([j for _, j in parts]) if sensitivities else None
+        out.append((states, jac))
+    return out
+
+
+def _fly_chunk(payload, segments, weights, slots, sensitivities):
+    return fly_segments(AbkowitzModel.from_dict(payload), segments, weights, slots,
+                        sensitivities=sensitivities)
+
+
+def _penalty_rows(model, records) -> dict:
+    """Per degree of freedom, the fit's own objective as rows: the force error of eq. 16 and,
+    for a ``prior`` fit, its prior; ``(lhs, rhs, ||y||, [(key index, column)], fixed
+    coefficients, the objective's part no row reaches over ||y||^2)``."""
+    from .identify import design
+    from .optimizers import PriorRidge
+
+    info = model.info
+    prior = model.optimizer.get("name") == "prior" and "prior" in info
+    strength = info.get("straight_run", {}).get(
+        "strength", model.optimizer["params"].get("strength")) if prior else 0.0
+    problems = design(records, model.ship, model.library, rudder_signal=model.rudder_signal,
+                      derivative=info.get("derivative", "five-point"),
+                      window=info.get("window_s") or 21.0)
+    keys = active_keys(model)
+    out = {}
+    for dof in DOFS:
+        setting = info["prior"][dof] if prior else {"mean": None, "scale": None,
+                                                    "relations": None}
+        estimator = PriorRidge(strength=strength, mean=setting["mean"],
+                               scale=None if setting["scale"] is None else
+                               [np.nan if s is None else s for s in setting["scale"]],
+                               relations=setting["relations"])
+        lhs, rhs, norm2, offset = estimator.objective_rows(problems[dof].features,
+                                                           problems[dof].target)
+        terms = list(problems[dof].terms)
+        positions = [(k, terms.index(t)) for k, (d, t) in enumerate(keys) if d == dof]
+        fixed = np.array([model.coefficients[dof][t] for t in terms])
+        out[dof] = (lhs, rhs, math.sqrt(max(norm2, 1e-300)), positions, fixed,
+                    offset / max(norm2, 1e-300))
+    return out
 
 
 def _with_changes(model: AbkowitzModel, changes: dict, info: dict) -> AbkowitzModel:

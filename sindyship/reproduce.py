@@ -34,9 +34,9 @@ METHOD_LIBRARIES = {"prior": "abkowitz-vr"}
 #: The captive tests the models' forces are compared with (:func:`captive_agreement`).
 CAPTIVE_TESTS = ("static-drift", "rudder", "pure-yaw", "drift-yaw")
 TEST_NAMES = ("tc15_port", "tc15_stbd", "zz10_10")
-#: Most trial steps of the refinement of the diagnosed model (``max_evaluations`` of
-#: :func:`sindyship.refine.refine`).
-REFINE_EVALUATIONS = 10
+#: Most evaluations of the recommended model's refinement (``max_evaluations`` of
+#: :func:`sindyship.refine.refine`; the default of ``sindyship fit``).
+REFINE_EVALUATIONS = 60
 
 
 def _progress(message: str) -> None:
@@ -80,7 +80,8 @@ def _diagnosis_rounds(train, test, ship, rounds, progress):
 
     progress("diagnosing missing effects, adding the best one, diagnosing again")
     t0 = time.perf_counter()
-    iterative = diagnose_iteratively(train, ship, test=test, max_rounds=rounds)
+    iterative = diagnose_iteratively(train, ship, test=test, max_rounds=rounds,
+                                     search_beyond=False)
     diagnosis = {"rounds": [], "stopped": iterative.stopped, "report": iterative.report()}
     results, models = [], {}
     for k, rnd in enumerate(iterative.rounds):
@@ -104,26 +105,30 @@ def _diagnosis_rounds(train, test, ship, rounds, progress):
     return diagnosis, results, models, iterative
 
 
-def _refined_row(iterative, train, test, ship, evaluations, progress):
-    """The last diagnosed model refined by the error of its training flights
-    (:func:`sindyship.refine.refine`): its result row, its key and model, its held-out
-    flights."""
+def _recommended_row(iterative, train, test, ship, evaluations, progress):
+    """The recommended workflow: the default fit of ``sindyship fit`` (``prior`` on
+    ``abkowitz-vr``, refined by its training flights, :func:`sindyship.refine.refine`) with the
+    first effect the diagnosis names; its result row, key, model and held-out flights."""
     from .refine import refine
 
-    final = iterative.rounds[-1].diagnosis.model
-    progress(f"refining the last diagnosed model by its training flights "
-             f"(at most {evaluations} trial steps)")
+    added = [rnd.added for rnd in iterative.rounds if rnd.added]
+    effects = added[:1]
+    progress(f"the recommended fit: prior on {METHOD_LIBRARIES['prior']} with "
+             f"{', '.join(effects) or 'no effect'}, refined by its training flights (at most "
+             f"{evaluations} evaluations)")
     t0 = time.perf_counter()
-    model = refine(final, train, max_evaluations=evaluations, progress=sys.stderr.isatty())
+    fitted = fit(train, ship, library=METHOD_LIBRARIES["prior"], effects=effects,
+                 optimizer="prior")
+    model = refine(fitted, train, max_evaluations=evaluations, progress=sys.stderr.isatty())
     flown = fly_like_batch(model, test)
     errors = _distances(flown, test, ship)
-    effects = list(model.library.effects)
-    progress(f"  refined in {time.perf_counter() - t0:5.1f} s: "
+    progress(f"  fitted and refined in {time.perf_counter() - t0:5.1f} s: "
              + ", ".join(f"{k} {v['mean_distance_L']:.3f} L" for k, v in errors.items()))
-    row = {"method": "ls", "library": model.library.name, "effects": effects,
-           "refined": True, "errors": errors, "active_terms": model.n_active(),
-           "selected": {}, "refinement": model.info["refined"]}
-    return row, "ls+" + "+".join(effects) + "+refined", model, flown
+    row = {"method": "prior", "library": model.library.name, "effects": effects,
+           "refined": True, "recommended": True, "errors": errors,
+           "active_terms": model.n_active(), "selected": {},
+           "refinement": model.info["refined"]}
+    return row, "+".join(["prior", *effects, "refined"]), model, flown
 
 
 def _held_out_flights(iterative, test) -> dict:
@@ -181,9 +186,9 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
         refine_evaluations: int = REFINE_EVALUATIONS, progress=_progress) -> dict:
     """Run the protocol; return the JSON-ready results (and write files when ``out_dir``).
 
-    The last diagnosed model is also refined by the error of its training flights
-    (:mod:`sindyship.refine`, at most ``refine_evaluations`` trial steps; 0 skips it): the
-    workflow the README recommends for flying.
+    Last comes the recommended workflow: the default fit (``prior``) with the first effect
+    the diagnosis names, refined by the error of its training flights (:mod:`sindyship.refine`,
+    at most ``refine_evaluations`` evaluations; 0 skips it).
 
     Returns
     -------
@@ -210,8 +215,8 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
         if figures:
             drawn.append(("diagnosis-rounds.png", iterative.figure()))
         if refine_evaluations:
-            row, key, model, flights[key] = _refined_row(iterative, train, test, ship,
-                                                         refine_evaluations, progress)
+            row, key, model, flights[key] = _recommended_row(iterative, train, test, ship,
+                                                             refine_evaluations, progress)
             results.append(row)
             models[key] = model
     agreement = ls_agreement(models["ls"].coefficients) if "ls" in models else None

@@ -318,7 +318,10 @@ class _Symbolic:
 
 
 def _unwrap(value):
-    return value.expr if isinstance(value, _Symbolic) else sympy.sympify(value)
+    if isinstance(value, _Symbolic):
+        return value.expr
+    # a numpy scalar as a Python number: older sympy reads numpy 2's repr as text
+    return sympy.sympify(value.item() if isinstance(value, np.generic) else value)
 
 
 def _with_gamma(ship: Ship, gamma_R: float | None) -> Ship:

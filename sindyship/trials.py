@@ -14,7 +14,8 @@ Thresholds (module constants) and why:
   least 0.25 U0.  A 35 deg turning circle slows the KCS to 0.53 U0 and a full tanker to about
   0.35 U0, so a manoeuvre never drops below it; a ship getting under way passes it early.
 - ``STEADY_ACCELERATION = 0.03``: the window starts once the ship no longer speeds up by more
-  than 0.03 U0 per L/U0 (slope of a straight line fitted to u over one L/U0).  Getting under
+  than 0.03 U0 per L/U0 (slope of a straight line fitted to u over one L/U0), for one L/U0
+  on end (a single low sample, such as a dip in u at the first row, does not count).  Getting under
   way takes 0.1 to 0.2 U0 per L/U0; 1 % noise on u moves the fitted slope by about 0.008.
 - ``PROPELLER_RUNNING = 0.5``: where ``n`` is recorded the propeller runs when n (averaged
   over one L/U0) is at least half its median while under way.
@@ -27,10 +28,18 @@ Thresholds (module constants) and why:
   rounded to the nearest multiple of 5 deg when one lies within ``ROUNDING = 1.5`` deg,
   else to 0.1 deg.  The heading change (from the execute) at the rudder reversals must
   agree within ``CHECK_SPREAD = 3`` deg.
+- Turn: the record ends on a rudder hold of at least ``TURN_RUDDER = 5`` deg that lasts at
+  least ``TURN_SHARE = 0.25`` of the record (a spiral's last step is a seventh of it, a
+  pull-out ends at midship); its execute is the last sample at the approach value before the
+  rudder moved to that hold (:func:`recognise_turn`).  A steady turn from its execute is the
+  standard turning test: whatever was steered before (course keeping by hand) is not part of
+  it.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -39,12 +48,18 @@ from sindyship.errors import SindyshipInputError
 from sindyship.trajectory import Trajectory
 
 __all__ = [
+    "FlightStart",
+    "detect_zigzag",
+    "flight_start",
+    "recognised_zigzag",
     "UNDERWAY_SPEED",
     "STEADY_ACCELERATION",
     "PROPELLER_RUNNING",
+    "Turn",
     "Window",
     "ZigZag",
     "explain_zigzag",
+    "recognise_turn",
     "recognise_zigzag",
     "zigzag_levels",
     "trim",
@@ -59,6 +74,8 @@ HOLD_SAMPLES = 5
 PLATEAU_SPREAD = 2.5  # deg
 ROUNDING = 1.5  # deg
 CHECK_SPREAD = 3.0  # deg
+TURN_RUDDER = 5.0  # deg
+TURN_SHARE = 0.25
 _MOVING = 0.25  # deg per sample: the rudder is moving toward a plateau
 
 
@@ -68,6 +85,13 @@ class Window(NamedTuple):
     start: float
     stop: float
     reason: str
+
+
+class Turn(NamedTuple):
+    """A recognised turn: the rudder angle it holds [deg] and its execute [s]."""
+
+    rudder_deg: float
+    start_time: float
 
 
 class ZigZag(NamedTuple):
@@ -155,9 +179,7 @@ def underway_window(record: Trajectory, ship) -> Window:
         )
     first, last = _longest_run(usable)
     slope = _moving_slope(t, record["u"], count) * ship.time_scale / ship.U0
-    begin = first
-    while begin < last and slope[begin] > STEADY_ACCELERATION:
-        begin += 1
+    begin = _steady_from(slope[first:last + 1], count) + first
     ends = "at the end of the record" if last == len(t) - 1 else (
         "where the propeller slows" if not running[last + 1] else "where the ship slows")
     reason = (
@@ -166,6 +188,18 @@ def underway_window(record: Trajectory, ship) -> Window:
         f"until t = {t[last]:.6g} s {ends}"
     )
     return Window(float(t[begin]), float(t[last]), reason)
+
+
+def _steady_from(slope: np.ndarray, count: int) -> int:
+    """The first sample from which the slope stays at most :data:`STEADY_ACCELERATION` for
+    ``count`` samples (one L/U0): a single low sample (a dip in u at the first row) does not
+    end the speeding up; the last sample when it never settles."""
+    steady = (slope <= STEADY_ACCELERATION).astype(int)
+    if len(steady) <= count:
+        return int(np.argmax(steady)) if steady.any() else max(len(steady) - 1, 0)
+    runs = np.convolve(steady, np.ones(count, dtype=int), mode="valid")
+    settled = np.flatnonzero(runs == count)
+    return int(settled[0]) if settled.size else len(steady) - 1
 
 
 def trim(record: Trajectory, window: Window | tuple[float, float]) -> Trajectory:
@@ -219,6 +253,50 @@ def recognise_zigzag(record: Trajectory) -> ZigZag | None:
     ZigZag(amplitude_deg=20.0, check_deg=20.0, first_sign=1, start_time=0.0)
     """
     return explain_zigzag(record)[0]
+
+
+def recognise_turn(record: Trajectory) -> Turn | None:
+    """``(rudder_deg, start_time)`` of a turn (module docstring), else None.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> t = np.arange(100.0)
+    >>> delta = np.where(t < 40.0, 0.002 * np.sin(t), np.radians(np.minimum(35.0, t - 39.0)))
+    >>> frame = pd.DataFrame({"t": t, "u": 1.0, "v": 0.0, "r": 0.0, "x": t, "y": 0.0,
+    ...                       "psi": 0.0, "delta": delta})
+    >>> recognise_turn(Trajectory(frame, "tc"))
+    Turn(rudder_deg=35.0, start_time=39.0)
+    """
+    command = np.degrees(record["delta_c"] if record.has("delta_c") else record.rudder)
+    holds = _holds(command)
+    if not holds:
+        return None
+    first, last, level = holds[-1]
+    n = len(command)
+    if last < n - 1 or abs(level) < TURN_RUDDER or (last - first + 1) < TURN_SHARE * n:
+        return None
+    start = _execute(command, first, int(np.sign(level)))
+    return Turn(round(float(level), 1), float(record.t[start]))
+
+
+#: A rudder that moves back by less than this [deg per sample] is still on its way to a hold.
+_NOISE_STEP = 0.05
+#: The execute is the last sample within this [deg] of the rudder's approach value.
+_EXECUTE_BAND = 0.5
+
+
+def _execute(command: np.ndarray, hold: int, sign: int) -> int:
+    """The last sample at the approach value before the rudder moved to the hold that starts
+    at ``hold``: back along the ramp to where it began (a servo's exponential approach, a
+    step), then forward to the last sample within :data:`_EXECUTE_BAND` of that value."""
+    i = hold
+    while i > 0 and sign * (command[i] - command[i - 1]) > -_NOISE_STEP:
+        i -= 1
+    j = i
+    while j < hold and sign * (command[j + 1] - command[i]) <= _EXECUTE_BAND:
+        j += 1
+    return j
 
 
 def zigzag_levels(record: Trajectory) -> tuple[float, ...]:
@@ -324,3 +402,125 @@ def _roundest(low: float, high: float) -> float:
     if low - ROUNDING <= candidate <= high + ROUNDING:
         return float(candidate)
     return round(middle, 1)
+
+
+# ---------------------------------------------------------------------------------------------
+# where a flight starts
+
+
+def detect_zigzag(record: Trajectory) -> tuple[float, float, int] | None:
+    """``(rudder_deg, check_deg, first_sign)`` if the record is a zig-zag, else None.
+
+    Examples
+    --------
+    >>> from sindyship import MMGModel, Manoeuvre, fly, load_ship
+    >>> plan = [Manoeuvre("zigzag", rudder=20, check=20, duration=600)]
+    >>> (run,) = fly(MMGModel(load_ship("kcs")), plan)
+    >>> detect_zigzag(run)
+    (20.0, 20.0, 1)
+    """
+    command = record["delta_c"] if record.has("delta_c") else record.rudder
+    cmd = np.degrees(command)
+    moving = np.flatnonzero(np.abs(cmd) >= 1.0)
+    if moving.size == 0:
+        return None
+    values = cmd[moving[0]:]
+    magnitude = np.abs(values)
+    if magnitude.min() < 1.0 or magnitude.max() - magnitude.min() > 0.5:
+        return None
+    sign = np.sign(values)
+    reversals = np.flatnonzero(np.diff(sign) != 0) + 1 + moving[0]
+    if len(reversals) < 2:
+        return None
+    psi = np.degrees(record["psi"] - record["psi"][0])
+    at_reversal = np.abs(psi[reversals])
+    before = np.abs(psi[reversals - 1])
+    if at_reversal.max() - at_reversal.min() > 2.0:
+        return None
+    rudder = round(float(magnitude.mean()), 1)
+    return rudder, _check_angle(before.max(), at_reversal.min()), int(sign[0])
+
+
+def _check_angle(low: float, high: float) -> float:
+    """The check angle the samples allow: the roundest value in (low, high], to 0.1 deg.
+
+    The rudder reverses at the first sample past the check angle C, so C lies between the
+    heading change one sample before each reversal and the one at it.
+    """
+    if high <= low:
+        return round(0.5 * (low + high), 1)
+    for step in (5.0, 1.0, 0.5, 0.1):
+        candidate = math.ceil(low / step + 1e-9) * step
+        if candidate <= high:
+            return round(candidate, 1)
+    return round(0.5 * (low + high), 1)
+
+
+def recognised_zigzag(record: Trajectory) -> tuple[float, float, int, float] | None:
+    """``(rudder_deg, check_deg, first_sign, execute_time)`` of a zig-zag record, else None.
+
+    The strict recognition (:func:`detect_zigzag`, a zig-zag from the first row) first, then
+    the tolerant one of logged trials (:func:`sindyship.trials.recognise_zigzag`: a manual
+    lead-in, plateaus a degree or two off the nominal angle).
+    """
+    strict = detect_zigzag(record)
+    if strict is not None:
+        return (*strict, float(record.t[0]))
+    found = recognise_zigzag(record)
+    return None if found is None else tuple(found)
+
+
+@dataclass(frozen=True)
+class FlightStart:
+    """Where a record's flight starts and why.
+
+    Attributes
+    ----------
+    time : float
+        The first flown (and scored) sample [s].
+    kind : {"zigzag", "turn", "record"}
+        A recognised zig-zag or turn flown from its rudder execute, or any other record from
+        its first row.
+    reason : str
+        One sentence for reports.
+    """
+
+    time: float
+    kind: str
+    reason: str
+
+
+def flight_start(record: Trajectory) -> FlightStart:
+    """Where a record is flown and scored from: a zig-zag or a turn from its rudder execute
+    with the measured state there (whatever was steered before it, by hand or otherwise, is
+    neither flown nor scored), any other record from its first row.
+
+    A record read with its automatic time range carries the recognition made on all its rows
+    before the cut (``meta["flight_start"]``, :func:`sindyship.records.read_record`).
+
+    Examples
+    --------
+    >>> from sindyship import MMGModel, Manoeuvre, fly, load_ship
+    >>> plan = [Manoeuvre("turning-circle", rudder=35, duration=300)]
+    >>> (run,) = fly(MMGModel(load_ship("kcs")), plan)
+    >>> start = flight_start(run)
+    >>> start.time, start.kind
+    (0.0, 'turn')
+    >>> start.reason
+    'a turn with 35 deg rudder, flown from its execute at t = 0 s'
+    """
+    saved = record.meta.get("flight_start")
+    t = record.t
+    if saved is not None and t[0] - 1e-9 <= saved["time"] <= t[-1]:
+        return FlightStart(float(saved["time"]), saved["kind"], saved["reason"])
+    zigzag = recognised_zigzag(record)
+    if zigzag is not None:
+        rudder, check, _, start = zigzag
+        return FlightStart(float(start), "zigzag", f"a {rudder:g}/{check:g} zig-zag, flown "
+                           f"closed loop from its execute at t = {start:.6g} s")
+    turn = recognise_turn(record)
+    if turn is not None:
+        return FlightStart(turn.start_time, "turn", f"a turn with {turn.rudder_deg:g} deg "
+                           f"rudder, flown from its execute at t = {turn.start_time:.6g} s")
+    return FlightStart(float(t[0]), "record", "no zig-zag or turn recognised: flown from the "
+                       f"first row, t = {t[0]:.6g} s")

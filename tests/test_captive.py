@@ -198,4 +198,11 @@ def test_forces_refuses_careless_input_in_one_sentence(kcs, tmp_path, capsys):
     assert main(["forces", str(model), str(captive), "--out", str(report)]) == 0
     assert main(["forces", str(model), str(captive), "--out", str(report)]) == 0
     assert main(["forces", str(model), str(captive), "--out", str(tmp_path)]) == 2
-    assert sorted(p.name for p in report.iterdir()) == ["captive-forces.png", "forces.json"]
+    assert sorted(p.name for p in report.iterdir()) == [".sindyship-output",
+                                                          "captive-forces.png", "forces.json"]
+    # a file of the user's in a previous output folder is never deleted with it
+    (report / "notes.txt").write_text("mine", encoding="utf-8")
+    capsys.readouterr()
+    assert main(["forces", str(model), str(captive), "--out", str(report)]) == 2
+    assert "also holds 'notes.txt', which this command did not write" in capsys.readouterr().err
+    assert (report / "notes.txt").read_text(encoding="utf-8") == "mine"

@@ -143,9 +143,9 @@ def test_a_closed_loop_flight_does_not_depend_on_a_replayed_record_beside_it(kcs
 
 
 @pytest.mark.parametrize("compiled", [True, False])
-def test_coefficient_sets_fly_each_records_own_channel(kcs, depth_model, compiled,
+def test_shooting_segments_fly_each_records_own_channel(kcs, depth_model, compiled,
                                                        monkeypatch):
-    from sindyship.flights import fly_coefficient_sets
+    from sindyship.shooting import fly_segments, make_segments
 
     if not compiled:
         monkeypatch.setenv("SINDYSHIP_NO_COMPILE", "1")
@@ -154,15 +154,14 @@ def test_coefficient_sets_fly_each_records_own_channel(kcs, depth_model, compile
     (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=20, duration=600)])
     ramp = _with_depth(run, np.linspace(0.0, 200.0, run.n_samples))
     flat = _with_depth(run, np.full(run.n_samples, 100.0)).with_name("flat")
-    stronger = {("Y", "depth"): 2.2e-5}
-    together = fly_coefficient_sets(model, [{}, stronger], [ramp, flat])
-    coefficients = {d: dict(c) for d, c in model.coefficients.items()}
-    coefficients["Y"]["depth"] = 2.2e-5
-    changed = AbkowitzModel(kcs, model.library, coefficients)
-    for flown, alone in ((together[0], fly_like_batch(model, [ramp, flat])),
-                         (together[1], fly_like_batch(changed, [ramp, flat]))):
-        for a, b in zip(flown, alone, strict=True):
-            np.testing.assert_allclose(a["x"], b["x"], rtol=0, atol=1e-8)
-            np.testing.assert_allclose(a["y"], b["y"], rtol=0, atol=1e-8)
-    gap = np.hypot(*(together[1][0][k] - together[0][0][k] for k in ("x", "y"))) / kcs.L
-    assert gap[-1] > 0.01  # the stronger channel term flies elsewhere
+    (segments,) = make_segments(model, [ramp, flat], 600.0)
+    assert segments.n_segments == 2 and segments.channels["depth"].shape[0] == 2
+    states, _ = fly_segments(model, segments)
+    # a whole-record segment replaying the actual rudder is the record's own flight
+    for k, record in enumerate((ramp, flat)):
+        alone = fly_like_batch(model, [_replayed(record, record.n_samples, record.name)])[0]
+        rows = np.arange(1, states.shape[1] + 1) * 2  # two samples a step (0.1 L/U0)
+        rows = rows[rows < record.n_samples]
+        np.testing.assert_allclose(states[k, : len(rows), 3], alone["x"][rows], atol=0.5)
+    gap = np.hypot(*(states[0, -1, 3:5] - states[1, -1, 3:5])) / kcs.L
+    assert gap > 0.01  # the two records' channels fly apart

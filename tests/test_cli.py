@@ -190,15 +190,18 @@ def test_fit_refine_flies_the_records_and_says_what_it_did(records, tmp_path, ca
     assert main(["fit", *train, "--ship", "kcs", "--refine", "8", "--no-identifiability",
                  "--out", str(model), "--json"]) == 0
     out, err = capsys.readouterr()
-    refined = json.loads(model.read_text())["info"]["refined"]
-    assert refined["records"] == ["tc35", "zz20"]
-    assert refined["jacobians"] >= 1
-    assert refined["cost_after"] < 0.5 * refined["cost_before"]
+    saved = json.loads(model.read_text())
+    refined = saved["info"]["refined"]
+    assert saved["optimizer"]["name"] == "prior" and saved["library"]["name"] == "abkowitz-vr"
+    assert refined["records"] == ["tc35", "zz20"] and refined["method"] == "multiple shooting"
+    assert refined["jacobians"] >= 1 and refined["evaluations"] <= 8
+    assert refined["flight_rms_after"] < refined["flight_rms_before"]
     assert json.loads(out)["refined"]["cost_after"] == pytest.approx(refined["cost_after"])
-    assert "refined: flight error" in err
-    assert main(["fit", *train, "--ship", "kcs", "--refine", "3", "--stream",
-                 "--out", str(tmp_path / "streamed.json")]) == 2
-    assert "fit in memory or drop --refine" in capsys.readouterr().err
-    assert main(["fit", *train, "--ship", "kcs", "--refine", "3", "--scheduler",
-                 "tcp://127.0.0.1:1", "--out", str(tmp_path / "streamed.json")]) == 2
-    assert "(--stream or --scheduler)" in capsys.readouterr().err
+    assert "refined: flight error" in err and "refining by flights: step 1," in err
+    # the paper's least squares is one option away, and not refined unless asked
+    assert main(["fit", *train, "--ship", "kcs", "--optimizer", "ls", "--no-identifiability",
+                 "--out", str(tmp_path / "ls.json")]) == 0
+    assert "refined" not in json.loads((tmp_path / "ls.json").read_text())["info"]
+    assert main(["fit", *train, "--ship", "kcs", "--optimizer", "ls", "--segment", "100",
+                 "--out", str(tmp_path / "x.json")]) == 2
+    assert "--segment sets the refinement, which is off" in capsys.readouterr().err

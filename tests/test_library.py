@@ -586,7 +586,70 @@ def test_a_permuted_column_order_prints_the_right_names():
     assert model.get_feature_names() == ["du", "v", "r"]
 
 
-def test_a_library_bound_in_another_order_refuses_to_print_wrong_names():
-    model = _permuted_fit(("du", "v", "r"))
-    with pytest.raises(ValueError, match=r"the input columns are named \['v', 'r', 'du'\]"):
-        model.equations()
+def test_a_library_bound_in_another_order_names_its_terms_by_position():
+    with pytest.warns(UserWarning, match="binds them by position") as caught:
+        model = _permuted_fit(("du", "v", "r"))
+        equations = model.equations()
+    # column 0, which the caller named v, is the library's "du": named by its column
+    assert equations[0].strip() == "2.000 v"
+    assert sum("binds them by position" in str(w.message) for w in caught) == 1
+
+
+@pytest.mark.parametrize("names", [["a", "b", "c"], ["a", "b", "c", "d", "e"], ["Heel angle"]])
+def test_feature_names_of_any_length_come_back_as_names(names):
+    lib = AbkowitzFeatureLibrary(terms=("v^2 r", "abs(v) v", "1"), input_names=("v", "r"))
+    lib.fit(np.ones((3, 2)))
+    with pytest.warns(UserWarning):
+        out = lib.get_feature_names(names)
+    assert out == ["v^2 r", "abs(v) v", "1"]
+
+
+def test_feature_names_by_position_rename_every_variable():
+    lib = AbkowitzFeatureLibrary(terms=("v^2 r", "abs(v) v", "2 r", "1"), input_names=("v", "r"))
+    lib.fit(np.ones((3, 2)))
+    with pytest.warns(UserWarning, match="v -> a, r -> b"):
+        assert lib.get_feature_names(["a", "b"]) == ["a^2 b", "abs(a) a", "2 b", "1"]
+
+
+def _composition_data():
+    rng = np.random.default_rng(7)
+    x = rng.normal(size=(300, 3)) * 0.1
+    return x, rng
+
+
+@pytest.mark.parametrize("kind", ["tensored", "generalized", "concat"])
+def test_the_library_composes_with_pysindy_libraries_under_user_names(kind):
+    import pysindy as ps
+
+    x, _ = _composition_data()
+    own = AbkowitzFeatureLibrary(terms=("v", "r", "v^2 r"), input_names=("du", "v", "r"))
+    poly = ps.PolynomialLibrary(degree=1, include_bias=False)
+    library = {"tensored": lambda: ps.TensoredLibrary([own, poly]),
+               "generalized": lambda: ps.GeneralizedLibrary([own, poly]),
+               "concat": lambda: own + poly}[kind]()
+    # representable: v alone, or v times the polynomial's sway (x1 x1) when tensored
+    target = 3.0 * x[:, 1:2] * (x[:, 1:2] if kind == "tensored" else 1.0)
+    model = ps.SINDy(feature_library=library, optimizer=ps.STLSQ(threshold=0.0))
+    with pytest.warns(UserWarning, match="by position"):
+        model.fit(x, t=1.0, x_dot=np.hstack([target, target, target]),
+                  feature_names=["surge", "sway", "yaw"])
+        names = model.get_feature_names()
+        printed = model.equations()
+    assert len(names) == library.n_output_features_ and all(isinstance(n, str) for n in names)
+    assert any("sway" in n for n in names) and not any(n in ("v", "r") for n in names)
+    assert len(printed) == 3 and all(isinstance(e, str) for e in printed)
+    prediction = model.predict(x)
+    np.testing.assert_allclose(prediction[:, 0], target[:, 0], atol=1e-8)
+
+
+def test_the_library_in_discrete_sindy_prints_with_default_and_own_names():
+    import pysindy as ps
+
+    x, _ = _composition_data()
+    lib = AbkowitzFeatureLibrary(terms=("v", "r^2"), input_names=("v", "r"))
+    model = ps.DiscreteSINDy(feature_library=lib, optimizer=ps.STLSQ(threshold=0.0))
+    model.fit(x[:, 1:], t=1)
+    assert model.get_feature_names() == ["v", "r^2"]  # default names x0[k], x1[k]: no rename
+    with pytest.warns(UserWarning, match="by position"):
+        model.fit(x[:, 1:], t=1, feature_names=["sway", "yaw"])
+        assert model.get_feature_names() == ["sway", "yaw^2"]

@@ -85,3 +85,51 @@ def test_an_identification_ship_cannot_be_simulated(own_ship):
 def test_an_identification_ship_needs_its_inertia(own_ship):
     with pytest.raises(SindyshipInputError, match="I_zz or k_zz"):
         own_ship(KCS_PARTICULARS.replace("k_zz = 0.25", ""))
+
+
+def test_an_identification_ship_keeps_every_value_it_gives(own_ship):
+    ship = own_ship(KCS_PARTICULARS.replace("k_zz = 0.25", "m = 0.182280\nI_zz = 0.011432\n"
+                                            "m_x = 0.006531\nm_y = 0.155164\nJ_zz = 0.010"))
+    assert (ship.mass.m, ship.mass.I_zz) == (0.182280, 0.011432)
+    assert (ship.mass.m_x, ship.mass.m_y, ship.mass.J_zz) == (0.006531, 0.155164, 0.010)
+    k = 10.8 / 230.0
+    inertia = ship.prime_i_inertia()
+    assert inertia["Y_vdot"] == pytest.approx(-0.155164 * k, rel=1e-15)
+    assert inertia["X_udot"] == pytest.approx(-0.006531 * k, rel=1e-15)
+    assert inertia["N_rdot"] == pytest.approx(-0.010 * k, rel=1e-15)
+    # what it leaves out is assumed, and named: Y_rdot, N_vdot and the servo
+    assert len(ship.assumptions) == 3
+    assert "Y_rdot, N_vdot" in ship.assumptions[0] and "X_udot" not in ship.assumptions[0]
+    assert "rudder servo T_R = 0.1 L/U0" in ship.assumptions[1]
+
+
+def test_given_derivatives_win_over_given_added_masses_and_nothing_is_assumed(own_ship):
+    ship = own_ship(KCS_PARTICULARS + "m_y = 0.2\n" + TABLE_6)
+    assert ship.mass.m_y == 0.2  # kept as written
+    assert ship.prime_i_inertia()["Y_vdot"] == -732e-5
+    assert not any("acceleration" in a or "servo" in a for a in ship.assumptions)
+
+
+def test_a_fitted_model_records_what_its_ship_assumed(own_ship, protocol_runs):
+    ship = own_ship(KCS_PARTICULARS)
+    model = fit(protocol_runs["train"][:2], ship)
+    assert model.info["ship_assumptions"] == list(ship.assumptions)
+    assert any("Clarke" in a for a in model.info["ship_assumptions"])
+
+
+def test_the_command_line_names_what_the_ship_assumes(tmp_path, protocol_runs):
+    import subprocess
+    import sys
+
+    from sindyship.measurements import write_csv
+
+    path = tmp_path / "ship.toml"
+    path.write_text(KCS_PARTICULARS, encoding="utf-8")
+    record = tmp_path / "tc.csv"
+    write_csv(protocol_runs["train"][1], record)
+    done = subprocess.run([sys.executable, "-m", "sindyship.cli", "fit", str(record), "--ship",
+                           str(path), "--optimizer", "ls", "--out", str(tmp_path / "m.json")],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    notes = [line for line in done.stderr.splitlines() if line.startswith("note: ship")]
+    assert len(notes) == 3 and "Clarke" in notes[0] and "servo" in notes[1]

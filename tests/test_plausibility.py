@@ -336,7 +336,8 @@ def test_a_logged_zigzag_is_flown_from_its_execute_and_scores_like_a_clean_one(
     (logged,) = read_records([logged_trial], ship=kcs)
     assert logged.t[0] >= 200.0  # never flown from rest
     errors = evaluate(model, [logged])["trial"]
-    assert errors["flown_as"] == "zigzag" and errors["execute_s"] == 350.0
+    assert errors["flown_as"] == "zigzag" and errors["start_s"] == 350.0
+    assert errors["start_reason"].startswith("a 20/20 zig-zag, flown closed loop")
     assert errors["amplitude_deg"] == 20.0 and errors["check_deg"] == 20.0
     assert errors["completed"] and errors["flown_s"] == 750.0
     # the same zig-zag recorded cleanly: steady at the execute, no lead-in, no wrap, no blanks
@@ -345,25 +346,23 @@ def test_a_logged_zigzag_is_flown_from_its_execute_and_scores_like_a_clean_one(
                                np.array([kcs.U0, 0, 0, 0, 0, 0, 0.0]))
     clean = result_to_trajectory(result, "clean")
     reference = evaluate(model, [clean])["clean"]
-    assert reference["flown_as"] == "zigzag" and "execute_s" not in reference
+    assert reference["flown_as"] == "zigzag" and reference["start_s"] == 0.0
     assert errors["mean_distance_L"] == pytest.approx(reference["mean_distance_L"], rel=0.10)
 
 
 def test_refinement_flies_a_logged_zigzag_from_its_execute(logged_trial, kcs, protocol_runs):
     """Refining by flights judges the flights evaluate judges: a logged zig-zag's lead-in is
-    cut, and the cost is that of the closed-loop flight from the execute."""
+    never flown; its segments start at the execute, and its whole flight is the closed-loop
+    zig-zag from there."""
     from sindyship.cli._records import read_records
-    from sindyship.flights import fly_like_batch, from_execute
     from sindyship.identify import fit
-    from sindyship.refine import flight_residuals, refine
+    from sindyship.shooting import make_segments
 
     model = fit(protocol_runs["train"], kcs)
     (logged,) = read_records([logged_trial], ship=kcs)
-    kept = refine(model, [logged], max_evaluations=1)  # the starting point only
-    cut = from_execute(logged)
-    assert cut.t[0] == 350.0
-    residuals = flight_residuals(fly_like_batch(model, [cut]), [cut], kcs.L, kcs.U0, 20.0)
-    assert kept.info["refined"]["cost_before"] == pytest.approx(0.5 * residuals @ residuals,
-                                                                rel=1e-12)
-    whole = flight_residuals(fly_like_batch(model, [logged]), [logged], kcs.L, kcs.U0, 20.0)
-    assert 0.5 * whole @ whole != pytest.approx(kept.info["refined"]["cost_before"], rel=1e-3)
+    assert logged.t[0] < 350.0  # the record keeps some approach
+    (segments,) = make_segments(model, [logged], 100.0)
+    assert segments.start.min() == 350.0
+    (whole,) = make_segments(model, [logged], None)
+    assert whole.start.tolist() == [350.0] and whole.zigzag.sign.tolist() == [1]
+    assert math.degrees(whole.zigzag.check[0]) == pytest.approx(20.0)

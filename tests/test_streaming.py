@@ -218,7 +218,8 @@ def test_fit_stream_without_a_scheduler_starts_a_local_cluster(files, records, k
     pytest.importorskip("distributed")
     out = tmp_path / "model.json"
     pattern = str(files["folder"] / "run*.csv")
-    assert main(["fit", pattern, "--stream", "--n-jobs", "1", "--out", str(out)]) == 0
+    assert main(["fit", pattern, "--stream", "--n-jobs", "1", "--optimizer", "ls", "--out",
+                 str(out)]) == 0
     assert "on 1 Dask workers (local cluster)" in capsys.readouterr().err
     assert gap(fit(records, kcs), AbkowitzModel.load(out)) <= RTOL
 

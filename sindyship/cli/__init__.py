@@ -9,6 +9,8 @@ stderr.  Outputs are written to a temporary file and renamed (:mod:`sindyship._i
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import signal
 import sys
 import threading
@@ -74,18 +76,45 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _tolerant_streams() -> None:
+    """Output that cannot be written whole ends quietly: a stdout of another encoding escapes
+    what it cannot show, and a closed stdout or stderr takes nothing (the verb's files are
+    written all the same)."""
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        if stream is None:
+            setattr(sys, name, open(os.devnull, "w", encoding="utf-8"))  # noqa: SIM115
+        elif hasattr(stream, "reconfigure"):
+            with contextlib.suppress(ValueError, OSError):
+                stream.reconfigure(errors="backslashreplace")
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run one verb; return its exit status."""
+    """Run one verb; return its exit status.  A reader that goes away (``--json | head``)
+    ends the output quietly, with the status the verb had."""
+    _tolerant_streams()
     parser = build_parser()
     args = parser.parse_args(argv)
     previous = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _terminate)
     try:
-        return _run(args)
+        status = _run(args)
+        sys.stdout.flush()
+        return status
+    except BrokenPipeError:
+        _quiet_stdout()
+        return 0
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
+
+
+def _quiet_stdout() -> None:
+    """After a reader went away: later writes (and the interpreter's final flush) go nowhere."""
+    with contextlib.suppress(OSError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
 
 
 def _run(args) -> int:
@@ -104,6 +133,8 @@ def _run(args) -> int:
     except KeyboardInterrupt:
         print("sindyship: interrupted", file=sys.stderr)
         return 1
+    except BrokenPipeError:
+        raise  # the reader of stdout went away: main ends quietly
     except Exception as exc:  # a bug or an environment failure: status 1, never status 2
         print(f"sindyship {args.verb}: internal error: {type(exc).__name__}: {exc} "
               "(please report it with the command you ran)", file=sys.stderr)

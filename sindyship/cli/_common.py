@@ -19,6 +19,8 @@ from ..errors import SindyshipInputError
 
 #: Default term library of every verb that fits.
 DEFAULT_LIBRARY = "abkowitz"
+#: Default term library of the ``prior`` fit: every term its prior has an estimate for.
+PRIOR_LIBRARY = "abkowitz-vr"
 
 #: Longest record [s] a verb simulates (11.6 days), and the most samples it holds.
 MAX_DURATION = 1e6
@@ -187,19 +189,35 @@ def add_resample(p) -> None:
                    "machine's memory is refused (default: refuse irregular records)")
 
 
-def add_identification(p, *, optimizer: bool = True) -> None:
-    """The options that say how a library is fitted: library, effects, optimizer, rudder,
-    derivative (shared by ``fit``, ``diagnose`` and, without the optimizer, ``discover``)."""
+def add_identification(p, *, optimizer: bool = True, recommended: bool = False) -> None:
+    """The options that say how a library is fitted: library, effects, optimizer, speed form,
+    rudder, derivative (shared by ``fit``, ``diagnose`` and, without the optimizer,
+    ``discover``).  With ``recommended`` (``fit``) the optimizer is the physics-consistent
+    ``prior`` by default, on the library with every term its prior has an estimate for."""
     from ..optimizers import OPTIMIZERS
 
-    p.add_argument("--library", default=DEFAULT_LIBRARY, metavar="NAME|FILE",
-                   help=f"term library name or TOML file (default: {DEFAULT_LIBRARY})")
+    if recommended:
+        p.add_argument("--library", default=None, metavar="NAME|FILE",
+                       help=f"term library name or TOML file (default: {PRIOR_LIBRARY} with "
+                       f"--optimizer prior, the paper's {DEFAULT_LIBRARY} with the others)")
+    else:
+        p.add_argument("--library", default=DEFAULT_LIBRARY, metavar="NAME|FILE",
+                       help=f"term library name or TOML file (default: {DEFAULT_LIBRARY})")
     p.add_argument("--effects", default="", metavar="NAME,...",
                    help="comma-separated catalogue effects (or effect TOML files) whose terms "
                    "are added to the library (default: none)")
     if optimizer:
-        p.add_argument("--optimizer", default="ls", choices=sorted(OPTIMIZERS),
-                       help="regression method (default: ls, least squares)")
+        default = "prior" if recommended else "ls"
+        what = ("prior, least squares drawn toward the ship's semi-empirical derivatives, the "
+                "recommended fit; ls is the paper's least squares" if recommended else
+                "ls, least squares")
+        p.add_argument("--optimizer", default=default, choices=sorted(OPTIMIZERS),
+                       help=f"regression method (default: {what})")
+    p.add_argument("--speed", default="auto", choices=["auto", "design", "instantaneous"],
+                   help="the speed the forces and variables are made non-dimensional with: the "
+                   "design speed U0 (the paper's Prime I), or the instantaneous speed U = "
+                   "sqrt(u^2 + v^2), valid as a ship slows in a turn (default: auto, the "
+                   "ship's speed_reference: design for kcs, instantaneous for kvlcc2)")
     p.add_argument("--rudder-signal", default="actual", choices=["actual", "commanded"],
                    help="rudder angle used in the features: the actual (servo) angle or the "
                    "commanded one (default: actual, as the paper's protocol)")
@@ -210,6 +228,18 @@ def add_identification(p, *, optimizer: bool = True) -> None:
                    metavar="SECONDS",
                    help=f"Savitzky-Golay window [s], in (0, {MAX_STEP:g}] (with --derivative "
                    "savgol; default 21)")
+
+
+def resolved_library(args) -> str:
+    """The library ``--library`` names, or its default for the optimizer."""
+    if args.library is not None:
+        return args.library
+    return PRIOR_LIBRARY if getattr(args, "optimizer", "ls") == "prior" else DEFAULT_LIBRARY
+
+
+def speed_form(args, ship) -> str:
+    """The speed form ``--speed`` asks for (``auto``: the ship's ``speed_reference``)."""
+    return ship.speed_reference if args.speed == "auto" else args.speed
 
 
 def add_n_jobs(p, *, default: int | None = 1) -> None:
@@ -276,6 +306,18 @@ def check_inputs(paths) -> None:
             )
 
 
+def load_cli_ship(name):
+    """The ship ``--ship`` names (:func:`sindyship.ships.load_ship`), with each value it assumes
+    (a ship file made for identification leaves out the servo or added masses) named on
+    stderr."""
+    from ..ships import load_ship
+
+    ship = load_ship(name)
+    for assumption in ship.assumptions:
+        progress(f"note: ship {ship.name!r} assumes {assumption}.")
+    return ship
+
+
 def ship_file(name: str | None) -> list[str]:
     """The ship file among a verb's inputs (none for a built-in ship)."""
     from ..ships import BUILTIN_SHIPS
@@ -318,8 +360,22 @@ def check_simulation_cost(ship, duration: float, dt: float | None = None) -> Non
         )
 
 
+def add_record_options(p) -> None:
+    """``--skip-check`` and ``--time-range``: how records are read."""
+    from ..plausibility import CHECKS
+
+    p.add_argument("--skip-check", action="append", default=[], metavar="NAME",
+                   choices=[*CHECKS, "all"],
+                   help="plausibility check not to run on the records, repeatable: "
+                   f"{', '.join(CHECKS)} or all (default: run every check)")
+    p.add_argument("--time-range", default="auto", metavar="auto|all|START:STOP",
+                   help="the part of each record to use [s]: 'auto' keeps the part under way "
+                   "with the propeller running (never from rest), 'all' every sample, "
+                   "START:STOP the samples between two times (default: auto)")
+
+
 def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool = True,
-                         workers: bool = True) -> None:
+                         workers: bool = True, recommended: bool = False) -> None:
     """What every verb that fits a library on records takes (``fit``, ``diagnose``,
     ``discover``): the records, the ship, how the library is fitted, smoothing, resampling,
     workers, JSON."""
@@ -327,15 +383,13 @@ def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool =
                    help="training records: measurement CSV or Parquet files, or quoted glob "
                    "patterns that name them ('fleet/*.parquet')")
     add_ship(p)
-    add_identification(p, optimizer=optimizer)
+    add_identification(p, optimizer=optimizer, recommended=recommended)
     p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",
                    help="smooth noisy training records before differencing: a Savitzky-Golay "
                    "or a Kalman (RTS) smoother over W seconds, or 'auto' to choose the setting "
                    "by leave-one-manoeuvre-out flights on the training records (its windows "
                    "scale with the ship's L/U0) (default: none)")
     add_resample(p)
-    from ._records import add_record_options
-
     add_record_options(p)
     if workers:
         add_n_jobs(p, default=n_jobs_default)

@@ -17,7 +17,7 @@ from pathlib import Path
 from ..errors import SindyshipInputError
 from ._common import check_memory, progress
 
-__all__ = ["add_record_options", "read_record_sets", "read_records", "record_keys"]
+__all__ = ["read_record_sets", "read_records", "record_keys"]
 
 
 def _refuse_repeats(paths: list[Path]) -> None:
@@ -91,20 +91,6 @@ def _check_resample_memory(path: Path, resample: float) -> None:
         check_memory(span / resample, f"{path}: resampling {span:g} s at {resample:g} s")
 
 
-def add_record_options(p) -> None:
-    """``--skip-check`` and ``--time-range``: how records are read."""
-    from ..plausibility import CHECKS
-
-    p.add_argument("--skip-check", action="append", default=[], metavar="NAME",
-                   choices=[*CHECKS, "all"],
-                   help="plausibility check not to run on the records, repeatable: "
-                   f"{', '.join(CHECKS)} or all (default: run every check)")
-    p.add_argument("--time-range", default="auto", metavar="auto|all|START:STOP",
-                   help="the part of each record to use [s]: 'auto' keeps the part under way "
-                   "with the propeller running (never from rest), 'all' every sample, "
-                   "START:STOP the samples between two times (default: auto)")
-
-
 def reading(args, ship) -> dict:
     """The keyword arguments of :func:`read_records` that a verb's options give."""
     return {"ship": ship, "skip_checks": args.skip_check, "time_range": args.time_range}
@@ -156,7 +142,7 @@ def read_records(paths, resample=None, *, keys=None, ship=None, skip_checks=(),
     skip_checks : sequence of str
         Plausibility checks not to run.
     time_range : str
-        ``"auto"``, ``"all"`` or ``"START:STOP"`` (see :func:`add_record_options`).
+        ``"auto"``, ``"all"`` or ``"START:STOP"`` (the option ``--time-range``).
     """
     paths = [Path(p) for p in paths]
     _refuse_repeats(paths)

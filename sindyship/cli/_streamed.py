@@ -21,7 +21,7 @@ def add_stream_options(p) -> None:
                    "processes, every core when unset)")
 
 
-def streamed_fit(args, ship, effects, params):
+def streamed_fit(args, ship, effects, params, speed=None):
     """The model of the streamed fit and what the JSON reports of it.
 
     Returns
@@ -40,7 +40,7 @@ def streamed_fit(args, ship, effects, params):
         ship, library=args.library, effects=effects, rudder_signal=args.rudder_signal,
         derivative=args.derivative, window=args.window, smoothing=args.smoothing,
         resample=args.resample, skip_checks=args.skip_check,
-        time_range=time_window(args.time_range))
+        time_range=time_window(args.time_range), speed=speed)
     estimator = make_optimizer(args.optimizer, **params)
     estimator.check_factor_fit(len(paths))
     workers = args.n_jobs if args.n_jobs and args.n_jobs > 0 else None

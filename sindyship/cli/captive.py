@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._common import add_ship, progress, ship_file
+from ._common import add_ship, bounded_float, bounded_int, progress, ship_file
 
 
 def add_parser(sub) -> None:
@@ -18,11 +18,12 @@ def add_parser(sub) -> None:
                    help="test type: drift angle to +-20 deg, rudder angle to +-35 deg, yaw "
                    "rate r' = r L / U0 to +-0.6, their drift-yaw grid, or all four "
                    "(default: all)")
-    p.add_argument("--points", type=int, default=21,
-                   help="conditions per sweep, >= 2; drift-yaw uses points x points "
+    p.add_argument("--points", type=bounded_int(2, 201), default=21,
+                   help="conditions per sweep, 2 to 201; drift-yaw uses points x points "
                    "(default: 21)")
-    p.add_argument("--speed", type=float, default=None,
-                   help="carriage speed [m/s] (default: the ship's design speed U0)")
+    p.add_argument("--speed", type=bounded_float(0, 1000, "m/s"), default=None,
+                   help="carriage speed [m/s], at most three times the ship's design speed "
+                   "(default: the ship's design speed U0)")
     p.add_argument("--out", required=True,
                    help="output captive CSV: u, v [m/s], r [rad/s], delta [rad], n [rps], "
                    "X, Y [N], N [N m]")
@@ -31,11 +32,11 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from .._io import check_output
     from ..captive import captive_tests, write_captive_csv
-    from ..ships import load_ship
+    from ._common import load_cli_ship
 
     check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}",
                  suffixes=(".csv",))
-    ship = load_ship(args.ship)
+    ship = load_cli_ship(args.ship)
     frame = captive_tests(ship, args.test, points=args.points, speed=args.speed)
     write_captive_csv(frame, args.out)
     progress(f"wrote {args.out}: {len(frame)} captive conditions ({args.test}) of {ship.name}")

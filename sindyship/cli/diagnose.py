@@ -19,6 +19,7 @@ from ._common import (
     on_cluster,
     progress,
     report_prior_coverage,
+    speed_form,
     split_names,
 )
 from ._records import read_record_sets
@@ -86,7 +87,7 @@ def run(args) -> int:
     from ..diagnose import diagnose, diagnose_iteratively
     from ..identify import resolve_library
     from ..records import expand_paths
-    from ..ships import load_ship
+    from ._common import load_cli_ship
 
     start = time.perf_counter()
     args.data, args.test = expand_paths(args.data), expand_paths(args.test)
@@ -94,12 +95,12 @@ def run(args) -> int:
         check_output(args.out, inputs=fit_inputs(args), kind="folder",
                      label=f"--out {args.out}", replaceable="diagnose.json")
     check_inputs(fit_inputs(args))
-    ship = load_ship(args.ship)
+    ship = load_cli_ship(args.ship)
     records, test = read_record_sets(args.data, args.test, resample=args.resample,
                                      ship=ship, skip_checks=args.skip_check,
                                      time_range=args.time_range)
     check_simulation_cost(ship, max(record.duration for record in records + test))
-    library = resolve_library(args.library, split_names(args.effects))
+    library = resolve_library(args.library, split_names(args.effects), speed_form(args, ship))
     if args.optimizer == "prior":
         report_prior_coverage(ship, library)
     options = {

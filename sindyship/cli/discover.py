@@ -13,6 +13,7 @@ from ._common import (
     emit,
     on_cluster,
     progress,
+    speed_form,
     split_names,
 )
 from ._records import read_records
@@ -51,19 +52,22 @@ def run(args) -> int:
     from .._io import check_output, write_text_atomic
     from ..diagnose import discover
     from ..records import expand_paths
-    from ..ships import load_ship
+    from ._common import load_cli_ship
 
     args.data = expand_paths(args.data)
     if args.out is not None:
         check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}",
                      suffixes=(".toml",))
     check_inputs(fit_inputs(args))
-    ship = load_ship(args.ship)
+    ship = load_cli_ship(args.ship)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
     progress(f"sindyship discover: {len(records)} records, library {args.library}")
     with on_cluster(args.scheduler, args.n_jobs) as n_jobs:
-        found = discover(records, ship, library=args.library,
+        from ..identify import resolve_library
+
+        found = discover(records, ship, library=resolve_library(args.library, (),
+                                                                speed_form(args, ship)),
                          effects=split_names(args.effects), rudder_signal=args.rudder_signal,
                          derivative=args.derivative, window=args.window,
                          smoothing=None if args.smoothing == "none" else args.smoothing,

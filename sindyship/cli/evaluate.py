@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from ._common import (
     add_json,
+    add_record_options,
     add_resample,
     add_ship,
     check_inputs,
@@ -11,18 +12,20 @@ from ._common import (
     emit,
     ship_file,
 )
-from ._records import add_record_options, read_records
+from ._records import read_records
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("evaluate", help="fly a model like each record, report distances",
-                       description="Fly a saved model the way each record was flown (zig-zags "
-                       "closed loop) and report the Table-10 distance per file.")
+                       description="Fly a saved model the way each record was flown (a zig-zag "
+                       "closed loop and a turn from its rudder execute, a manual approach "
+                       "neither flown nor scored) and report the Table-10 distance per file.")
     p.add_argument("model", help="saved model JSON")
     p.add_argument("data", nargs="+",
-                   help="measurement CSV files, each reported under its file stem (or, where "
-                   "two share a stem, the shortest end of their paths that tells them apart); "
-                   "a file given twice is refused")
+                   help="measurement CSV or Parquet files, or quoted glob patterns that name "
+                   "them ('trials/tc*.csv'), each reported under its file stem (or, where two "
+                   "share a stem, the shortest end of their paths that tells them apart); a "
+                   "file given twice is refused")
     add_ship(p, default=None)
     add_resample(p)
     add_record_options(p)
@@ -32,11 +35,13 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from ..evaluation import evaluate
     from ..model import AbkowitzModel
+    from ..records import expand_paths
     from ..reports import evaluation_report
-    from ..ships import load_ship
+    from ._common import load_cli_ship
 
+    args.data = expand_paths(args.data)
     check_inputs([args.model, *args.data, *ship_file(args.ship)])
-    ship = load_ship(args.ship) if args.ship else None
+    ship = load_cli_ship(args.ship) if args.ship else None
     model = AbkowitzModel.load(args.model, ship=ship)
     records = read_records(args.data, args.resample, ship=model.ship,
                            skip_checks=args.skip_check, time_range=args.time_range)

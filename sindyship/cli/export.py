@@ -44,7 +44,8 @@ def add_parser(sub) -> None:
     p.add_argument("--channel", action="append", default=[], metavar="NAME=VALUE",
                    help="default value (library scaling) of a recorded channel the library "
                    "uses, repeatable; the generated simulate() and zigzag() take the channels "
-                   "as time series (channels=...), and without a default they must")
+                   "as time series (channels=...), and without a default they must be passed "
+                   "there (default: no defaults)")
     add_json(p)
 
 
@@ -95,10 +96,10 @@ def run(args) -> int:
     """Run ``sindyship export``; returns the exit status."""
     from ..export import equations_text, generate_python, latex_document_part
     from ..model import AbkowitzModel
-    from ..ships import load_ship
+    from ._common import load_cli_ship
 
     _check(args)
-    ship = load_ship(args.ship) if args.ship else None
+    ship = load_cli_ship(args.ship) if args.ship else None
     model = AbkowitzModel.load(args.model, ship=ship)
     channels = _parse_channels(args.channel)
     if args.python:

@@ -10,9 +10,12 @@ from ._common import (
     bounded_int,
     check_inputs,
     emit,
+    load_cli_ship,
     progress,
     report_prior_coverage,
+    resolved_library,
     ship_file,
+    speed_form,
     split_names,
 )
 from ._records import read_records
@@ -24,7 +27,7 @@ def add_parser(sub) -> None:
                        description="Identify an Abkowitz model (paper eq. 14-17) from "
                        "measurement CSVs (or Parquet files with the same columns; quoted glob "
                        "patterns such as 'fleet/*.parquet' name many) and save it as JSON.")
-    add_training_options(p, n_jobs_default=None)
+    add_training_options(p, n_jobs_default=None, recommended=True)
     add_stream_options(p)
     p.add_argument("--seed", type=SEED, default=0,
                    help="seed of randomised optimizers, a whole number >= 0 (default 0)")
@@ -33,13 +36,24 @@ def add_parser(sub) -> None:
                    help="with --optimizer prior: the weight of the ship's prior, in [0, 1], as "
                    "a share of the force's sum of squares that one prior standard deviation "
                    "costs (default 1e-5; smaller follows the data, larger the prior)")
-    p.add_argument("--refine", type=bounded_int(0, 1000, "a whole number of steps"),
-                   default=0, metavar="N",
+    p.add_argument("--refine", type=bounded_int(0, 1000, "a whole number of evaluations"),
+                   default=None, metavar="N",
                    help="refine the fitted coefficients by the error of the records' flights "
-                   "(output error; each record flown as evaluate flies it), at most N trial "
-                   "steps, each accepted one with a Jacobian that flies the model once per "
-                   "non-zero coefficient (10 is typical: a minute on 8 records of 3200 s; 1 or "
-                   "2 may refine nothing); 0 does not refine (default)")
+                   "(regularised output error by multiple shooting: every record from its "
+                   "flight start cut into segments, each flown from its measured state; the "
+                   "fit's own objective, with the prior of a prior fit, holds what the flights "
+                   "cannot tell apart), at most N evaluations of the flights' error, each "
+                   "accepted step with exact sensitivities; 0 does not refine (default: 60 "
+                   "with --optimizer prior, 0 with the others)")
+    p.add_argument("--segment", type=bounded_float(0, 1e6, "seconds"), default=None,
+                   metavar="SECONDS",
+                   help="length of the refinement's segments [s] (default: three stages of "
+                   "5, 15 and 45 L/U0, none longer than the longest record)")
+    p.add_argument("--refine-weight", type=bounded_float(0, 1e6, "", low_open=False),
+                   default=None, metavar="W",
+                   help="weight of the fit's own objective (force error over its sum of "
+                   "squares, and the prior) against the flights' mean squared error in the "
+                   "refinement, >= 0 (default 0.01; 0 refines by the flights alone)")
     p.add_argument("--out", required=True, metavar="FILE",
                    help=f"output model JSON ({OUT_NOTE})")
     p.add_argument("--no-identifiability", action="store_true",
@@ -90,26 +104,38 @@ def fit_inputs(args) -> list[str]:
             *split_names(args.effects)]
 
 
+def _defaults(args) -> None:
+    """The options whose default depends on others: the library (``abkowitz-vr`` for the
+    prior fit) and the refinement (on for the prior fit)."""
+    args.library = resolved_library(args)
+    if args.refine is None:
+        from ..refine import MAX_EVALUATIONS
+
+        args.refine = MAX_EVALUATIONS if args.optimizer == "prior" else 0
+    for option, value in (("--segment", args.segment), ("--refine-weight", args.refine_weight)):
+        if value is not None and not args.refine:
+            from ..errors import SindyshipInputError
+
+            raise SindyshipInputError(f"{option} sets the refinement, which is off (--refine 0 "
+                                      f"or --optimizer {args.optimizer}); add --refine N or "
+                                      f"drop {option}.")
+
+
 def run(args) -> int:
     from .._io import check_output
     from ..identify import fit
     from ..records import expand_paths
-    from ..ships import load_ship
 
     args.data = expand_paths(args.data)
+    _defaults(args)
     params = optimizer_params(args)
     check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}",
                  suffixes=(".json",))
     check_inputs(fit_inputs(args))
-    ship = load_ship(args.ship)
+    ship = load_cli_ship(args.ship)
+    speed = speed_form(args, ship)
     if args.stream or args.scheduler:
-        if args.refine:
-            from ..errors import SindyshipInputError
-
-            raise SindyshipInputError("--refine flies the records, which a streamed fit "
-                                      "(--stream or --scheduler) does not hold in memory; fit "
-                                      "in memory or drop --refine.")
-        return _run_streamed(args, ship, params)
+        return _run_streamed(args, ship, params, speed)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
     effects = split_names(args.effects)
@@ -121,59 +147,78 @@ def run(args) -> int:
         records = smooth_records(records, smoothing)
     model = fit(records, ship, library=args.library, effects=effects, optimizer=args.optimizer,
                 params=params, rudder_signal=args.rudder_signal, derivative=args.derivative,
-                window=args.window)
+                window=args.window, speed=speed)
     if smoothing is not None:
         model.info["smoothing"] = smoothing.as_dict()
     report_prior_fit(model)
     if args.refine:
-        model = _refined(model, records, args.refine)
+        model = _refined(model, records, args)
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
     state = model.info.get("straight_run")  # a raised prior strength is the fit's strength
     fitted_params = params if state is None else {**params, "strength": state["strength"]}
     report = None if args.no_identifiability else _identifiability(args, records, ship, effects,
-                                                                   fitted_params)
+                                                                   fitted_params, speed)
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
-              "library": model.library.name, "optimizer": model.optimizer["name"],
+              "library": model.library.name, "speed": model.library.speed,
+              "optimizer": model.optimizer["name"],
               "identifiability": None if report is None else report.to_dict(),
               "refined": model.info.get("refined")})
     return 0
 
 
-def _refined(model, records, evaluations: int):
+def _refined(model, records, args, n_jobs=1):
     """The model refined by its records' flights (:func:`sindyship.refine.refine`), with
-    what the refinement did on stderr."""
-    import sys
-
+    each step and what the refinement did on stderr."""
     from ..refine import refine
 
-    progress(f"refining by the records' flights (at most {evaluations} trial steps)")
-    refined = refine(model, records, max_evaluations=evaluations, progress=sys.stderr.isatty())
+    progress(f"refining by the records' flights (multiple shooting, at most {args.refine} "
+             "evaluations)")
+    refined = refine(model, records, max_evaluations=args.refine, segment_s=args.segment,
+                     prior_weight=args.refine_weight, progress=True, n_jobs=n_jobs)
     done = refined.info["refined"]
     if done["refused_unstable"]:
         progress(f"not refined: {done['stopped']} (the prior fit's stability requirement).")
     elif done["cost_after"] < done["cost_before"]:
         change = done["largest_change"]
-        progress(f"refined: flight error (half the sum of squares) {done['cost_before']:.4g} -> "
-                 f"{done['cost_after']:.4g} in {done['evaluations']} trial steps and "
-                 f"{done['jacobians']} Jacobians; {change['coefficient']} moved most "
+        progress(f"refined: flight error (rms over the compared samples) "
+                 f"{done['flight_rms_before']:.4g} -> {done['flight_rms_after']:.4g} in "
+                 f"{done['evaluations']} evaluations and {done['jacobians']} Jacobians "
+                 f"({done['stopped']}); {change['coefficient']} moved most "
                  f"({change['relative']:+.1%}).")
     else:
-        progress(f"not refined: no step lowered the flight error ({done['cost_before']:.4g}); "
-                 "the fitted coefficients are kept (a larger --refine allows more steps).")
+        progress(f"not refined: no step lowered the error ({done['cost_before']:.4g}); the "
+                 "fitted coefficients are kept.")
+    if not done["converged"] and not done["refused_unstable"]:
+        progress(f"note: the refinement stopped before it converged ({done['stopped']}); a "
+                 "larger --refine lets it finish.")
     if not done["straight_run_stable"]:
         progress("warning: the refined model is unstable in straight running, so a disturbance "
                  "grows in its flights; refine a --optimizer prior fit, which starts stable, "
-                 "or fewer steps, and fly it on records it was not refined on.")
+                 "and fly it on records it was not refined on.")
     return refined
 
 
-def _run_streamed(args, ship, params: dict) -> int:
-    """``fit --stream``: the model from per-record factors reduced on a Dask cluster."""
+def _run_streamed(args, ship, params: dict, speed: str) -> int:
+    """``fit --stream`` (or ``--scheduler``): the model from per-record factors reduced on a
+    Dask cluster; a refinement then reads the records and flies their segments on the
+    cluster's workers."""
     effects = split_names(args.effects)
-    model, summary = streamed_fit(args, ship, effects, params)
+    model, summary = streamed_fit(args, ship, effects, params, speed)
     report_prior_fit(model)
+    if args.refine:
+        from ._common import on_cluster
+
+        records = read_records(args.data, args.resample, ship=ship,
+                               skip_checks=args.skip_check, time_range=args.time_range)
+        if args.smoothing not in ("none", None):
+            from ..smoothing import SmoothingSetting, smooth_records
+
+            records = smooth_records(records, SmoothingSetting.parse(args.smoothing))
+        with on_cluster(args.scheduler, args.n_jobs) as workers:
+            model = _refined(model, records, args, n_jobs=workers if args.scheduler else
+                             (args.n_jobs or 1))
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
     if not args.no_identifiability:
@@ -181,8 +226,9 @@ def _run_streamed(args, ship, params: dict) -> int:
                  "fit a subset in memory to see it.")
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
-              "library": model.library.name, "optimizer": model.optimizer["name"],
-              "identifiability": None, "streamed": summary})
+              "library": model.library.name, "speed": model.library.speed,
+              "optimizer": model.optimizer["name"], "identifiability": None,
+              "streamed": summary, "refined": model.info.get("refined")})
     return 0
 
 
@@ -210,15 +256,17 @@ def report_prior_fit(model) -> None:
                  f"identifiability report names{larger}).")
 
 
-def _identifiability(args, records, ship, effects, params):
+def _identifiability(args, records, ship, effects, params, speed):
     """Terms the records cannot separate, on stderr (the remedies need the ship's MMG)."""
     if len(records) < 2:
         return None
     from ..identifiability import identifiability
+    from ..identify import resolve_library
 
     # the members draw their own seeds (uncertainty.ensemble); the strength is the fit's
     members = {k: v for k, v in params.items() if k != "random_state"}
-    report = identifiability(records, ship, library=args.library, effects=effects,
+    report = identifiability(records, ship, library=resolve_library(args.library, effects,
+                                                                    speed), effects=(),
                              optimizer=args.optimizer, params=members,
                              rudder_signal=args.rudder_signal,
                              remedies=ship.has_mmg)

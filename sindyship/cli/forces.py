@@ -44,13 +44,15 @@ def run(args) -> int:
     from ..measurements import read_csv
     from ..model import AbkowitzModel
     from ..reports import forces_report
-    from ..ships import load_ship
+    from ._common import check_inputs, load_cli_ship, ship_file
 
+    inputs = [args.model, args.captive, *(args.training or []), *ship_file(args.ship)]
+    check_inputs(inputs)  # a FIFO or a device never reaches a reader
     _check_order(args.model, args.captive)
     if args.out is not None:
         check_output(args.out, inputs=[args.model, args.captive, *(args.training or [])],
                      kind="folder", label=f"--out {args.out}", replaceable="forces.json")
-    ship = load_ship(args.ship) if args.ship else None
+    ship = load_cli_ship(args.ship) if args.ship else None
     model = AbkowitzModel.load(args.model, ship=ship)
     captive = read_captive_csv(args.captive)
     training = [read_csv(p) for p in args.training] if args.training else None

@@ -109,12 +109,12 @@ def run(args) -> int:
     from ..effects import parse_effects, simulate_with_effects
     from ..manoeuvres import Manoeuvre
     from ..measurements import write_csv
-    from ..ships import load_ship
+    from ._common import load_cli_ship
 
     check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}",
                  kind="folder" if args.protocol else "file", suffixes=(".csv",))
     check_inputs(ship_file(args.ship))
-    ship = load_ship(args.ship)
+    ship = load_cli_ship(args.ship)
     check_rudder(args.rudder, ship, "--rudder")
     check_rudder(args.check, ship, "--check")
     check_simulation_cost(ship, args.duration, args.dt)

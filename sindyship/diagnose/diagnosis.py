@@ -16,15 +16,12 @@ from ..library import (
     DOFS,
     Effect,
     TermLibrary,
-    available_effects,
-    load_effect,
 )
 from ..model import AbkowitzModel
-from ..optimizers import GroupedProblem, one_blas_thread
+from ..optimizers import one_blas_thread
 from ..ships import Ship
 from ..smoothing import SmoothingSetting, resolve_smoothing, smooth_records
 from ..stability import Stability, straight_run_stability
-from ..terms import Term
 from ..trajectory import Trajectory
 from ..uncertainty import library_conditioning
 from ._constants import (
@@ -39,9 +36,10 @@ from ._flights import _fly_many
 from .before_after import BeforeAfter, _change_rows, _fit
 from .compare import ManoeuvreComparison, compare
 from .discovery import Discovery, discover
-from .noise import channel_noise, noise_sse
-from .residuals import Residuals, _residuals
-from .scoring import EffectScore, NotTestable, _score, _untestable
+from .noise import channel_noise
+from .ranking import rank_effects
+from .residuals import Residuals
+from .scoring import EffectScore, NotTestable
 
 
 @dataclass
@@ -256,17 +254,6 @@ def _collinear_terms(problems: Mapping[str, Design]) -> dict[str, dict[str, floa
     return out
 
 
-def _catalogue(effects: Sequence[str | Effect] | None) -> list[Effect]:
-    names = available_effects() if effects is None else effects
-    out = [e if isinstance(e, Effect) else load_effect(e) for e in names]
-    seen = set()
-    for effect in out:
-        if effect.name in seen:
-            raise SindyshipInputError(f'the effect "{effect.name}" is given twice.')
-        seen.add(effect.name)
-    return out
-
-
 @one_blas_thread
 def diagnose(
     records: Sequence[Trajectory],
@@ -337,8 +324,6 @@ def diagnose(
         Fewer than two training records, an unknown effect, or a record the library cannot
         be evaluated on.
     """
-    from joblib import Parallel, delayed
-
     start = time.perf_counter()
     records, test = list(records), list(test)
     _check_arguments(records, test, threshold)
@@ -347,79 +332,9 @@ def diagnose(
     smoothing = resolve_smoothing(smoothing, records, ship, library=base, optimizer=optimizer,
                                   rudder_signal=rudder_signal, n_jobs=n_jobs)
     fitted = records if smoothing is None else smooth_records(records, smoothing)
-    candidates, not_testable, in_library = [], [], []
-    for effect in _catalogue(effects):
-        if effect.name in base.effects:
-            in_library.append(effect.name)
-            continue
-        reason = _untestable(effect, records)
-        if reason is not None:
-            not_testable.append(reason)
-            continue
-        present = {dof: {t.canonical(scale=False) for t in base.terms[dof]} for dof in DOFS}
-        new = {
-            dof: [t.text for t in effect.terms[dof] if t.canonical(scale=False) not in present[dof]]
-            for dof in DOFS
-        }
-        if not any(new.values()):
-            in_library.append(effect.name)
-            continue
-        candidates.append((effect, new))
-    union = base.extended(*[effect for effect, _ in candidates])
-    problems = design(fitted, ship, union, **settings)
-    n_base = {dof: len(base.terms[dof]) for dof in DOFS}
-    base_problems = {
-        dof: Design(
-            problems[dof].features[:, : n_base[dof]],
-            problems[dof].target,
-            problems[dof].groups,
-            problems[dof].terms[: n_base[dof]],
-        )
-        for dof in DOFS
-    }
-    model = _fit(fitted, ship, base, base_problems, optimizer=optimizer, **settings)
-    residuals = _residuals(
-        base_problems,
-        {dof: model.coefficient_vector(dof) for dof in DOFS},
-        fitted,
-        ship,
-        rudder_signal,
-    )
-    grouped = {
-        dof: GroupedProblem(problems[dof].features, problems[dof].target, problems[dof].groups)
-        for dof in DOFS
-    }
-    base_columns = {dof: np.arange(n_base[dof]) for dof in DOFS}
-    base_errors = {dof: grouped[dof].lomo_errors(base_columns[dof]) for dof in DOFS}
-    window = max(1, int(round(ship.time_scale / float(np.median([r.dt for r in records])))))
-    noise = {dof: noise_sse(base_errors[dof], problems[dof].groups, window) for dof in DOFS}
-    force_error = {
-        dof: float(
-            np.sqrt(np.mean(base_errors[dof] ** 2))
-            / max(np.sqrt(np.mean(problems[dof].target ** 2)), 1e-300)
-        )
-        for dof in DOFS
-    }
-    index = {
-        dof: {t.canonical(scale=False): i for i, t in enumerate(union.terms[dof])} for dof in DOFS
-    }
-    jobs = []
-    for effect, new in candidates:
-        columns = {
-            dof: np.array(
-                sorted(
-                    set(base_columns[dof].tolist())
-                    | {index[dof][Term(t).canonical(scale=False)] for t in new[dof]}
-                ),
-                dtype=int,
-            )
-            for dof in DOFS
-        }
-        jobs.append(
-            delayed(_score)(effect, columns, grouped, base_errors, residuals, new, threshold, noise)
-        )
-    ranking = list(Parallel(n_jobs=n_jobs, prefer="threads")(jobs)) if jobs else []
-    ranking.sort(key=lambda s: (-s.explained_signal, -s.explained, s.effect.name))
+    ranked = rank_effects(fitted, records, ship, base, effects, settings, optimizer=optimizer,
+                          threshold=threshold, n_jobs=n_jobs)
+    model, ranking = ranked.model, ranked.ranking
 
     sets = ([("training", records)] if fly_training else []) + [("held-out", test)]
     sets = [(kind, recs) for kind, recs in sets if recs]
@@ -463,16 +378,17 @@ def diagnose(
         model=model,
         threshold=threshold,
         ranking=ranking,
-        not_testable=not_testable,
-        in_library=in_library,
+        not_testable=ranked.not_testable,
+        in_library=ranked.in_library,
         comparisons=comparisons,
-        residuals=residuals,
-        force_error=force_error,
+        residuals=ranked.residuals,
+        force_error=ranked.force_error,
         stability=_stability(model),
-        noise_floor={dof: noise[dof] / max(float(base_errors[dof] @ base_errors[dof]), 1e-300)
+        noise_floor={dof: ranked.noise[dof] / max(float(ranked.base_errors[dof]
+                                                        @ ranked.base_errors[dof]), 1e-300)
                      for dof in DOFS},
         noise_level=channel_noise(records),
-        collinear=_collinear_terms(base_problems),
+        collinear=_collinear_terms(ranked.base_problems),
         settings={
             **settings,
             "optimizer": optimizer,

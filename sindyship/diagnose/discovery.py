@@ -48,6 +48,7 @@ from ..trajectory import Trajectory
 from ._constants import MEANINGFUL_SHARE
 from .candidates import Family, families, family_columns
 from .noise import noise_sse
+from .ranking import rank_effects
 from .scoring import _dof_shares
 
 #: Most terms a family may add to one equation.
@@ -529,11 +530,9 @@ def discover(
 
 def _meaningful_catalogue(records, ship, library, threshold, settings) -> dict[str, float]:
     """The catalogued effects meaningful on ``records`` (scored as the diagnosis does)."""
-    from .diagnosis import diagnose
-
-    scored = diagnose(records, ship, library=library, threshold=threshold, confirm=0,
-                      fly_training=False, search_beyond=False, **settings)
-    return {s.effect.name: s.explained_signal for s in scored.ranking if s.meaningful}
+    ranked = rank_effects(records, records, ship, library, None, settings, optimizer="ls",
+                          threshold=threshold)
+    return {s.effect.name: s.explained_signal for s in ranked.ranking if s.meaningful}
 
 
 def _as_effect(finding: Finding, k: int) -> Effect:

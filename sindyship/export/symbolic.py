@@ -76,7 +76,7 @@ def force_expressions(model: AbkowitzModel, numeric: bool = False) -> dict[str, 
     for dof in DOFS:
         total: sympy.Expr = sympy.Integer(0)
         for term, value in _active_terms(model, dof):
-            coef = sympy.Float(value) if numeric else coefficient_symbol(dof, term)
+            coef = sympy.Float(float(value)) if numeric else coefficient_symbol(dof, term)
             total = total + coef * term.sympy()
         out[dof] = total
     return out
@@ -129,7 +129,7 @@ def model_equations(model: AbkowitzModel, numeric: bool = False) -> dict[str, sy
     extra = coriolis_expressions(model.ship)
     out = {}
     for i, dof in enumerate(DOFS):
-        lhs = sum((sympy.Float(M[i, j]) * ACCELERATIONS[j] for j in range(3) if M[i, j] != 0.0),
-                  sympy.Integer(0))
+        lhs = sum((sympy.Float(float(M[i, j])) * ACCELERATIONS[j] for j in range(3)
+                   if M[i, j] != 0.0), sympy.Integer(0))
         out[dof] = sympy.Eq(lhs, forces[dof] + extra[dof], evaluate=False)
     return out

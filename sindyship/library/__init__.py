@@ -63,7 +63,19 @@ from ._files import (
 )
 from ._objects import Effect, TermLibrary
 from ._pysindy import AbkowitzFeatureLibrary
-from ._variables import feature_matrix, nondimensional_variables, record_variables
+from ._variables import (
+    SPEED_FACTOR,
+    SPEED_FLOOR,
+    SPEED_FORMS,
+    apparent_wind,
+    derived_variables,
+    feature_matrix,
+    motion_variables,
+    nondimensional_variables,
+    record_variables,
+    rescaled_to_speed,
+    speed_ratio,
+)
 
 __all__ = [
     "DOFS",
@@ -78,4 +90,12 @@ __all__ = [
     "load_library",
     "nondimensional_variables",
     "record_variables",
+    "SPEED_FACTOR",
+    "SPEED_FLOOR",
+    "SPEED_FORMS",
+    "apparent_wind",
+    "derived_variables",
+    "motion_variables",
+    "rescaled_to_speed",
+    "speed_ratio",
 ]

@@ -22,7 +22,7 @@ _NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
 _CHANNEL_RE = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
 _MAX_FILE_BYTES = 1_000_000
 _LIBRARY_KEYS = {"name": True, "system": True, "description": False, "terms": True,
-                 "delays": False}
+                 "delays": False, "speed": False}
 _EFFECT_KEYS = {"name": True, "title": True, "physics": True, "channels": False, "terms": False,
                 "delays": False}
 #: Channels a library may not delay: time, the motion state and the positions it integrates.

@@ -140,6 +140,7 @@ def load_library(name_or_path: str | Path) -> TermLibrary:
         terms=_read_terms(data["terms"], file, raw, all_dofs=True),
         source=source,
         delays=_read_delays(data.get("delays"), file),
+        speed=_speed_form(data, file),
     )
 
 
@@ -171,3 +172,13 @@ def load_effect(name_or_path: str | Path) -> Effect:
         source=Path(str(file)),
         delays=_read_delays(data.get("delays"), file),
     )
+
+
+def _speed_form(data, label) -> str:
+    """A library's ``speed`` key: ``design`` (the default) or ``instantaneous``."""
+    value = data.get("speed", "design")
+    if value not in ("design", "instantaneous"):
+        raise SindyshipInputError(
+            f'{_where(label)}speed must be "design" or "instantaneous", not {value!r}.'
+        )
+    return value

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from sindyship.errors import SindyshipInputError
-from sindyship.terms import CORE_VARIABLES, Term
+from sindyship.terms import CORE_VARIABLES, Term, sources_of
 
 from ._checks import (
     _CHANNEL_RE,
@@ -54,6 +54,12 @@ class TermLibrary:
         Recorded channels that lag the physics, and by how many seconds (a rudder-angle
         sensor late by 4 s: ``{"delta": 4.0}``).  Every term reads such a channel at
         ``t + delay`` (:meth:`aligned`); see docs/effects.md.
+    speed : {"design", "instantaneous"}
+        The speed the forces and the variables are made non-dimensional with: the constant
+        design speed U0 (the paper's Prime I), or the instantaneous speed U = sqrt(u^2 + v^2),
+        so that ``v`` is v/U, ``r`` r L/U, ``n`` n L/U and every term carries (U/U0)^2 (forces
+        that scale with the square of the speed, valid as a ship slows in a turn; Yasukawa &
+        Yoshimura 2015).  ``du`` stays u/U0 - 1 in both.
 
     Examples
     --------
@@ -77,9 +83,14 @@ class TermLibrary:
     source: Path | None = field(default=None, compare=False)
     effects: tuple[str, ...] = ()
     delays: Mapping[str, float] = field(default_factory=dict)
+    speed: str = "design"
 
     def __post_init__(self) -> None:
         label = self.source if self.source is not None else f'library "{self.name}"'
+        if self.speed not in ("design", "instantaneous"):
+            raise SindyshipInputError(
+                f'{_where(label)}speed must be "design" or "instantaneous", not {self.speed!r}.'
+            )
         frozen = _frozen_terms(self.terms, label, all_dofs=True)
         object.__setattr__(self, "terms", frozen)
         object.__setattr__(self, "effects", tuple(self.effects))
@@ -87,7 +98,7 @@ class TermLibrary:
 
     def __hash__(self) -> int:
         return hash((self.name, self.system, self.description, *self.terms.items(), self.effects,
-                     *sorted(self.delays.items())))
+                     *sorted(self.delays.items()), self.speed))
 
     def aligned(self, record):
         """The record with every delayed channel read ``delay`` seconds later.
@@ -188,7 +199,22 @@ class TermLibrary:
             source=self.source,
             effects=tuple(names),
             delays=delays,
+            speed=self.speed,
         )
+
+    def with_speed(self, speed: str) -> TermLibrary:
+        """The same terms made non-dimensional with another speed (:attr:`speed`).
+
+        Examples
+        --------
+        >>> from sindyship.library import load_library
+        >>> load_library("abkowitz").with_speed("instantaneous").speed
+        'instantaneous'
+        """
+        if speed == self.speed:
+            return self
+        return TermLibrary(self.name, self.system, self.description, self.terms, self.source,
+                           self.effects, self.delays, speed)
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready description (name, system, description, effects, term texts).
@@ -209,6 +235,8 @@ class TermLibrary:
         }
         if self.delays:
             out["delays"] = dict(self.delays)
+        if self.speed != "design":
+            out["speed"] = self.speed
         return out
 
     @classmethod
@@ -237,6 +265,7 @@ class TermLibrary:
             source=Path(source) if source is not None else None,
             effects=tuple(effects),
             delays=_read_delays(data.get("delays"), label),
+            speed=data.get("speed", "design"),
         )
 
 
@@ -294,7 +323,8 @@ class Effect:
                     f'{_where(label)}"{channel}" is always available; list only the channels '
                     "beyond du, v, r and delta."
                 )
-        undeclared = sorted(_variables(frozen) - set(CORE_VARIABLES) - set(channels))
+        used = {source for name in _variables(frozen) for source in sources_of(name)}
+        undeclared = sorted(used - set(CORE_VARIABLES) - set(channels))
         if undeclared:
             raise SindyshipInputError(
                 f'{_where(label)}the terms use the channel "{undeclared[0]}"; add it to channels.'

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import re
+import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 from pysindy.feature_library.base import BaseFeatureLibrary, x_sequence_or_item
@@ -13,12 +13,10 @@ from sklearn.utils.validation import check_is_fitted
 
 from sindyship.errors import SindyshipInputError
 from sindyship.terms import CORE_VARIABLES, Term, parse_term
+from sindyship.terms._term import _number_text as number_text
 
 from ._objects import TermLibrary
 from ._variables import feature_matrix
-
-if TYPE_CHECKING:
-    pass
 
 
 # ---------------------------------------------------------------------------- pysindy
@@ -140,31 +138,70 @@ class AbkowitzFeatureLibrary(BaseFeatureLibrary):
         return out
 
     def get_feature_names(self, input_features: Sequence[str] | None = None) -> list[str]:
-        """The term texts (the coefficient keys), checked against pysindy's input names.
+        """The term texts (the coefficient keys), in the names pysindy gives the inputs.
 
-        The library binds its input columns by ``input_names``; pysindy passes the names it
-        gives the same columns (``SINDy.fit(..., feature_names=...)``) as ``input_features``.
-        When they disagree the library would label its terms with the wrong variables, so it
-        refuses (pysindy's default names ``x0, x1, ..., u0, ...`` name no variable and pass).
+        The library binds its input columns by position to ``input_names``.  pysindy passes
+        the names it gives the same columns (``SINDy.fit(..., feature_names=...)``, or a
+        composed library's own names) as ``input_features``:
+
+        - ``None``, ``input_names`` themselves, or pysindy's default names ``x0, x1, ...,
+          u0, ...``: the term texts as written (the coefficient keys);
+        - any other names (one per input column): the terms with each variable replaced by
+          the name of its column, by position, and one :class:`UserWarning` saying so
+          (names in another order than ``input_names`` mean that the columns are not bound
+          as the caller thinks).
 
         Raises
         ------
         sklearn.exceptions.NotFittedError
             Before :meth:`fit`.
-        ValueError
-            When ``input_features`` are not ``input_names`` in the same order.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> lib = AbkowitzFeatureLibrary(terms=("v^2 r", "abs(v) v"), input_names=("v", "r"))
+        >>> lib = lib.fit(np.ones((3, 2)))
+        >>> import warnings
+        >>> with warnings.catch_warnings():
+        ...     warnings.simplefilter("ignore")
+        ...     lib.get_feature_names(["a", "b"])
+        ['a^2 b', 'abs(a) a']
         """
         check_is_fitted(self)
-        if input_features is not None:
-            given, expected = [str(n) for n in input_features], [str(n) for n in self.input_names]
-            if given != expected and not all(re.fullmatch(r"[xu]\d+", n) for n in given):
-                missing = sorted(set(expected) - set(given))
-                extra = sorted(set(given) - set(expected))
-                what = (f"missing {missing}" if missing else "") + (
-                    f"{'; ' if missing else ''}unknown {extra}" if extra else "")
-                raise ValueError(
-                    f"the input columns are named {given} but the library binds them as "
-                    f"{expected} ({what or 'another order'}); pass input_names in the order of "
-                    "the columns (state, then control) or the same feature_names to SINDy."
-                )
-        return [str(t) for t in self.terms_]
+        texts = [str(t) for t in self.terms_]
+        if input_features is None:
+            return texts
+        given = [str(n) for n in input_features]
+        expected = [str(n) for n in self.input_names]
+        if given == expected or all(re.fullmatch(r"[xu]\d+(\[k\])?", n) for n in given):
+            return texts
+        if len(given) != len(expected):
+            self._warn_once(
+                f"{len(given)} input names were given for the library's {len(expected)} input "
+                f"columns ({', '.join(expected)}); the terms are named by the library's own "
+                "variables.")
+            return texts
+        mapping = dict(zip(expected, given, strict=True))
+        renames = ", ".join(f"{a} -> {b}" for a, b in mapping.items() if a != b)
+        self._warn_once(
+            f"the input columns are named {given} but the library binds them by position as "
+            f"{expected}; its terms are named by position ({renames}).")
+        return [_renamed(term, mapping) for term in self.terms_]
+
+    def _warn_once(self, message: str) -> None:
+        """One :class:`UserWarning` per fitted library about how its names are bound."""
+        if getattr(self, "_names_warned", None) != message:
+            self._names_warned = message
+            warnings.warn(message, UserWarning, stacklevel=3)
+
+
+def _renamed(term: Term, mapping: dict[str, str]) -> str:
+    """A term's text with its variables renamed (``v^2 r`` with v -> a, r -> b: ``a^2 b``)."""
+    if not term.factors:
+        return str(term)
+    words = []
+    for function, base, power in term.factors:
+        name = mapping.get(base, base) if isinstance(base, str) else number_text(base)
+        word = f"{function}({name})" if function else name
+        words.append(word + (f"^{power}" if power > 1 else ""))
+    return " ".join(words)

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sindyship.errors import SindyshipInputError
-from sindyship.terms import CORE_VARIABLES, Term, describe_variable
+from sindyship.terms import CORE_VARIABLES, DERIVED_SOURCES, Term, describe_variable
 
 from ._objects import Effect, TermLibrary
 
@@ -24,6 +24,80 @@ _SCALINGS = {
     "none": lambda x, L, U0: x,
 }
 
+#: The two reference speeds of a library (:attr:`TermLibrary.speed`).
+SPEED_FORMS = ("design", "instantaneous")
+#: The key of the speed factor (U/U0)^2 in a dictionary of variables of the ``instantaneous``
+#: form (no variable can be named so).
+SPEED_FACTOR = "_U2"
+#: The least speed U/U0 of the ``instantaneous`` form: a ship at rest has no U to divide by.
+SPEED_FLOOR = 0.05
+
+
+def speed_ratio(u, v, U0: float):
+    """U/U0 with U = sqrt(u^2 + v^2), at least :data:`SPEED_FLOOR` (SI speeds)."""
+    return np.maximum(np.hypot(u, v) / U0, SPEED_FLOOR)
+
+
+def apparent_wind(u, v, psi, wind_speed, wind_dir):
+    """The wind the ship feels: speed [m/s] and the angle off the bow it comes from [rad,
+    positive from starboard], from the true wind (``wind_speed`` [m/s] from ``wind_dir``
+    [rad, clockwise from north]) and the ship's own motion (u, v [m/s] over ground, heading
+    psi [rad]).
+
+    Examples
+    --------
+    >>> speed, angle = apparent_wind(5.0, 0.0, 0.0, 0.0, 0.0)  # calm: a head wind of 5 m/s
+    >>> float(speed), float(angle)
+    (5.0, 0.0)
+    >>> speed, angle = apparent_wind(0.0, 0.0, 0.0, 10.0, np.pi / 2)  # at rest, wind from east
+    >>> float(speed), round(float(np.degrees(angle)))
+    (10.0, 90)
+    """
+    relative = np.asarray(wind_dir, dtype=float) - np.asarray(psi, dtype=float)
+    # the air's velocity relative to the ship, body axes (x forward, y to starboard)
+    u_air = -np.asarray(wind_speed) * np.cos(relative) - np.asarray(u)
+    v_air = -np.asarray(wind_speed) * np.sin(relative) - np.asarray(v)
+    return np.hypot(u_air, v_air), np.arctan2(-v_air, -u_air)
+
+
+def motion_variables(u, v, r, delta, psi, L: float, U0: float, speed: str = "design") -> dict:
+    """The library's motion variables at SI states (paper eq. 14-15).
+
+    ``design``: Prime I with the design speed U0, ``du = u/U0 - 1``, ``v = v/U0``,
+    ``r = r L/U0``.  ``instantaneous``: ``v`` and ``r`` over the instantaneous speed U
+    (:func:`speed_ratio`), ``du`` still ``u/U0 - 1`` (how the coefficients change with the
+    speed), and the speed factor (U/U0)^2 under :data:`SPEED_FACTOR`, which multiplies every
+    term (the forces scale with the square of the speed).
+    """
+    un = np.asarray(u, dtype=float) / U0
+    values = {"du": un - 1.0, "delta": delta, "psi": psi}
+    if speed == "instantaneous":
+        ratio = speed_ratio(u, v, U0)
+        values.update(v=np.asarray(v) / (U0 * ratio), r=np.asarray(r) * L / (U0 * ratio))
+        values[SPEED_FACTOR] = ratio * ratio
+    else:
+        values.update(v=np.asarray(v) / U0, r=np.asarray(r) * L / U0)
+    return values
+
+
+def rescaled_to_speed(values: dict, names, ratio) -> None:
+    """Channels of the ``instantaneous`` form over the speed: those made non-dimensional with
+    U0 (``speed`` and ``rate`` scaling, e.g. n L/U0) divided by U/U0 = ``ratio``, in place."""
+    for name in names:
+        if name in values and describe_variable(name).scaling in ("speed", "rate"):
+            values[name] = values[name] / ratio
+
+
+def derived_variables(values: dict, names, u, v, psi, U0: float) -> None:
+    """The derived variables among ``names`` (:data:`sindyship.terms.DERIVED_SOURCES`) from
+    the SI motion and the recorded channels in ``values`` (library scaling), in place."""
+    if not ({"wind_app_speed", "wind_app_angle"} & set(names)):
+        return
+    speed, angle = apparent_wind(u, v, psi, np.asarray(values["wind_speed"]) * U0,
+                                 values["wind_dir"])
+    values["wind_app_speed"] = speed / U0
+    values["wind_app_angle"] = angle
+
 
 def nondimensional_variables(
     trajectory: Trajectory,
@@ -32,14 +106,18 @@ def nondimensional_variables(
     *,
     needed: Iterable[str] | TermLibrary | Effect | None = None,
     rudder: np.ndarray | None = None,
+    speed: str = "design",
 ) -> dict[str, np.ndarray]:
     """The library variables of a record, non-dimensional in the Prime-I system (eq. 14).
 
     With the ship length ``L`` and the design speed ``U0`` (constant, not the instantaneous
     speed): ``du = u/U0 - 1``, ``v = v/U0``, ``r = r L/U0``, ``delta`` the rudder angle
     [rad], ``delta_rate`` its rate by central differences times L/U0, ``psi`` the heading
-    [rad], ``n = n L/U0`` (n in rps), ``wind_speed`` over U0, ``wind_dir`` [rad].  Any other
-    channel is passed through as recorded (SI units).
+    [rad], ``n = n L/U0`` (n in rps), ``wind_speed`` over U0, ``wind_dir`` [rad], the apparent
+    wind ``wind_app_speed`` over U0 and ``wind_app_angle`` [rad] (:func:`apparent_wind`, from
+    the record's own motion).  Any other channel is passed through as recorded (SI units).
+    With ``speed="instantaneous"`` the speeds and rates are over U instead of U0
+    (:func:`motion_variables`) and the speed factor (U/U0)^2 is added.
 
     Parameters
     ----------
@@ -53,6 +131,8 @@ def nondimensional_variables(
     rudder : numpy.ndarray, optional
         The rudder angle [rad] to use for ``delta`` (e.g. the commanded one); default the
         record's actual rudder angle, else its commanded one.
+    speed : {"design", "instantaneous"}
+        The reference speed of the non-dimensional variables.
 
     Returns
     -------
@@ -79,6 +159,9 @@ def nondimensional_variables(
     for label, value in (("L", L), ("U0", U0)):
         if not (np.isfinite(value) and value > 0):
             raise SindyshipInputError(f"{label} must be a positive number, not {value!r}.")
+    if speed not in SPEED_FORMS:
+        raise SindyshipInputError(f"speed must be one of {', '.join(SPEED_FORMS)}, not "
+                                  f"{speed!r}.")
     if needed is None:
         names, requester = set(CORE_VARIABLES), "the model"
     elif isinstance(needed, TermLibrary | Effect):
@@ -87,37 +170,52 @@ def nondimensional_variables(
     else:
         names, requester = set(needed), "the terms"
     record = f'record "{trajectory.name}"' if trajectory.name else "the record"
-    order = sorted(names, key=lambda n: (n not in CORE_VARIABLES, _core_rank(n), n))
+    derived = names & set(DERIVED_SOURCES)
+    sources = {source for name in derived for source in DERIVED_SOURCES[name]}
+    order = sorted(names - derived | sources, key=lambda n: (n not in CORE_VARIABLES,
+                                                             _core_rank(n), n))
     out: dict[str, np.ndarray] = {}
     for name in order:
-        variable = describe_variable(name)
-        if variable.column == "rudder_rate":
-            angle = (np.asarray(rudder, dtype=float) if rudder is not None
-                     else trajectory.rudder)
-            column = np.gradient(angle, trajectory.t) if trajectory.n_samples > 1 else 0 * angle
-        elif variable.column == "rudder":
-            if rudder is not None:
-                column = np.asarray(rudder, dtype=float)
-                if column.shape != (trajectory.n_samples,):
-                    raise SindyshipInputError(
-                        f"the rudder angle given for {record} has shape {column.shape}, "
-                        f"not ({trajectory.n_samples},)."
-                    )
-            elif trajectory.has("delta") or trajectory.has("delta_c"):
-                column = trajectory.rudder
-            else:
-                raise SindyshipInputError(
-                    f'{requester} needs the rudder angle ("delta" or "delta_c"), which '
-                    f"{record} does not have."
-                )
-        elif trajectory.has(variable.column):
-            column = trajectory[variable.column]
-        else:
-            raise SindyshipInputError(
-                f'{requester} needs the channel "{variable.column}", which {record} does not have.'
-            )
-        out[name] = _SCALINGS[variable.scaling](column, float(L), float(U0))
+        column = _column(trajectory, describe_variable(name), rudder, requester, record)
+        out[name] = _SCALINGS[describe_variable(name).scaling](column, float(L), float(U0))
+    if derived:
+        derived_variables(out, derived, trajectory["u"], trajectory["v"], trajectory["psi"],
+                          U0)
+    if speed == "instantaneous":
+        ratio = speed_ratio(trajectory["u"], trajectory["v"], U0)
+        rescaled_to_speed(out, [n for n in out if n not in ("du",)], ratio)
+        out[SPEED_FACTOR] = ratio * ratio
+    for name in sources - names:
+        out.pop(name)
     return out
+
+
+def _column(trajectory: Trajectory, variable, rudder, requester: str, record: str
+            ) -> np.ndarray:
+    """The SI column of a variable in a record (the rudder, its rate, or a channel)."""
+    if variable.column == "rudder_rate":
+        angle = np.asarray(rudder, dtype=float) if rudder is not None else trajectory.rudder
+        return np.gradient(angle, trajectory.t) if trajectory.n_samples > 1 else 0 * angle
+    if variable.column == "rudder":
+        if rudder is not None:
+            column = np.asarray(rudder, dtype=float)
+            if column.shape != (trajectory.n_samples,):
+                raise SindyshipInputError(
+                    f"the rudder angle given for {record} has shape {column.shape}, "
+                    f"not ({trajectory.n_samples},)."
+                )
+            return column
+        if trajectory.has("delta") or trajectory.has("delta_c"):
+            return trajectory.rudder
+        raise SindyshipInputError(
+            f'{requester} needs the rudder angle ("delta" or "delta_c"), which '
+            f"{record} does not have."
+        )
+    if trajectory.has(variable.column):
+        return trajectory[variable.column]
+    raise SindyshipInputError(
+        f'{requester} needs the channel "{variable.column}", which {record} does not have.'
+    )
 
 
 def _core_rank(name: str) -> int:
@@ -179,4 +277,5 @@ def record_variables(record: Trajectory, library: TermLibrary, L: float, U0: flo
     elif not record.has("delta"):
         rudder = record["delta_c"]
     needed = set(library.variables) | set(CORE_VARIABLES)
-    return nondimensional_variables(record, L, U0, needed=needed, rudder=rudder)
+    return nondimensional_variables(record, L, U0, needed=needed, rudder=rudder,
+                                    speed=library.speed)

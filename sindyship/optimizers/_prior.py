@@ -116,23 +116,52 @@ class PriorRidge(_LinearModel):
             mean[j], scale[j] = 0.0, np.nan
         return D, mean, scale
 
-    def _reduce(self, data: _FitData) -> NDArray:
-        """The stacked least-squares problem of data and prior rows, per target."""
+    def _augmented(self, data: _FitData, target: int) -> tuple[NDArray, NDArray]:
+        """``(lhs, rhs)`` of one target: the data (compressed) over the prior rows, whose
+        least-squares solution is the fit."""
         p = data.n_features
         D, mean, scale = self._prior_rows(p)
         A, B = data.scaled_problem(np.ones(p))
-        norms = data.column_norms()
-        coef = np.empty((data.n_targets, p))
+        total = data.n_samples * float(data.y_mean_square[target])  # ||y||^2
+        finite = np.isfinite(scale)
+        # weak scale rms(y) / rms(X_j) makes the row weight sqrt(strength) * ||X_j||
+        weight = np.where(finite, np.sqrt(self.strength * total)
+                          / np.where(finite, scale, 1.0),
+                          np.sqrt(self.strength) * data.column_norms())
+        return (np.vstack([A, D * weight[:, None]]),
+                np.concatenate([B[:, target], weight * mean]))
+
+    def _reduce(self, data: _FitData) -> NDArray:
+        """The stacked least-squares problem of data and prior rows, per target."""
+        coef = np.empty((data.n_targets, data.n_features))
         for t in range(data.n_targets):
-            total = data.n_samples * float(data.y_mean_square[t])  # ||y||^2
-            # weak scale rms(y) / rms(X_j) makes the row weight sqrt(strength) * ||X_j||
-            weight = np.where(np.isfinite(scale),
-                              np.sqrt(self.strength * total) / np.where(np.isfinite(scale),
-                                                                        scale, 1.0),
-                              np.sqrt(self.strength) * norms)
-            rows = D * weight[:, None]
-            lhs = np.vstack([A, rows])
-            rhs = np.concatenate([B[:, t], weight * mean])
+            lhs, rhs = self._augmented(data, t)
             coef[t] = scipy.linalg.lstsq(lhs, rhs, lapack_driver="gelsd",
                                          check_finite=False)[0]
         return coef
+
+    def objective_rows(self, X, y) -> tuple[NDArray, NDArray, float, float]:
+        """The fit's objective as least-squares rows: ``(lhs, rhs, y_norm2, offset)`` with
+        ``||lhs w - rhs||^2 + offset`` equal to ``||y - X w||^2 + strength ||y||^2 sum_k
+        (...)^2`` (the class docstring; ``offset`` is the part of y no coefficients reach)
+        and ``y_norm2 = ||y||^2``.  A refinement of the fitted coefficients keeps this
+        objective as its penalty (:func:`sindyship.refine.refine`).
+
+        Examples
+        --------
+        >>> X = np.column_stack([np.linspace(0, 1, 50), np.ones(50)])
+        >>> y = 2.0 * X[:, 0] + 1.0
+        >>> model = PriorRidge(strength=0.0)
+        >>> lhs, rhs, norm2, offset = model.objective_rows(X, y)
+        >>> w = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+        >>> np.round(w, 6).tolist(), round(norm2, 3)
+        ([2.0, 1.0], 217.347)
+        """
+        X = np.asarray(X, dtype=float)
+        Y = np.asarray(y, dtype=float).reshape(-1, 1)
+        data = _FitData(X, Y, None)
+        lhs, rhs = self._augmented(data, 0)
+        norm2 = float(Y[:, 0] @ Y[:, 0])
+        data_rows = lhs.shape[0] - X.shape[1]  # the compressed data, then the prior rows
+        reached = float(rhs[:data_rows] @ rhs[:data_rows])
+        return lhs, rhs, norm2, max(norm2 - reached, 0.0) if data_rows < X.shape[0] else 0.0

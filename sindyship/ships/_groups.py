@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 BUILTIN_SHIPS = ("kcs", "kvlcc2")
 
@@ -174,6 +174,10 @@ class Ship:
     abkowitz : dict
         Prime I acceleration derivatives X_udot, Y_vdot, Y_rdot, N_vdot, N_rdot used by the
         identification (paper Table 6); derived from the Prime II added masses when absent.
+    assumptions : tuple of str
+        What a ship file made for identification left out and sindyship assumed (added
+        masses, servo), one sentence each; empty for a complete file.  Not part of the
+        ship's identity: a saved model keeps the values, not the assumptions.
 
     Examples
     --------
@@ -195,6 +199,7 @@ class Ship:
     rudder: Rudder | None
     servo: Servo
     abkowitz: dict[str, float]
+    assumptions: tuple[str, ...] = field(default=(), compare=False)
 
     @property
     def has_mmg(self) -> bool:

@@ -253,38 +253,87 @@ def clarke_added_masses(p: Particulars, m_prime_i: float) -> dict[str, float]:
 
 def _identification_ship(data: dict, source: str) -> Ship:
     """A ship file without [hull], [propeller] and [rudder]: enough to identify and fly an
-    Abkowitz model (particulars, mass, inertia; added masses estimated when absent)."""
+    Abkowitz model (particulars, mass, inertia).
+
+    Every value the file gives is kept as written.  What it leaves out and a flight needs is
+    assumed, and each assumption is named in :attr:`Ship.assumptions`: the acceleration
+    derivatives of eq. 14 (from the Prime II added masses ``m_x``, ``m_y``, ``J_zz`` where
+    given, else the estimates of :func:`clarke_added_masses`; ``Y_rdot`` and ``N_vdot`` from
+    Clarke unless [abkowitz] gives them) and the rudder servo (:data:`DEFAULT_SERVO`).
+    """
     if not isinstance(data.get("name"), str):
         raise SindyshipInputError(f"{source}: top-level key 'name' (a string) is missing.")
     for section in ("mass", "abkowitz", "servo"):
         if section in data and not isinstance(data[section], dict):
             raise SindyshipInputError(f"{source}: [{section}] must be a table of numbers.")
     particulars = _group(Particulars, data.get("particulars"), "particulars", source)
-    mass_table = {"m_x": 0.0, "m_y": 0.0, "J_zz": 0.0, **dict(data.get("mass") or {})}
-    mass = _mass_properties({"mass": mass_table}, particulars, source)
+    given_mass = dict(data.get("mass") or {})
     k = particulars.d / particulars.L
-    abkowitz = clarke_added_masses(particulars, mass.m * k)
-    abkowitz.update(_abkowitz_added_masses(data, source))
+    mass_table = {"m_x": 0.0, "m_y": 0.0, "J_zz": 0.0, **given_mass}
+    mass = _mass_properties({"mass": mass_table}, particulars, source)
+    given_abkowitz = _abkowitz_added_masses(data, source)
+    estimates = clarke_added_masses(particulars, mass.m * k)
+    from_mass = {"X_udot": ("m_x", -mass.m_x * k), "Y_vdot": ("m_y", -mass.m_y * k),
+                 "N_rdot": ("J_zz", -mass.J_zz * k)}
+    abkowitz, assumed = {}, []
+    for key in ("X_udot", "Y_vdot", "Y_rdot", "N_vdot", "N_rdot"):
+        if key in given_abkowitz:
+            abkowitz[key] = given_abkowitz[key]
+        elif key in from_mass and from_mass[key][0] in given_mass:
+            abkowitz[key] = from_mass[key][1]
+        else:
+            abkowitz[key] = estimates[key]
+            assumed.append(key)
+    # the Prime II added masses the file leaves out follow the derivatives used
+    filled = {name: -abkowitz[key] / k for key, (name, _) in from_mass.items()
+              if name not in given_mass}
+    mass = replace(mass, **filled)
+    assumptions = []
+    if assumed:
+        assumptions.append(
+            f"acceleration derivatives {', '.join(assumed)} estimated from the main dimensions "
+            "(Clarke et al. 1983): " + ", ".join(f"{key} = {abkowitz[key]:.4g}"
+                                                 for key in assumed)
+            + " (Prime I); give them in [abkowitz] or as m_x, m_y, J_zz in [mass]")
     servo_table = {**DEFAULT_SERVO, **dict(data.get("servo") or {})}
     if "servo" not in data:
         servo_table["rate_max"] = DEFAULT_SERVO["rate_max"] / math.sqrt(particulars.scale)
     servo = _group(Servo, servo_table, "servo", source)
+    servo_assumed = [key for key in DEFAULT_SERVO if key not in (data.get("servo") or {})]
+    if servo_assumed:
+        values = {"T_R": f"T_R = {servo.T_R:g} L/U0",
+                  "rate_max": f"rate_max = {servo.rate_max:.3g} deg/s",
+                  "delta_max": f"delta_max = {servo.delta_max:g} deg"}
+        assumptions.append(
+            "rudder servo " + ", ".join(values[key] for key in servo_assumed)
+            + " (the IMO steering-gear rate, Froude-scaled); give [servo] with the ship's own")
+    assumptions.append("Coriolis terms of the rigid body with the added masses (eq. 14)")
     _check_physics(particulars, servo, source)
     return Ship(
         name=data["name"],
         title=str(data.get("title", data["name"])),
         hull_form="none",
-        speed_reference="design",
+        speed_reference=_speed_reference(data, source),
         coriolis="with-added-mass",
         particulars=particulars,
-        mass=replace(mass, m_x=-abkowitz["X_udot"] / k, m_y=-abkowitz["Y_vdot"] / k,
-                     J_zz=-abkowitz["N_rdot"] / k),
+        mass=mass,
         hull={},
         propeller=None,
         rudder=None,
         servo=servo,
         abkowitz=abkowitz,
+        assumptions=tuple(assumptions),
     )
+
+
+def _speed_reference(data: dict, source: str) -> str:
+    """An identification ship's ``speed_reference``: ``design`` unless the file says."""
+    value = data.get("speed_reference", "design")
+    if value not in ("design", "instantaneous"):
+        raise SindyshipInputError(
+            f"{source}: speed_reference = {value!r} is not one of design, instantaneous."
+        )
+    return value
 
 
 def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
@@ -352,6 +401,8 @@ def ship_to_dict(ship: Ship) -> dict:
     out: dict[str, Any] = {"name": ship.name, "title": ship.title,
                            "particulars": asdict(ship.particulars), "mass": asdict(ship.mass),
                            "servo": asdict(ship.servo), "abkowitz": dict(ship.abkowitz)}
+    if not ship.has_mmg and ship.speed_reference != "design":
+        out["speed_reference"] = ship.speed_reference
     if ship.has_mmg:
         propeller = asdict(ship.propeller)
         propeller["K_T"] = list(propeller["K_T"])

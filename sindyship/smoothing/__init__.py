@@ -70,12 +70,13 @@ True
 
 from __future__ import annotations
 
+from ._apply import smooth_record, smooth_records
 from ._choice import (  # noqa: F401  (_cv_scores for the tests)
     _cv_scores,
     choose_smoothing,
     resolve_smoothing,
 )
-from ._filters import estimate_noise, smooth_record, smooth_records
+from ._noise import estimate_noise
 from ._settings import (
     DEFAULT_CANDIDATES,
     RTS_CHANNELS,

@@ -11,7 +11,7 @@ import pandas as pd
 from ..errors import SindyshipInputError
 from ..ships import Ship
 from ..trajectory import Trajectory
-from ._filters import smooth_records
+from ._apply import smooth_records
 from ._settings import SmoothingSetting, default_candidates
 
 

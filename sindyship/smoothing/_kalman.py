@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import SindyshipInputError
 from ..trajectory import Trajectory
-from ._filters import estimate_noise
+from ._noise import estimate_noise
 from ._settings import _CUTOFF_TIMES_WINDOW, RTS_CHANNELS, SmoothingSetting
 
 # ---------------------------------------------------------------------------------------------

@@ -9,7 +9,6 @@ from typing import Any
 
 from ..errors import SindyshipInputError
 from ..ships import Ship
-from ..trajectory import Trajectory
 
 SMOOTHING_METHODS = ("none", "savgol", "rts")
 #: Channels the Kalman smoother estimates, in its state order.
@@ -79,11 +78,6 @@ class SmoothingSetting:
         if self.method == "savgol":
             out["order"] = self.order
         return out
-
-    def apply(self, record: Trajectory, **options: Any) -> Trajectory:
-        """The smoothed copy of ``record`` (:func:`smooth_record` with this setting)."""
-        from ._filters import smooth_record  # it applies settings of this module
-        return smooth_record(record, self.method, self.window, order=self.order, **options)
 
     @classmethod
     def parse(cls, text: str) -> SmoothingSetting:

@@ -23,7 +23,8 @@ def stream_settings(ship: Ship, *, library: str = "abkowitz", effects: Sequence[
                     rudder_signal: str = "actual", derivative: str = "five-point",
                     window: float = 21.0, smoothing: SmoothingSetting | str | None = None,
                     resample: float | None = None, skip_checks: Sequence[str] = (),
-                    time_range: tuple[float, float] | str = "auto") -> StreamSettings:
+                    time_range: tuple[float, float] | str = "auto",
+                    speed: str | None = None) -> StreamSettings:
     """Checked :class:`StreamSettings`: the library and the smoothing are resolved here, so
     a bad one is refused before any record is read.
 
@@ -38,7 +39,7 @@ def stream_settings(ship: Ship, *, library: str = "abkowitz", effects: Sequence[
             "a streamed fit needs the library by name or TOML path (each worker reads it); "
             "pass library='abkowitz' or the file's path."
         )
-    resolve_library(os.fspath(library), tuple(effects))
+    resolve_library(os.fspath(library), tuple(effects), speed)
     if isinstance(smoothing, str):
         if smoothing == "auto":
             raise SindyshipInputError(
@@ -53,7 +54,7 @@ def stream_settings(ship: Ship, *, library: str = "abkowitz", effects: Sequence[
     return StreamSettings(ship=ship, library=os.fspath(library), effects=tuple(effects),
                           rudder_signal=rudder_signal, derivative=derivative,
                           window=float(window), smoothing=smoothing, resample=resample,
-                          skip_checks=tuple(skip_checks), time_range=time_range)
+                          skip_checks=tuple(skip_checks), time_range=time_range, speed=speed)
 
 
 def _absolute(name):
@@ -86,7 +87,7 @@ def fit_reduction(whole: Reduction, settings: StreamSettings, *, optimizer: str 
         As :func:`sindyship.identify.fit` makes it on the same records, with
         ``info["streamed"]``.
     """
-    lib = resolve_library(settings.library, settings.effects)
+    lib = resolve_library(settings.library, settings.effects, settings.speed)
     terms = {dof: [t.text for t in lib.terms[dof]] for dof in DOFS}
     info = {
         "training": list(whole.names),
@@ -108,7 +109,7 @@ def fit_reduction(whole: Reduction, settings: StreamSettings, *, optimizer: str 
         fitted = {}
         for dof in DOFS:
             estimator = make_optimizer(optimizer, **dof_params(optimizer, chosen, settings.ship,
-                                                               dof, terms[dof]))
+                                                               dof, terms[dof], lib.speed))
             if estimator.cross_validates and records is None:
                 raise ValueError(f"optimizer {optimizer!r} cross-validates: pass records=.")
             parts = [r.factors[dof] for r in records] if records is not None else []

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from ..optimizers import RowFactor, merge_factors, pairwise_tree
 from ..ships import Ship
-from ..smoothing import SmoothingSetting
+from ..smoothing import SmoothingSetting, smooth_records
 from ..targets import DOFS
 
 __all__ = ["Reduction", "StreamSettings", "merge_reductions", "reduce_record"]
@@ -44,6 +44,8 @@ class StreamSettings:
         flies every record and needs them all in memory).
     resample, skip_checks, time_range
         As for :func:`~sindyship.records.read_record`.
+    speed : {"design", "instantaneous"} or None
+        The library's speed form (None: the library's own).
     """
 
     ship: Ship
@@ -56,6 +58,7 @@ class StreamSettings:
     resample: float | None = None
     skip_checks: tuple[str, ...] = ()
     time_range: tuple[float, float] | str = "auto"
+    speed: str | None = None
 
 
 @dataclass(frozen=True)
@@ -121,8 +124,8 @@ def reduce_record(path: str | os.PathLike, name: str, settings: StreamSettings) 
                                      skip_checks=settings.skip_checks,
                                      time_range=settings.time_range)
     if settings.smoothing is not None:
-        record = settings.smoothing.apply(record)
-    library = resolve_library(settings.library, settings.effects)
+        (record,) = smooth_records([record], settings.smoothing)
+    library = resolve_library(settings.library, settings.effects, settings.speed)
     problems = design([record], ship, library, rudder_signal=settings.rudder_signal,
                       derivative=settings.derivative, window=settings.window)
     factors = {dof: RowFactor.of_rows(problems[dof].features, problems[dof].target)

@@ -39,6 +39,7 @@ from ._parser import Factor
 from ._term import Term, evaluate_factor, parse_term
 from ._variables import (
     CORE_VARIABLES,
+    DERIVED_SOURCES,
     FUNCTIONS,
     MAX_DEGREE,
     MAX_FACTORS,
@@ -47,10 +48,12 @@ from ._variables import (
     Variable,
     channel_scaling,
     describe_variable,
+    sources_of,
 )
 
 __all__ = [
     "CORE_VARIABLES",
+    "DERIVED_SOURCES",
     "FUNCTIONS",
     "Factor",
     "MAX_DEGREE",
@@ -63,4 +66,5 @@ __all__ = [
     "describe_variable",
     "evaluate_factor",
     "parse_term",
+    "sources_of",
 ]

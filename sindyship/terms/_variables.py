@@ -104,9 +104,32 @@ VARIABLES: Mapping[str, Variable] = MappingProxyType(
                 r"\psi_{w}",
                 "direction the wind comes from, clockwise from north [rad]",
             ),
+            Variable("wind_app_speed", "apparent_wind", "speed", "V_{A}'", "VA", "V_{A}",
+                     "apparent wind speed over U0, from the true wind and the ship's motion"),
+            Variable("wind_app_angle", "apparent_wind", "none", r"\gamma_{A}", "gA",
+                     r"\gamma_{A}", "angle off the bow the apparent wind comes from, "
+                     "positive from starboard [rad]"),
         )
     }
 )
+
+#: Variables made from the ship's motion and recorded channels, with the channels they need:
+#: in a flight they follow the flown motion, never the recorded one.
+DERIVED_SOURCES: Mapping[str, tuple[str, ...]] = MappingProxyType({
+    "wind_app_speed": ("wind_speed", "wind_dir"),
+    "wind_app_angle": ("wind_speed", "wind_dir"),
+})
+
+
+def sources_of(name: str) -> tuple[str, ...]:
+    """The recorded channels a variable is made from: itself, or a derived variable's sources.
+
+    Examples
+    --------
+    >>> sources_of("wind_app_angle"), sources_of("n")
+    (('wind_speed', 'wind_dir'), ('n',))
+    """
+    return DERIVED_SOURCES.get(name, (name,))
 
 
 def describe_variable(name: str) -> Variable:
