@@ -1,6 +1,6 @@
 """Benchmark: sindyship's LassoCV against a naive scikit-learn LassoCV on a realistic problem.
 
-The problem has the real shape (PROTOCOL.md): 8 manoeuvres x 3200 samples = 25,600 samples;
+The problem has the real shape (docs/protocol.md): 8 manoeuvres x 3200 samples = 25,600 samples;
 the surge library of eq. 17a (16 terms) and the sway and yaw libraries of eq. 17b-c (22
 terms), with the constant term; targets built from the paper's least-squares coefficients
 (Tables 7-9, LS column) plus a deterministic fifth-order force that the library lacks, as the

@@ -1,7 +1,7 @@
 """Side by side on the paper's experiment: a careful pysindy workflow against sindyship's.
 
 Both identify the KCS from the protocol's 8 training manoeuvres (MMG, 1 Hz, 3200 s) and fly
-the 3 held-out ones (PROTOCOL.md); the metric is the mean distance between the tracks in ship
+the 3 held-out ones (docs/protocol.md); the metric is the mean distance between the tracks in ship
 lengths (paper Table 10), ``sindyship.evaluation.distance_errors`` for every flight.
 
 1. **pysindy, without sindyship's identification.**  A full cubic
@@ -16,13 +16,14 @@ lengths (paper Table 10), ``sindyship.evaluation.distance_errors`` for every fli
    The identified model is flown by a simulator written here (:func:`hand_fly`): scipy's
    ``solve_ivp`` (DOP853, rtol 1e-10) on [u', v', r', x/L, y/L, psi, delta] in t', the rudder
    servo of paper eq. 12-13, the zig-zag closed loop through a terminal heading event, and the
-   divergence rule of PROTOCOL.md as a terminal event.
+   divergence rule of docs/protocol.md as a terminal event.
 2. **sindyship**: least squares on the paper's Abkowitz library (``sindyship.identify.fit``),
    and the library the iterative diagnosis reaches, run as ``sindyship reproduce`` runs it
    (``diagnose_iteratively(train, ship, test=test, max_rounds=3)``; its last round's model is
-   reproduce's last diagnosed row), that model refined by the error of its training flights
-   (``sindyship.refine.refine``: reproduce's last row, the recommended workflow), and the
-   physics-consistent fit (``optimizer="prior"`` on the library ``abkowitz-vr``, as
+   reproduce's last diagnosed row), the recommended workflow (``sindyship fit``'s default: the
+   ``prior`` fit on ``abkowitz-vr`` with the first effect the diagnosis names, refined by the
+   error of its training flights, ``sindyship.refine.refine``: reproduce's last row), and the
+   physics-consistent fit alone (``optimizer="prior"`` on the library ``abkowitz-vr``, as
    ``reproduce`` fits it), all flown by ``sindyship.evaluation.evaluate``.
 3. A check that the hand-written simulator is not what makes the difference: fed the MMG
    accelerations it reproduces the MMG records, fed sindyship's identified models it
@@ -87,7 +88,7 @@ CHOICES = {
                 "smallest score chosen (largest threshold among ties)",
     "simulator": "scipy solve_ivp DOP853 rtol 1e-10 atol 1e-12 on [u', v', r', x/L, y/L, psi, "
                  "delta] in t', servo of paper eq. 12-13, zig-zag reversed by a terminal "
-                 "heading event, PROTOCOL.md divergence rule as a terminal event",
+                 "heading event, docs/protocol.md divergence rule as a terminal event",
 }
 #: Largest distance [L] at which the hand-written simulator counts as reproducing a flight.
 SIMULATOR_TOLERANCE_L = 1e-3
@@ -318,7 +319,7 @@ def _right_hand_side(accel: Callable, ship: Ship, command: list) -> Callable:
 
 
 def _plausible(_t, y) -> float:
-    """Positive while u' in (0, 2), |v'| <= 1 and |r'| <= 2 (PROTOCOL.md, Divergence)."""
+    """Positive while u' in (0, 2), |v'| <= 1 and |r'| <= 2 (docs/protocol.md, Divergence)."""
     return min(y[0], 2.0 - y[0], 1.0 - abs(y[1]), 2.0 - abs(y[2]))
 
 
@@ -334,7 +335,7 @@ def hand_fly(accel: Callable, manoeuvre: Manoeuvre, ship: Ship, *, t=None, state
     the rudder servo of paper eq. 12-13 (``ship.servo``).  A turning circle or straight run
     holds its commanded angle from t = 0; a zig-zag commands +-A and is reversed when the
     heading change reaches the check angle (a terminal event, the integration restarted from
-    there).  Leaving the plausible range (PROTOCOL.md) is a terminal event too, and an
+    there).  Leaving the plausible range (docs/protocol.md) is a terminal event too, and an
     integrator failure ends the flight: the flight has diverged at the first output sample
     after it and holds NaN from there.
 
@@ -466,14 +467,14 @@ def run_pysindy(train, test, test_plan, ship, *, thresholds=THRESHOLDS, alpha=AL
 
 
 def run_sindyship(train, test, ship, *, rounds: int = 3) -> dict:
-    """sindyship's workflows: least squares on the Abkowitz library, the diagnosed library, its
-    model refined by the error of its training flights (:func:`sindyship.refine.refine`, the
-    recommended workflow), and the physics-consistent fit (``prior`` on the library
-    ``reproduce`` gives it).
+    """sindyship's workflows: least squares on the Abkowitz library, the diagnosed library, the
+    recommended workflow (``sindyship fit``'s default, the ``prior`` fit on ``abkowitz-vr``
+    refined by the error of its training flights, :func:`sindyship.refine.refine`, with the
+    first effect the diagnosis names) and the ``prior`` fit alone.
 
     The diagnosis runs as ``sindyship reproduce`` runs it (held-out records flown every round,
-    never used to choose); its last round's model is reproduce's last diagnosed row, and its
-    refinement (on the training records only) reproduce's last row.
+    never used to choose); its last round's model is reproduce's last diagnosed row, and the
+    recommended model (refined on the training records only) reproduce's last row.
 
     Parameters
     ----------
@@ -486,8 +487,8 @@ def run_sindyship(train, test, ship, *, rounds: int = 3) -> dict:
     -------
     dict
         ``{"ls": {...}, "diagnosed": {...}, "refined": {...}, "prior": {...}}``, each with
-        ``library``, ``fit_s`` (one fit of the final library; the refined model's adds its
-        refinement), ``selection_s`` (the diagnosis; None for the others),
+        ``library``, ``fit_s`` (one fit of the final library; the recommended model's fit
+        and refinement), ``selection_s`` (the diagnosis; None for the others),
         ``active_terms``, ``errors`` (``evaluate`` on the held-out records) and ``model``.
     """
     from sindyship.diagnose import diagnose_iteratively
@@ -508,13 +509,14 @@ def run_sindyship(train, test, ship, *, rounds: int = 3) -> dict:
     refit_difference = max(abs(refit.coefficients[d][k] - c)
                            for d, terms in final.coefficients.items() for k, c in terms.items())
     t0 = time.perf_counter()
-    refined = refine(final, train, max_evaluations=REFINE_EVALUATIONS)
+    recommended = fit(train, ship, library=METHOD_LIBRARIES["prior"],
+                      effects=iterative.added[:1], optimizer="prior")
+    refined = refine(recommended, train, max_evaluations=REFINE_EVALUATIONS)
     refine_s = time.perf_counter() - t0
     out = {}
     for key, model, fit_s, selection_s in (("ls", ls, ls_s, None),
                                            ("diagnosed", final, refit_s, diagnosis_s),
-                                           ("refined", refined, refit_s + refine_s,
-                                            diagnosis_s),
+                                           ("refined", refined, refine_s, diagnosis_s),
                                            ("prior", prior, prior_s, None)):
         out[key] = {"library": model.library.name, "fit_s": fit_s, "selection_s": selection_s,
                     "active_terms": int(sum(model.n_active().values())),
@@ -566,7 +568,7 @@ def simulator_check(test, test_plan, ship, models: dict) -> dict:
 
 
 def beats(ours: dict, theirs: dict) -> bool:
-    """Whether flight ``ours`` is better than ``theirs`` (PROTOCOL.md's comparison).
+    """Whether flight ``ours`` is better than ``theirs`` (docs/protocol.md's comparison).
 
     A flight that diverges where the other does not (or earlier) is the worse one, whatever
     the means; two complete flights of one record cover the same samples and compare by mean.
@@ -666,7 +668,8 @@ def run(variants: bool = True) -> dict:
     for key, row in sindyship_run.items():
         row.pop("model")
         row["label"] = {"ls": "least squares, ", "diagnosed": "least squares, diagnosed ",
-                        "refined": "diagnosed, refined by its training flights, ",
+                        "refined": "prior + first diagnosed effect, refined by its training "
+                                   "flights (the default fit), ",
                         "prior": "least squares with the ship's prior, "}[key] + row["library"]
     recommended = sindyship_run["refined"]
     return {

@@ -81,7 +81,7 @@ def _marin() -> dict | None:
     change = before_after(train, ship, effects=[top.effect.name], test=test, **settings)
     rows = {row["manoeuvre"]: row for row in change.rows}
     return {
-        "refined": _marin_refined(train, test, ship, settings),
+        "default_fit": _marin_default(train, test, ship, settings),
         "measured_turns": measured,
         "model_revolutions_rps": model_n,
         "ranking": {s.effect.name: {"explained": s.explained, "signal": s.explained_signal,
@@ -95,30 +95,33 @@ def _marin() -> dict | None:
     }
 
 
-def _marin_refined(train, test, ship, settings: dict) -> dict:
-    """Least squares and the prior fit on the MARIN zig-zags, before and after refining by
-    their flights: the held-out turns and the mean over the training zig-zags."""
-    from sindyship.evaluation import evaluate
+def _marin_default(train, test, ship, settings: dict) -> dict:
+    """The default fit (``sindyship fit``: the prior on ``abkowitz-vr`` in the ship's speed
+    form, refined by the records' flights) on the MARIN zig-zags, alone and with
+    ``crossflow``: the turns' figures (advance, tactical diameter, speed loss) as flown, and
+    what the refinement did."""
+    from sindyship.flights import fly_like_batch
     from sindyship.identify import fit
+    from sindyship.manoeuvres import turning_figures
     from sindyship.refine import refine
-    from sindyship.reproduce import REFINE_EVALUATIONS
-
-    def flights(model) -> dict:
-        held_out = evaluate(model, test)
-        training = evaluate(model, train)
-        return {"turns": {k: {"mean_distance_L": v["mean_distance_L"],
-                              "diverged_at_s": v["diverged_at_s"]} for k, v in held_out.items()},
-                "training_mean_L": sum(v["mean_distance_L"] for v in training.values())
-                / len(training)}
 
     out = {}
-    for key, options in (("ls", {}), ("prior", {"optimizer": "prior",
-                                                 "library": "abkowitz-vr"})):
-        model = fit(train, ship, **options, **settings)
-        refined = refine(model, train, max_evaluations=REFINE_EVALUATIONS)
-        out[key] = {"before": flights(model), "after": flights(refined),
-                    "straight_run_stable": refined.info["refined"]["straight_run_stable"],
-                    "kept_stable": refined.info["refined"]["refused_unstable"]}
+    for effects in ((), ("crossflow",)):
+        model = refine(fit(train, ship, library="abkowitz-vr", optimizer="prior",
+                           effects=list(effects), speed=ship.speed_reference, **settings),
+                       train)
+        turns = {}
+        for record, flown in zip(test, fly_like_batch(model, test), strict=True):
+            diverged = flown.meta.get("diverged_at")
+            figures = {} if diverged is not None else turning_figures(flown, ship.L)
+            turns[record.name] = {"diverged_at_s": diverged, **{
+                key: figures.get(key) for key in ("advance_L", "tactical_diameter_L",
+                                                  "speed_loss")}}
+        done = model.info["refined"]
+        out["+".join(effects) or "plain"] = {
+            "speed": model.library.speed, "turns": turns,
+            "refined": done["largest_change"] is not None,
+            "stopped": done["stopped"]}
     return out
 
 
@@ -147,6 +150,8 @@ def compute() -> dict:
         path = RESULTS / f"{name}.json"
         numbers[name] = json.loads(path.read_text()) if path.exists() else None
     numbers["captive_bench"] = _saved_captive_bench()
+    numbers["campaign"] = _saved_campaign()
+    numbers["speed"] = _saved_speed()
     numbers["pysindy"] = _saved_pysindy()
     numbers["seconds"] = time.perf_counter() - start
     return numbers
@@ -165,6 +170,31 @@ def _saved_captive_bench() -> dict | None:
     keys = ("ls", default, *TAYLOR_FITS, "ls refined", f"{default} refined")
     return {"default_strength": result["default_strength"],
             "sets": {"zigzags": {"fits": {k: fits[k] for k in keys}}}}
+
+
+def _saved_speed() -> dict | None:
+    """The timings of benchmarks/results/speed.json (one run, two checkouts)."""
+    path = RESULTS / "speed.json"
+    if not path.exists():
+        return None
+    result = json.loads(path.read_text())
+    return {"reference_over_flights": result.get("reference_over_flights"),
+            "steps": {k: {"now": v["now"].get("seconds"),
+                          "before": v.get("before", {}).get("seconds")}
+                      for k, v in result["steps"].items()}}
+
+
+def _saved_campaign() -> dict | None:
+    """The workflows of benchmarks/results/campaign.json: what the diagnosis adds, and the
+    held-out errors of each."""
+    path = RESULTS / "campaign.json"
+    if not path.exists():
+        return None
+    result = json.loads(path.read_text())
+    return {"named": result["named"], "recommended": result["recommended"],
+            "speed": result["diagnosis"]["speed"], "against_commit": result["against_commit"],
+            "workflows": {k: {"errors": v["errors"], "geometric_mean_L": v["geometric_mean_L"]}
+                          for k, v in result["workflows"].items()}}
 
 
 def _saved_pysindy() -> dict | None:
@@ -196,7 +226,8 @@ def _table10(n: dict) -> str:
         if row["effects"]:
             label += " + " + " + ".join(f"`{e}`" for e in row["effects"]) + " (diagnosed)"
         if row.get("refined"):
-            label += ", refined by its training flights (recommended for flights)"
+            label = ("the default fit: " + label + ", refined by its training flights "
+                     "(recommended)")
         paper = {} if row["effects"] else n["paper_table_10"].get(row["method"], {})
         cells = []
         for name in TEST_NAMES:
@@ -219,8 +250,8 @@ def _agreement(n: dict) -> str:
         f"{flown['tc15_stbd']['mean_distance_L']:.3f} and "
         f"{flown['zz10_10']['mean_distance_L']:.3f} ship lengths: the turning circles match its "
         "Table 10; its zig-zag figure (1.499) could not be reproduced under any protocol tried "
-        "(PROTOCOL.md), and neither could its LASSO and SVR figures with its own LASSO and SVR "
-        "coefficients."
+        "([docs/protocol.md](docs/protocol.md)), and neither could its LASSO and SVR figures "
+        "with its own LASSO and SVR coefficients."
     )
 
 
@@ -249,14 +280,16 @@ def _diagnosis(n: dict) -> str:
 
 def _linear(n: dict) -> str:
     row = next(r for r in n["linear_derivatives"] if r["name"] == "N_v")
-    keys = [k for k in row if k.startswith("ls+") and not k.endswith("+refined")]
+    keys = [k for k in row if k.startswith("ls+")]
     after = ", ".join(f"{row[k]:.0f} with {k[3:].replace('+', ' and ')}" for k in keys)
-    refined = next((row[k] for k in row if k.endswith("+refined")), None)
-    if refined is not None:
-        after += f", and {refined:.0f} once refined by the training flights"
+    refined = next((k for k in row if k.endswith("+refined")), None)
+    default = ("" if refined is None else
+               f" The default fit (the prior with {refined[6:-8].replace('+', ' and ')}, "
+               f"refined by the training flights) has {row[refined]:.0f}, the `prior` fit "
+               f"alone {row['prior']:.0f}.")
     return (f"N'_v (x 1e-5) is {row['MMG_Taylor']:.0f} in the MMG's own Taylor expansion, "
-            f"{row['paper_LS']:.0f} in the paper's LS, {row['ls']:.0f} in ours, and moves to "
-            f"{after}.")
+            f"{row['paper_LS']:.0f} in the paper's LS, {row['ls']:.0f} in our least squares, "
+            f"and moves to {after}.{default}")
 
 
 def _marin_text(n: dict) -> str:
@@ -289,34 +322,59 @@ def _marin_text(n: dict) -> str:
         "that a flight diverging where the other does not is the worse one, the effect does not "
         "carry over from zig-zags to turns: the zig-zags sweep about 70 deg of heading, over "
         "which heading terms can stand in for slow drift (the report says so)."
-        + _marin_refined_text(m.get("refined"))
+        + _marin_default_text(m)
     )
 
 
-def _marin_refined_text(refined: dict | None) -> str:
-    if refined is None:
+MARIN_TURNS = (("tc_35", "port"), ("tc_-35", "stbd"))
+
+
+def marin_misses(variant: dict, measured: dict) -> dict:
+    """The default fit's largest misses on the MARIN turns: the relative error of advance and
+    tactical diameter, the difference in speed loss (None when a turn diverged)."""
+    figures, losses = [], []
+    for name, side in MARIN_TURNS:
+        flown, truth = variant["turns"][name], measured[side]
+        if flown["diverged_at_s"] is not None:
+            return {"figures": None, "speed_loss": None}
+        figures += [abs(flown[k] / truth[k] - 1) for k in ("advance_L", "tactical_diameter_L")]
+        losses.append(abs(flown["speed_loss"] - truth["speed_loss"]))
+    return {"figures": max(figures), "speed_loss": max(losses)}
+
+
+def _marin_default_text(m: dict) -> str:
+    default = m.get("default_fit")
+    if default is None:
         return ""
+    measured = m["measured_turns"]
 
-    def turns(row):
-        return " / ".join(_cell(row["turns"][k]) for k in ("tc_35", "tc_-35"))
+    def turns(variant):
+        parts = []
+        for name, side in MARIN_TURNS:
+            flown, truth = variant["turns"][name], measured[side]
+            label = "port" if side == "port" else "starboard"
+            if flown["diverged_at_s"] is not None:
+                parts.append(f"the {label} turn diverges at {flown['diverged_at_s']:.0f} s")
+                continue
+            parts.append(f"the {label} turn {flown['advance_L']:.2f} / "
+                         f"{flown['tactical_diameter_L']:.2f} / {flown['speed_loss']:.2f} "
+                         f"(measured {truth['advance_L']:.2f} / "
+                         f"{truth['tactical_diameter_L']:.2f} / {truth['speed_loss']:.2f})")
+        miss = marin_misses(variant, measured)
+        if miss["figures"] is not None:
+            parts[-1] += (f": advance and tactical diameter within "
+                          f"{100 * miss['figures']:.0f} %, speed loss within "
+                          f"{miss['speed_loss']:.2f}")
+        return " and ".join(parts)
 
-    parts = []
-    for key, label in (("ls", "least squares"), ("prior", "the `prior` fit")):
-        r = refined[key]
-        if r.get("kept_stable"):
-            parts.append(f"{label} is kept as fitted (turns {turns(r['before'])}): refined, "
-                         "it was unstable in straight running, which the prior's stability "
-                         "requirement refuses")
-            continue
-        unstable = ("" if r["straight_run_stable"]
-                    else ", and the refined model is unstable in straight running")
-        parts.append(f"{label} goes from {r['before']['training_mean_L']:.3f} to "
-                     f"{r['after']['training_mean_L']:.3f} L on the zig-zags and flies the "
-                     f"turns (port / starboard) {turns(r['before'])} before and "
-                     f"{turns(r['after'])} after{unstable}")
-    return (" Refining by the zig-zags' flights (`fit --refine 10`) does not carry over to the "
-            f"turns either: {parts[0]}; {parts[1]}. A refinement fits the manoeuvres it "
-            "flies and extrapolates no better than they span.")
+    plain, crossflow = default["plain"], default["crossflow"]
+    kept = ("" if plain["refined"] else
+            f" Its refinement by the zig-zags' flights is refused: {plain['stopped']}.")
+    return (" The default fit (`sindyship fit --derivative savgol --window 21`: the prior on "
+            f"`abkowitz-vr` with forces scaled by the {plain['speed']} speed, the form the "
+            f"`kvlcc2` ship file names) flies, as advance / tactical diameter in ship lengths / "
+            f"speed loss, {turns(plain)}.{kept} With `--effects crossflow` it flies "
+            f"{turns(crossflow)}.")
 
 
 def _kvlcc2_table(n: dict) -> str:
@@ -374,12 +432,12 @@ def _correlations(by_test: dict) -> list[str]:
 
 def _captive(n: dict) -> str:
     captive = n["captive"]
-    diagnosed = [k for k in captive if k.startswith("ls+") and not k.endswith("+refined")][-1]
-    refined = f"{diagnosed}+refined"
+    diagnosed = [k for k in captive if k.startswith("ls+")][-1]
     rows = {"least squares": captive["ls"], "`prior`": captive["prior"],
             diagnosed: captive[diagnosed]}
-    if refined in captive:
-        rows[f"{diagnosed}, refined (recommended for flights)"] = captive[refined]
+    for key in captive:
+        if key.endswith("+refined"):
+            rows[f"{key[:-len('+refined')]}, refined (the default fit)"] = captive[key]
     lines = ["| model | " + " | ".join(CAPTIVE_LABELS.values()) + " |",
              "|---|" + "---|" * len(CAPTIVE_LABELS)]
     lines += [f"| {label} | " + " | ".join(_correlations(row)) + " |"
@@ -408,12 +466,23 @@ def _captive(n: dict) -> str:
                   f"{flights(zz[TAYLOR_FITS[1]])} at 1e-4 (lowest X, Y or N correlation "
                   f"{min(low(zz[k], 'XYN') for k in TAYLOR_FITS):+.2f}): the estimates from "
                   "main dimensions are not accurate enough for the turns by themselves. "
-                  "Refined by the error of its zig-zag flights (`fit --refine`), the `prior` "
-                  f"fit flies {flights(prior_refined)} and keeps its forces (lowest X, Y or N "
-                  f"correlation {low(prior_refined, 'XYN'):+.2f}); least squares refined the "
-                  f"same way flies {flights(ls_refined)} (lowest Y or N correlation "
-                  f"{low(ls_refined):+.2f}): it fits the zig-zags closer and the turns worse."]
+                  + _refined_on_zigzags(prior_refined, flights(prior_refined),
+                                        low(prior_refined, "XYN"))
+                  + f" Least squares refined the same way flies {flights(ls_refined)} (lowest "
+                  f"Y or N correlation {low(ls_refined):+.2f})."]
     return "\n".join(lines)
+
+
+def _refined_on_zigzags(row: dict, flown: str, lowest: float) -> str:
+    """What refining the prior fit by its zig-zag flights did (kept, or refused and why)."""
+    done = row.get("refinement", {})
+    if done.get("largest_change") is None:
+        return (f"Refining the `prior` fit by its zig-zag flights (the default `fit`) is "
+                f"refused: {done.get('stopped', 'no step lowered the error')}; it flies "
+                f"{flown} (lowest X, Y or N correlation {lowest:+.2f}).")
+    return (f"Refined by the error of its zig-zag flights (the default `fit`), the `prior` fit "
+            f"flies {flown} and keeps its forces (lowest X, Y or N correlation "
+            f"{lowest:+.2f}).")
 
 
 def _pysindy(n: dict) -> str:
@@ -432,11 +501,62 @@ def _pysindy(n: dict) -> str:
     prior = (f", sindyship with the ship's prior {errors('sindyship_prior')}"
              if "sindyship_prior" in work else "")
     return (f"Held-out mean distance ({' / '.join(names)}): pysindy {errors('pysindy')}, "
-            f"sindyship least squares {errors('sindyship_ls')}, sindyship diagnosed "
-            f"{errors('sindyship_diagnosed')}, the diagnosed model refined by its training "
-            f"flights {errors('sindyship_refined')}{prior} ship lengths; the recommended "
-            f"workflow (refined) is better than pysindy on {len(wins)} of {len(names)} "
-            f"({', '.join(wins)}).")
+            f"sindyship least squares {errors('sindyship_ls')}, sindyship least squares "
+            f"diagnosed {errors('sindyship_diagnosed')}{prior}, and the default fit (the "
+            f"prior with the first diagnosed effect, refined by its training flights) "
+            f"{errors('sindyship_refined')} ship lengths: the recommended workflow is better "
+            f"than pysindy on {len(wins)} of {len(names)} ({', '.join(wins)}).")
+
+
+def _campaign(n: dict) -> str:
+    result = n.get("campaign")
+    if result is None:
+        return "(run benchmarks/bench_campaign.py)"
+    work = result["workflows"]
+    names = list(work["default"]["errors"])
+
+    def flights(key):
+        return " / ".join(_cell(e) for e in work[key]["errors"].values())
+
+    alone = ", ".join(f"{flights('default + ' + e)} with `{e}` alone" for e in result["named"]
+                      if f"default + {e}" in work)
+    recommended = work[result["recommended"]]
+    low, high = result["speed"]["range"]
+    text = (f"`benchmarks/bench_campaign.py` flies a campaign like that in the simulator "
+            "(`sindyship.campaign`): the KVLCC2 model from rest, 120-180 s of course keeping by "
+            "hand before each execute, revolutions 70-85 % of the design condition, a gusty "
+            "wind 3-6 times the ship's speed, 1 % sensor noise; trained on 10/10 and 20/20 "
+            "zig-zags and 35 deg turns to both sides, held out a 15/15 zig-zag and 25 deg "
+            f"turns. Its speed runs from {low:.2f} to {high:.2f} U0, and `diagnose --rounds 3` "
+            f"recommends the {result['speed']['recommended']} speed form and adds "
+            + ", ".join(f"`{e}`" for e in result["named"])
+            + f". Held out ({' / '.join(names)}), the default fit flies {flights('default')} "
+            f"ship lengths without an effect, {alone}, and {flights(result['recommended'])} "
+            f"with all of them (geometric mean {recommended['geometric_mean_L']:.3f} L).")
+    if "default before" in work:
+        text += (f" On the same files the default `fit` and `evaluate` of commit "
+                 f"{result['against_commit']} (least squares on the paper's library) fly "
+                 f"{flights('default before')}.")
+    return text
+
+
+def _speed(n: dict) -> str:
+    speed = n.get("speed")
+    if speed is None:
+        return "(run benchmarks/bench_speed.py)"
+    steps = speed["steps"]
+
+    def pair(step):
+        return f"{steps[step]['now']:.0f} s ({steps[step]['before']:.0f} s before)"
+
+    return ("`benchmarks/bench_speed.py`, on two cores, beside the release before multiple "
+            "shooting in the same run: the 11 protocol manoeuvres fly together in "
+            f"{steps['protocol_flights']['now']:.2f} s, "
+            f"{speed['reference_over_flights']:.1f} times as fast as a scalar `solve_ivp` "
+            f"(RK45) of the same MMG; `fit --refine 10` on the eight training records takes "
+            f"{pair('fit_refine10_protocol')}, the default `fit` "
+            f"{steps['fit_protocol']['now']:.0f} s, and `sindyship reproduce` end to end "
+            f"{pair('reproduce')}.")
 
 
 BLOCKS = {
@@ -449,6 +569,8 @@ BLOCKS = {
     "marin": _marin_text,
     "kvlcc2": _kvlcc2_table,
     "noise": _noise,
+    "campaign": _campaign,
+    "speed": _speed,
 }
 
 

@@ -396,7 +396,8 @@ def quantise(trajectory: Trajectory, digits: int) -> Trajectory:
 
 
 def simulate_with_effects(ship: Ship, manoeuvres, effects: Effects | None = None, *,
-                          step: float | None = None) -> list[Trajectory]:
+                          step: float | None = None,
+                          state0: np.ndarray | None = None) -> list[Trajectory]:
     """Fly manoeuvres with the MMG model of ``ship`` and the given effects; return the records.
 
     Examples
@@ -412,7 +413,7 @@ def simulate_with_effects(ship: Ship, manoeuvres, effects: Effects | None = None
 
     effects = effects or Effects()
     if not effects.varies_in_time:
-        runs = fly(effects.dynamics(ship), manoeuvres, step=step)
+        runs = fly(effects.dynamics(ship), manoeuvres, step=step, state0=state0)
         return [effects.record(run, ship) for run in runs]
     records: list[Trajectory | None] = [None] * len(manoeuvres)
     batches: dict[tuple, list[int]] = {}
@@ -423,7 +424,8 @@ def simulate_with_effects(ship: Ship, manoeuvres, effects: Effects | None = None
         conditions = [effects.conditions(ship, times, index) for index in batch]
         series = ChannelSeries(times, {name: np.vstack([c[name] for c in conditions])
                                        for name in conditions[0]})
-        runs = fly(effects.dynamics(ship, series), [manoeuvres[i] for i in batch], step=step)
+        runs = fly(effects.dynamics(ship, series), [manoeuvres[i] for i in batch], step=step,
+                   state0=state0)
         for index, run, own in zip(batch, runs, conditions, strict=True):
             records[index] = effects.record(run, ship, own)
     return records

@@ -7,6 +7,7 @@ for a model and its records.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
 
 import numpy as np
@@ -16,7 +17,7 @@ from .trajectory import Trajectory
 
 
 def _before_divergence(flown: Trajectory) -> np.ndarray:
-    """Samples a flight covers: finite, and before its divergence (PROTOCOL.md, Divergence)."""
+    """Samples a flight covers: finite, and before its divergence (docs/protocol.md, Divergence)."""
     ok = np.isfinite(flown["x"]) & np.isfinite(flown["y"])
     diverged_at = flown.meta.get("diverged_at")
     if diverged_at is not None:
@@ -75,7 +76,7 @@ def distance_errors(flown: Trajectory, reference: Trajectory, L: float) -> dict:
 
 def compare_flights(before: Trajectory, after: Trajectory, reference: Trajectory, L: float
                     ) -> dict:
-    """Two flights of one record compared over the samples both cover (PROTOCOL.md).
+    """Two flights of one record compared over the samples both cover (docs/protocol.md).
 
     A flight that diverges where the other does not (or earlier) is the worse one, whatever
     the means; otherwise the smaller mean distance over the common window is the better.
@@ -141,6 +142,16 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
     (:func:`sindyship.flights.flight_start`).  Each entry is :func:`distance_errors` plus
     :func:`flown_as` (``start_s`` and ``start_reason`` say where the flight started and why).
     """
+    from .arguments import as_records, check_motion
+    from .model import AbkowitzModel
+
+    if isinstance(model, str | os.PathLike):
+        model = AbkowitzModel.load(model)
+    if not hasattr(model, "ship"):
+        raise TypeError(f"model must be an AbkowitzModel or a saved model's path, not "
+                        f"{type(model).__name__}.")
+    records = as_records(records)
+    check_motion(records)
     cut = [flown_part(record) for record in records]
     flown = fly_like_batch(model, cut, step=step)
     out = {}

@@ -196,10 +196,11 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
 
     Parameters
     ----------
-    records : sequence of Trajectory
-        Training records (SI), each uniformly sampled.
-    ship : Ship
+    records : sequence of Trajectory (or measurement CSV paths)
+        Training records (SI), each uniformly sampled, with finite motion.
+    ship : Ship or str
         Gives L, U0 and the Prime I inertia (paper Table 6); its MMG coefficients are not used.
+        A built-in name (``"kcs"``) or a ship TOML file is loaded.
     library : str or TermLibrary
         Term library (default the paper's ``abkowitz``).
     effects : sequence of str
@@ -222,6 +223,16 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
     -------
     AbkowitzModel
     """
+    from .arguments import as_records, as_ship, check_motion, check_scale, positive_number
+
+    ship = as_ship(ship)
+    records = as_records(records)
+    check_motion(records)
+    check_scale(records, ship)
+    window = positive_number(window, "window")
+    if optimizer not in _optimizer_names():
+        raise SindyshipInputError(f"optimizer must be one of {', '.join(_optimizer_names())}, "
+                                  f"not {optimizer!r}.")
     lib = resolve_library(library, effects, speed)
     if problems is None:
         problems = design(records, ship, lib, rudder_signal=rudder_signal,
@@ -250,6 +261,12 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
         _note_prior_coverage(ship, lib)
         model = straight_run_stable(model, fitted_with)
     return model
+
+
+def _optimizer_names() -> list[str]:
+    from .optimizers import OPTIMIZERS
+
+    return sorted(OPTIMIZERS)
 
 
 def _note_prior_coverage(ship: Ship, library: TermLibrary) -> None:

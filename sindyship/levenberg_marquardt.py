@@ -43,7 +43,8 @@ def levenberg_marquardt(residuals: Callable[[np.ndarray], np.ndarray],
                         normal: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
                         x0: np.ndarray, *, max_evaluations: int = 40,
                         tolerance: float = TOLERANCE,
-                        on_step: Callable[[int, float], None] | None = None) -> Search:
+                        on_step: Callable[[int, float], None] | None = None,
+                        bound: float | None = None) -> Search:
     """Minimise half the sum of squares of ``residuals(x)`` from ``x0``.
 
     Parameters
@@ -62,6 +63,8 @@ def levenberg_marquardt(residuals: Callable[[np.ndarray], np.ndarray],
         vanishes.
     on_step : callable, optional
         Called after every accepted step with its number and the cost.
+    bound : float, optional
+        Every parameter stays within [-bound, bound] (a trial step is cut back to the box).
 
     Examples
     --------
@@ -94,6 +97,8 @@ def levenberg_marquardt(residuals: Callable[[np.ndarray], np.ndarray],
         improved = False
         while evaluations < max_evaluations:
             step = _step(gram, gradient, scale, damping)
+            if bound is not None:
+                step = np.clip(x + step, -bound, bound) - x
             trial = x + step
             r_trial = residuals(trial)
             evaluations += 1

@@ -30,6 +30,70 @@ from .trajectory import Trajectory
 MANOEUVRE_KINDS = ("turning-circle", "zigzag", "spiral", "pull-out", "straight", "random")
 
 
+#: The helmsman's course keeping: his gain [rad of rudder per rad of heading error], how far
+#: ahead he looks [s] (the yaw rate times it counts as heading error), the most rudder he
+#: gives [deg], how often he moves the wheel [s] and the spread of his hand [deg]; a model
+#: steered on a lake.
+HELMSMAN = {"gain": 1.5, "lead_s": 4.0, "limit": 6.0, "period": 1.5, "hand": 0.5}
+
+
+class HelmsmanThen(RudderCommand):
+    """Course keeping by hand until the execute, then the manoeuvre's own command.
+
+    The helmsman steers toward the heading he started on: every ``period`` seconds he sets the
+    rudder to ``-gain (psi - psi_0 + lead_s r)`` within +-``limit``, off by a seeded hand
+    error (:data:`HELMSMAN`).  At the execute the manoeuvre's command starts from the state
+    there (a zig-zag measures its heading change from the heading at the execute).
+    """
+
+    def __init__(self, execute: float, manoeuvre: RudderCommand, seed: int,
+                 helmsman: dict | None = None):
+        self.execute = float(execute)
+        self.manoeuvre = manoeuvre
+        self.seed = int(seed)
+        self.helmsman = {**HELMSMAN, **(helmsman or {})}
+        self._started = False
+        self._next = 0.0
+        self._held = 0.0
+        self._psi_ref = 0.0
+        self._rng = np.random.default_rng(self.seed)
+
+    def reset(self, state0):
+        self._started = False
+        self._next = 0.0
+        self._held = 0.0
+        self._psi_ref = float(state0[5])
+        self._rng = np.random.default_rng(self.seed)
+
+    def value(self, t, state):
+        if t >= self.execute - 1e-9:
+            if not self._started:
+                self.manoeuvre.reset(state)
+                self._started = True
+            return self.manoeuvre.value(t, state)
+        if t >= self._next - 1e-9:
+            h = self.helmsman
+            error = float(state[5]) - self._psi_ref + h["lead_s"] * float(state[2])
+            wheel = -h["gain"] * error
+            limit = math.radians(h["limit"])
+            hand = math.radians(h["hand"]) * float(self._rng.standard_normal())
+            self._held = min(max(wheel + hand, -limit), limit)
+            self._next = t + h["period"]
+        return self._held
+
+    def next_change(self, t):
+        if t < self.execute - 1e-9:
+            return min(self._next if self._next > t + 1e-9 else t + self.helmsman["period"],
+                       self.execute)
+        return self.manoeuvre.next_change(t)
+
+    def event(self, state):
+        return self.manoeuvre.event(state) if self._started else None
+
+    def on_event(self):
+        self.manoeuvre.on_event()
+
+
 @dataclass(frozen=True)
 class Manoeuvre:
     """A standard manoeuvre.
@@ -57,9 +121,13 @@ class Manoeuvre:
     hold : tuple of float
         Random rudder: range of hold times [s].
     seed : int
-        Random rudder: seed of ``numpy.random.default_rng``.
+        Random rudder: seed of ``numpy.random.default_rng``; the helmsman's hand in an
+        approach.
     name : str
         Name of the record (default: made from kind and angles).
+    approach : float
+        Seconds of course keeping by hand before the programme starts (its rudder execute),
+        as a trial is run (:class:`HelmsmanThen`); 0 starts it at once.
 
     Examples
     --------
@@ -79,6 +147,7 @@ class Manoeuvre:
     seed: int = 0
     name: str = ""
     meta: dict = field(default_factory=dict, compare=False)
+    approach: float = 0.0
 
     def __post_init__(self):
         if self.kind not in MANOEUVRE_KINDS:
@@ -123,7 +192,13 @@ class Manoeuvre:
         return np.arange(int(round(self.duration / self.dt))) * self.dt
 
     def command(self) -> RudderCommand:
-        """The commanded rudder programme (paper section 3.1 for the protocol's manoeuvres)."""
+        """The commanded rudder programme (paper section 3.1 for the protocol's manoeuvres),
+        after course keeping by hand for ``approach`` seconds when there is one."""
+        if self.approach > 0:
+            return HelmsmanThen(self.approach, self._programme(), self.seed)
+        return self._programme()
+
+    def _programme(self) -> RudderCommand:
         rad = math.radians
         if self.kind == "straight":
             return ConstantCommand(0.0)
@@ -230,8 +305,15 @@ def fly(dynamics, manoeuvres: Sequence[Manoeuvre], *, state0: np.ndarray | None 
     >>> round(float(run["u"][-1] / 12.348), 4)  # the straight-run equilibrium u' = 1.0001
     1.0001
     """
+    if isinstance(manoeuvres, Manoeuvre | str) or not all(
+            isinstance(m, Manoeuvre) for m in manoeuvres):
+        raise TypeError("manoeuvres must be a list of Manoeuvre, such as "
+                        "[Manoeuvre('zigzag', rudder=20, check=20)].")
     if not hasattr(dynamics, "accelerations") and hasattr(dynamics, "dynamics"):
         dynamics = dynamics.dynamics()  # a fitted model flies through its dynamics
+    if not hasattr(dynamics, "accelerations"):
+        raise TypeError(f"dynamics must be a model (MMGModel, an identified model or its "
+                        f"dynamics), not {type(dynamics).__name__}.")
     ship = dynamics.ship
     s0 = initial_state(ship) if state0 is None else np.asarray(state0, dtype=float)
     groups: dict[tuple, list[int]] = {}

@@ -24,7 +24,7 @@ from . import __version__
 from ._io import write_text_atomic
 from ._saved_checks import (
     FORMAT_VERSION,
-    MAX_COEFFICIENT,  # noqa: F401  (part of the model's documented limits)
+    MAX_COEFFICIENT,
     _check_format,
     _check_nondim,
     _coefficients_of,
@@ -409,7 +409,22 @@ class AbkowitzModel:
         }
 
     def save(self, path: str | Path) -> None:
-        """Write the model as JSON (to a temporary file, then renamed)."""
+        """Write the model as JSON (to a temporary file, then renamed).
+
+        Raises
+        ------
+        SindyshipInputError
+            When a coefficient is not finite or beyond :data:`MAX_COEFFICIENT` in magnitude,
+            which no saved model may hold (such a fit comes from records that do not belong to
+            the ship, or from a ship file with the wrong units).
+        """
+        largest = max((abs(value) for terms in self.coefficients.values()
+                       for value in terms.values()), default=0.0)
+        if not largest <= MAX_COEFFICIENT:
+            raise SindyshipInputError(
+                f"the fit gave a coefficient of magnitude {largest:.3g}, beyond the "
+                f"{MAX_COEFFICIENT:g} a saved model may hold; check that the records belong "
+                f"to the ship {self.ship.name!r} and that its file has the right units.")
         write_text_atomic(path, json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n")
 
     @classmethod
@@ -459,6 +474,9 @@ class AbkowitzModel:
             ) from None
         except SindyshipInputError as exc:
             raise SindyshipInputError(f"{path}: {exc}; the file was edited by hand.") from None
+        except ValueError as exc:  # an integer of thousands of digits
+            raise SindyshipInputError(f"{path}: holds a number too long to read ({exc}); the "
+                                      "file was edited by hand.") from None
         except RecursionError:
             raise SindyshipInputError(
                 f"{path}: the JSON is nested too deeply to be a sindyship model."

@@ -56,6 +56,7 @@ import numpy as np
 from .errors import SindyshipInputError
 from .levenberg_marquardt import levenberg_marquardt
 from .model import AbkowitzModel
+from .refine_checks import carries_over, turns_kept
 from .shooting import (
     CHANNEL_SCALES,
     active_keys,
@@ -80,6 +81,11 @@ SEGMENT_TIMES = (5.0, 15.0, 45.0)
 #: refined coefficients no longer move, whatever the machine's rounding).
 STAGE_TOLERANCE = 1e-3
 TOLERANCE = 1e-7
+PENALTY_SCALE = "fit"
+#: Fewest records a refinement is validated on (two halves of two records or more each).
+VALIDATION_RECORDS = 4
+#: Most a coefficient moves, relative to its fitted value (None: no bound).
+RELATIVE_BOUND = None
 #: Most evaluations of a stage before the last.
 EARLY_EVALUATIONS = 5
 #: Default weight of a ``prior`` fit's objective against the mean squared flight error.
@@ -133,9 +139,6 @@ def _check_arguments(model, records, max_evaluations, segment_s, prior_weight) -
     if not isinstance(model, AbkowitzModel):
         raise TypeError(f"model must be an AbkowitzModel (sindyship.fit makes one), not "
                         f"{type(model).__name__}.")
-    if isinstance(records, Trajectory | str) or not isinstance(records, Sequence) \
-            or not all(isinstance(r, Trajectory) for r in records):
-        raise TypeError("records must be a list of Trajectory (sindyship.read_csv reads one).")
     if not records:
         raise SindyshipInputError("refine needs at least one record to fly; pass the "
                                   "training records.")
@@ -163,7 +166,7 @@ def _positive(value) -> bool:
 def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
            max_evaluations: int = MAX_EVALUATIONS, segment_s: float | None = None,
            prior_weight: float | None = None, progress: bool = False,
-           n_jobs: int | None = 1) -> AbkowitzModel:
+           n_jobs: int | None = 1, validate: bool = True) -> AbkowitzModel:
     """The model with its non-zero coefficients refined by the error of its flights.
 
     Parameters
@@ -193,6 +196,13 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
         joblib workers the segments are split across (``None``: from a
         ``joblib.parallel_config`` block, such as a Dask cluster's); the result does not
         depend on it.
+    validate : bool
+        With :data:`VALIDATION_RECORDS` records or more, check that refining carries over to
+        flights it was not refined on (:func:`sindyship.refine_checks.carries_over`: fitted and
+        refined on every other record, the model must fly the rest closer than its fit alone
+        does), else keep the fitted coefficients.  Trajectories
+        with disturbances the library lacks (gusts, noise, roll) can be matched by terms they
+        do not pin down, which then fly other manoeuvres worse.
 
     Returns
     -------
@@ -204,46 +214,44 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
         coefficient that moved most, whether the refined model is stable in straight running
         (:func:`sindyship.stability.straight_run_stability`) and whether a refinement was
         refused for making a stable ``prior`` fit unstable (``refused_unstable``).  A
-        refinement that does not lower the cost returns the fitted coefficients.
+        refinement that does not lower the cost returns the fitted coefficients, and so does
+        one that would lose the hard-over turns the fit flies (``refused_turning`` says why:
+        a turning circle at the rudder limit that diverges, or whose tactical diameter moves
+        by more than a factor :data:`sindyship.refine_checks.TURN_CHECK_FACTOR`).
     """
+    from .arguments import as_records, check_motion
+
+    records = as_records(records, allow_empty=True)
     _check_arguments(model, records, max_evaluations, segment_s, prior_weight)
+    check_motion(records)
+    settings = {"max_evaluations": int(max_evaluations), "segment_s": segment_s,
+                "prior_weight": PRIOR_WEIGHT if prior_weight is None else float(prior_weight),
+                "progress": progress, "n_jobs": n_jobs}
+    refined = _refined(model, records, **settings)
+    report = refined.info["refined"]
+    if validate and len(records) >= VALIDATION_RECORDS and report["largest_change"] is not None:
+        check = carries_over(model, records, lambda fitted, half: _refined(
+            fitted, half, **{**settings, "progress": False}))
+        report["validation"] = check
+        if not check["accepted"]:
+            refined = _with_changes(model, {}, {**refined.info, "refined": {
+                **report, "stopped": ("refined on half of the records, the model flew the other "
+                                      f"half {check['ratio']:.3g} times as far off as fitted "
+                                      f"({check['why']}); the fitted coefficients are kept"),
+                "largest_change": None, "flight_rms_after": report["flight_rms_before"],
+                "cost_after": report["cost_before"], "refused_validation": True}})
+            if "straight_run" in model.info:
+                refined.info["straight_run"] = dict(model.info["straight_run"])
+    return refined
+
+
+def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
+             prior_weight: float, progress: bool, n_jobs) -> AbkowitzModel:
+    """The refinement itself (:func:`refine` without its validation)."""
     stages = _stages(model.ship, records, segment_s)
-    if prior_weight is None:
-        prior_weight = PRIOR_WEIGHT
     penalty = _penalty_rows(model, records) if prior_weight > 0 else None
-    p = np.zeros(len(active_keys(model)))
-    done, budget, evaluations, jacobians = [], int(max_evaluations), 0, 0
-    # a stage before the last takes at most its share of half the evaluations
-    early = max(2, min(EARLY_EVALUATIONS,
-                       int(max_evaluations) // (2 * max(len(stages) - 1, 1))))
-    for stage, length in enumerate(stages):
-        final = stage == len(stages) - 1
-        problem = _Problem(model, list(records), length, float(prior_weight), penalty, n_jobs)
-        start_cost = _cost(problem.residuals(np.zeros_like(p)))
-        start_rms = problem.flight_rms
-        entry_cost = _cost(problem.residuals(p))
-        entry_rms = problem.flight_rms
-        allowed = budget if final else min(budget, early)
-        search = levenberg_marquardt(problem.residuals, problem.normal, p,
-                                     max_evaluations=max(allowed, 1),
-                                     tolerance=TOLERANCE if final else STAGE_TOLERANCE,
-                                     on_step=problem.report if progress else None) \
-            if len(p) and allowed > 0 else None
-        if search is not None and search.cost < entry_cost:
-            p = search.x
-        budget -= 0 if search is None else search.evaluations
-        evaluations += 0 if search is None else search.evaluations
-        jacobians += 0 if search is None else search.jacobians
-        problem.residuals(p)
-        done.append({"segment_s": length, "segments": problem.n_segments,
-                     "cost_fitted": start_cost, "flight_rms_fitted": start_rms,
-                     "cost_before": entry_cost,
-                     "cost_after": _cost(problem.residuals(p)),
-                     "flight_rms_before": entry_rms, "flight_rms_after": problem.flight_rms,
-                     "evaluations": 0 if search is None else search.evaluations,
-                     "stopped": "no active coefficient" if not len(p) else (
-                         "no evaluations left" if search is None else search.message),
-                     "converged": search is not None and search.converged})
+    p, done, evaluations, jacobians, problem = _search_stages(
+        model, records, stages, penalty, max_evaluations, prior_weight, progress, n_jobs)
     last = done[-1]
     cost_before, cost_after = last["cost_fitted"], last["cost_after"]
     if not cost_after < cost_before:
@@ -256,10 +264,16 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
     stable = straight_run_stability(candidate).stable
     promised = bool(info.get("straight_run", {}).get("stable"))
     refused_unstable = promised and not stable
+    turns = None if refused_unstable or not np.any(p) else turns_kept(model, candidate, records)
     if refused_unstable:  # a prior fit is straight-run stable; so is its refinement
         p, cost_after, stable, flight_after = start, cost_before, True, flight_before
         stopped = ("the refined model was unstable in straight running, which the fit it "
                    "started from is not; the fitted coefficients are kept")
+        candidate = _with_changes(model, problem.coefficients(p), info)
+    elif turns is not None:  # it flew hard-over turns it can no longer fly
+        p, cost_after, flight_after = start, cost_before, flight_before
+        stopped = (f"the refined model {turns}, which the fit it started from flies; the "
+                   "fitted coefficients are kept")
         candidate = _with_changes(model, problem.coefficients(p), info)
     if "straight_run" in info:  # the prior fit's record describes the model saved
         info["straight_run"] = {**info["straight_run"], "stable": stable}
@@ -278,9 +292,52 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
             "relative": float(p[moved])},
         "straight_run_stable": stable,
         "refused_unstable": refused_unstable,
+        "refused_turning": turns,
+        "refused_validation": False,
     }
     candidate.info = info
     return candidate
+
+
+def _search_stages(model, records, stages, penalty, max_evaluations, prior_weight, progress,
+                   n_jobs):
+    """The Levenberg-Marquardt search stage by stage: the relative changes of the active
+    coefficients, each stage's report, the evaluations and Jacobians, the last problem."""
+    p = np.zeros(len(active_keys(model)))
+    done, budget, evaluations, jacobians = [], int(max_evaluations), 0, 0
+    # a stage before the last takes at most its share of half the evaluations
+    early = max(2, min(EARLY_EVALUATIONS,
+                       int(max_evaluations) // (2 * max(len(stages) - 1, 1))))
+    for stage, length in enumerate(stages):
+        final = stage == len(stages) - 1
+        problem = _Problem(model, list(records), length, float(prior_weight), penalty, n_jobs)
+        start_cost = _cost(problem.residuals(np.zeros_like(p)))
+        start_rms = problem.flight_rms
+        entry_cost = _cost(problem.residuals(p))
+        entry_rms = problem.flight_rms
+        allowed = budget if final else min(budget, early)
+        search = levenberg_marquardt(problem.residuals, problem.normal, p,
+                                     max_evaluations=max(allowed, 1),
+                                     tolerance=TOLERANCE if final else STAGE_TOLERANCE,
+                                     bound=RELATIVE_BOUND,
+                                     on_step=problem.report if progress else None) \
+            if len(p) and allowed > 0 else None
+        if search is not None and search.cost < entry_cost:
+            p = search.x
+        budget -= 0 if search is None else search.evaluations
+        evaluations += 0 if search is None else search.evaluations
+        jacobians += 0 if search is None else search.jacobians
+        problem.residuals(p)
+        done.append({"segment_s": length, "segments": problem.n_segments,
+                     "cost_fitted": start_cost, "flight_rms_fitted": start_rms,
+                     "cost_before": entry_cost,
+                     "cost_after": _cost(problem.residuals(p)),
+                     "flight_rms_before": entry_rms, "flight_rms_after": problem.flight_rms,
+                     "evaluations": 0 if search is None else search.evaluations,
+                     "stopped": "no active coefficient" if not len(p) else (
+                         "no evaluations left" if search is None else search.message),
+                     "converged": search is not None and search.converged})
+    return p, done, evaluations, jacobians, problem
 
 
 class _Problem:
@@ -311,10 +368,12 @@ class _Problem:
         flights, _, _ = self._flight_part(self._flights(start, False))
         self.flight_norm = 1.0 / math.sqrt(max(float(flights @ flights), 1e-300))
         self.weight = 1.0
-        if penalty is not None:  # the objective's value: its rows and what no row reaches
+        if penalty is not None and PENALTY_SCALE == "fit":  # the objective's value there
             rows, _ = self._penalty_part(start, False)
             value = float(rows @ rows) + sum(part[5] for part in penalty.values())
             self.weight = math.sqrt(prior_weight / max(value, 1e-12))
+        elif penalty is not None:  # over the forces' sum of squares
+            self.weight = math.sqrt(prior_weight)
 
     def coefficients(self, p: np.ndarray) -> dict:
         return dict(zip(self.keys, (self.fitted * (1.0 + p)).tolist(), strict=True))

@@ -47,7 +47,7 @@ def before_after_report(change) -> str:
 
     Distances are mean / max in ship lengths; a diverged flight shows its divergence time
     beside its mean.  The last column compares the two flights over the window both cover
-    (PROTOCOL.md): the gain before/after, or which one diverged first.
+    (docs/protocol.md): the gain before/after, or which one diverged first.
     """
     w = max([16, *(len(row["manoeuvre"]) for row in change.rows)])
     lines = [
@@ -235,19 +235,32 @@ _REMEDIES = (
 )
 
 
+def _closer(score) -> str:
+    """How much closer an effect's confirmation flies the training records, as a factor."""
+    ratio = score.confirmation.ratio("training")
+    return f"{1.0 / ratio:.2g} times" if ratio > 0 else "much"
+
+
 def _verdict_lines(diagnosis) -> list[str]:
     lines = [textwrap.fill(f"Caution: {warning}.", width=96, subsequent_indent="  ")
              for warning in diagnosis.warnings]
     verdict = diagnosis.verdict
     if verdict == "complete":
+        flown = [s.effect.name for s in diagnosis.ranking if s.confirmation is not None]
+        checked = (f", re-flying the training records with {', '.join(flown)} brings them no "
+                   "clearly closer" if flown else "")
         text = (f"Verdict: complete - no catalogued effect explains "
-                f"{100 * diagnosis.threshold:.0f} % or more of the remaining force error, "
-                "every training flight completed and the library predicts most of every force.")
+                f"{100 * diagnosis.threshold:.0f} % or more of the remaining force error"
+                f"{checked}, every training flight completed and the library predicts most of "
+                "every force.")
     elif verdict == "add-effect":
         top = diagnosis.top
         optimizer = diagnosis.settings.get("optimizer", "ls")
         chosen = "" if optimizer == "ls" else f" --optimizer {optimizer}"
-        text = (f"Verdict: add {top.effect.name}: sindyship fit DATA.csv... --ship "
+        why = "" if top.meaningful else (
+            f" (its share of the force error is below the threshold, but re-flying the training "
+            f"records with it brings them {_closer(top)} closer)")
+        text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... --ship "
                 f"{_ship_argument(diagnosis.ship)} --effects "
                 f"{','.join([*diagnosis.library.effects, top.effect.name])}{chosen}; then "
                 "diagnose again with the same --effects.")
@@ -296,6 +309,8 @@ def diagnosis_report(diagnosis) -> str:
     lines += _ranking_lines(diagnosis)
     if diagnosis.discovery is not None:
         lines += ["", discovery_report(diagnosis.discovery), ""]
+    if getattr(diagnosis, "speed", None) is not None:
+        lines += [textwrap.fill(diagnosis.speed.text(), width=96, subsequent_indent="  "), ""]
     lines += _verdict_lines(diagnosis)
     return "\n".join(lines)
 

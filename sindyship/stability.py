@@ -64,7 +64,8 @@ class Stability:
 def straight_run_stability(model) -> Stability:
     """Eigenvalues of the model's sway-yaw system linearised about the straight run.
 
-    Channels the library uses beyond the heading are held at zero (the heading at 0).
+    The recorded channels the library uses are held at zero (the heading at 0; a calm: the
+    apparent wind is the ship's own headwind).
 
     Parameters
     ----------
@@ -78,7 +79,7 @@ def straight_run_stability(model) -> Stability:
 
     ship = model.ship
     U0, L = ship.U0, ship.L
-    channels = {name: 0.0 for name in model.library.channels - {"psi"}}
+    channels = {name: 0.0 for name in model.recorded_channels}
     dynamics = AbkowitzDynamics(model, channels)
 
     def sway_yaw(v_nd: float, r_nd: float) -> np.ndarray:

@@ -12,7 +12,7 @@ matrix of eq. 14 and C_abk the protocol's Coriolis terms (rigid body plus added 
 coefficient of du^a v'^b r'^c delta^d is the Taylor coefficient of F_abk about u' = 1,
 v' = r' = delta = 0.  The MMG rudder switches its flow straightening factor gamma_R at that
 point, so the expansion uses the mean gamma_R (0.415 for the KCS), which is also what central
-differences there see (PROTOCOL.md).
+differences there see (docs/protocol.md).
 
 The MMG physics is written once, in :func:`sindyship.mmg.force_components`.  Here it is
 evaluated, unchanged, on two kinds of values that numpy routes its ufuncs to (numpy's
@@ -341,7 +341,7 @@ def mmg_sympy(ship: Ship, gamma_R: float | None = None, *,
     ship : Ship
     gamma_R : float, optional
         The flow straightening factor, fixed (default: the mean of the port and starboard
-        values, the Taylor expansion point of PROTOCOL.md).
+        values, the Taylor expansion point of docs/protocol.md).
     symbols : tuple of 4 sympy symbols, optional
         (u', v', r', delta); default real symbols ``u, v, r, delta``.
 

@@ -28,12 +28,12 @@ Thresholds (module constants) and why:
   rounded to the nearest multiple of 5 deg when one lies within ``ROUNDING = 1.5`` deg,
   else to 0.1 deg.  The heading change (from the execute) at the rudder reversals must
   agree within ``CHECK_SPREAD = 3`` deg.
-- Turn: the record ends on a rudder hold of at least ``TURN_RUDDER = 5`` deg that lasts at
-  least ``TURN_SHARE = 0.25`` of the record (a spiral's last step is a seventh of it, a
-  pull-out ends at midship); its execute is the last sample at the approach value before the
-  rudder moved to that hold (:func:`recognise_turn`).  A steady turn from its execute is the
-  standard turning test: whatever was steered before (course keeping by hand) is not part of
-  it.
+- Turn: the record holds a rudder angle of at least ``TURN_RUDDER = 5`` deg for at least
+  ``TURN_SHARE = 0.25`` of its samples (a spiral's steps last a seventh of it each; a
+  turning circle may end in a pull-out); its execute is the last sample at the approach value
+  before the rudder moved to the hardest such hold (:func:`recognise_turn`).  A turn from its
+  execute is the standard turning test: whatever was steered before (course keeping by hand)
+  is not part of it.
 """
 
 from __future__ import annotations
@@ -269,29 +269,32 @@ def recognise_turn(record: Trajectory) -> Turn | None:
     Turn(rudder_deg=35.0, start_time=39.0)
     """
     command = np.degrees(record["delta_c"] if record.has("delta_c") else record.rudder)
-    holds = _holds(command)
+    n = len(command)
+    holds = [h for h in _holds(command)
+             if abs(h[2]) >= TURN_RUDDER and (h[1] - h[0] + 1) >= TURN_SHARE * n]
     if not holds:
         return None
-    first, last, level = holds[-1]
-    n = len(command)
-    if last < n - 1 or abs(level) < TURN_RUDDER or (last - first + 1) < TURN_SHARE * n:
-        return None
-    start = _execute(command, first, int(np.sign(level)))
+    first, _, level = max(holds, key=lambda h: abs(h[2]))  # a helmsman's wheel is gentler
+    sign = int(np.sign(level))
+    # the rudder first reached the hold's angle here (it may wander a degree before the hold)
+    arrived = int(np.argmax(sign * (command[: first + 1] - level) >= -HOLD_RANGE))
+    start = _execute(command, arrived, sign)
     return Turn(round(float(level), 1), float(record.t[start]))
 
 
-#: A rudder that moves back by less than this [deg per sample] is still on its way to a hold.
-_NOISE_STEP = 0.05
+#: A rudder still on its way to a hold moves by more than this toward it [deg per sample].
+_RAMP_STEP = 1e-3
 #: The execute is the last sample within this [deg] of the rudder's approach value.
 _EXECUTE_BAND = 0.5
 
 
 def _execute(command: np.ndarray, hold: int, sign: int) -> int:
     """The last sample at the approach value before the rudder moved to the hold that starts
-    at ``hold``: back along the ramp to where it began (a servo's exponential approach, a
-    step), then forward to the last sample within :data:`_EXECUTE_BAND` of that value."""
+    at ``hold``: back along the ramp while the rudder keeps moving toward the hold (a step,
+    or a servo's exponential approach; a helmsman's held wheel or a wobble ends it), then
+    forward to the last sample within :data:`_EXECUTE_BAND` of where it began."""
     i = hold
-    while i > 0 and sign * (command[i] - command[i - 1]) > -_NOISE_STEP:
+    while i > 0 and sign * (command[i] - command[i - 1]) > _RAMP_STEP:
         i -= 1
     j = i
     while j < hold and sign * (command[j + 1] - command[i]) <= _EXECUTE_BAND:

@@ -152,15 +152,18 @@ def test_reproduce_json_contract(tmp_path):
     from sindyship.reports import reproduce_report
 
     assert "prior on abkowitz-vr " in reproduce_report(doc)
-    # the last diagnosed model, refined by its training flights, is the last row
+    # the default fit (the prior) with the first diagnosed effect, refined by its training
+    # flights, is the last row
     refined = doc["results"][-1]
-    assert refined["refined"] is True and refined["effects"] == doc["results"][-2]["effects"]
+    first_added = doc["diagnosis"]["rounds"][0]["added"]
+    assert refined["refined"] is True and refined["method"] == "prior"
+    assert refined["effects"] == [first_added] and refined["library"].startswith("abkowitz-vr")
     assert refined["refinement"]["records"] == ["straight", "tc35_stbd", "tc35_port", "zz35_10",
                                                 "zz20_20", "zz15_15", "spiral_stbd",
                                                 "spiral_port"]
     assert ", refined " in reproduce_report(doc)
     # the README's refined row is what reproduce flies (docs/readme-numbers.json, made by
-    # scripts/make_readme.py); the Gauss-Newton path may round differently on another machine
+    # scripts/make_readme.py); the refinement's path may round differently on another machine
     readme = json.loads((Path(__file__).resolve().parents[1] / "docs" / "readme-numbers.json")
                         .read_text(encoding="utf-8"))
     (saved,) = [r for r in readme["table10"] if r.get("refined")]
@@ -168,7 +171,7 @@ def test_reproduce_json_contract(tmp_path):
         assert error["completed"], name
         assert error["mean_distance_L"] == pytest.approx(saved["errors"][name]["mean_distance_L"],
                                                          rel=1e-3), name
-    assert (tmp_path / "rep" / f"model-ls+{'+'.join(refined['effects'])}+refined.json").exists()
+    assert (tmp_path / "rep" / f"model-prior+{first_added}+refined.json").exists()
     assert (tmp_path / "rep" / "results.json").exists()
     assert (tmp_path / "rep" / "trajectory-zz10_10.png").exists()
 
@@ -180,8 +183,10 @@ def test_fit_with_smoothing_records_the_setting(records, tmp_path):
                  "--out", str(model)]) == 0
     info = json.loads(model.read_text())["info"]
     assert info["smoothing"] == {"method": "savgol", "window_s": 21.0, "order": 3}
-    assert main(["fit", str(train[0]), "--ship", "kcs", "--smoothing", "bogus:x",
-                 "--out", str(tmp_path / "x.json")]) == 2
+    with pytest.raises(SystemExit) as stop:  # refused as the command line is read
+        main(["fit", str(train[0]), "--ship", "kcs", "--smoothing", "bogus:x", "--out",
+              str(tmp_path / "x.json")])
+    assert stop.value.code == 2
 
 
 def test_fit_refine_flies_the_records_and_says_what_it_did(records, tmp_path, capsys):

@@ -1,6 +1,6 @@
-"""Ensembles, the smoothing choice, the diagnosis and discovery on a Dask cluster (a
-LocalCluster of two worker processes through joblib's dask backend): the work runs on the
-cluster and gives the same numbers as on one process."""
+"""Ensembles, the smoothing choice, the refinement, the diagnosis and discovery on a Dask
+cluster (a LocalCluster of two worker processes through joblib's dask backend): the work runs
+on the cluster and gives the same numbers as on one process."""
 
 from __future__ import annotations
 
@@ -80,6 +80,26 @@ def test_a_diagnosis_and_a_discovery_on_the_cluster_equal_the_local_ones(client,
                                                        n_jobs=None))
     assert tasks > 0
     assert found.best.delays == local.discovery.best.delays
+
+
+def test_a_refinement_on_the_cluster_equals_the_local_one(client, kcs, lagged):
+    """The refinement's segments fly on the workers (n_jobs=None takes the dask backend) with
+    the same coefficients as on one process, to rounding (a worker may fly the numpy
+    reference where this process runs compiled code)."""
+    from sindyship.identify import fit
+    from sindyship.refine import refine
+
+    _, runs = lagged
+    prior = fit(runs, kcs, library="abkowitz-vr", optimizer="prior")
+    local = refine(prior, runs, max_evaluations=4, n_jobs=1)
+    remote, tasks = on_cluster(client, lambda: refine(prior, runs, max_evaluations=4,
+                                                      n_jobs=None))
+    assert tasks > 0
+    for dof, terms in local.coefficients.items():
+        for term, value in terms.items():
+            assert remote.coefficients[dof][term] == pytest.approx(value, rel=1e-8, abs=1e-15)
+    assert remote.info["refined"]["cost_after"] == pytest.approx(
+        local.info["refined"]["cost_after"], rel=1e-8)
 
 
 def test_the_readme_cluster_example_runs(tmp_path):

@@ -358,7 +358,88 @@ def _model_cases() -> list[dict]:
     return cases
 
 
-CASES = _output_cases() + _number_cases() + _ship_cases() + _input_cases() + _model_cases()
+HUGE = "1" * 5000  # an integer no float holds
+#: Ship values outside any physical range: (section, key, value).
+SHIP_RANGES = [
+    ("particulars", "x_G", "-3.404\nscale = 0"), ("particulars", "x_G", "-3.404\nscale = -1"),
+    ("particulars", "B", "1e300"), ("particulars", "d", "1e-300"),
+    ("particulars", "B", "500"), ("particulars", "x_G", "1e200"), ("mass", "m", "1e200"),
+    ("mass", "I_zz", "1e200"), ("mass", "m_y", "1e300"), ("particulars", "displacement", "1e-300"),
+    ("particulars", "L", HUGE),
+]
+IDENTIFICATION_SHIP = ('name = "mine"\n[particulars]\nL = 100.0\nB = 16.0\nd = 6.0\n'
+                       'displacement = 6000.0\nrho = 1025.0\nU0 = 7.0\nx_G = 0.0\n'
+                       '[mass]\nk_zz = 0.25\n')
+
+
+def _trust_cases() -> list[dict]:
+    """What a fresh user met: huge integers, ship values with no range, unbounded options,
+    special files given to forces, over-long output names, glob patterns that match nothing."""
+    cases = []
+    for section, key, value in SHIP_RANGES:
+        ship = {"ship.toml": ship_edit(section, key, value)}
+        fragment = "ship.toml"
+        cases.append(case("ship range: simulate", ["simulate", "--manoeuvre", "straight",
+                          "--duration", "30", "--ship", "ship.toml", "--out", "o.csv"], 2,
+                          fragment, ship))
+        cases.append(case("ship range: fit", FIT + ["--ship", "ship.toml", "--out", "m.json"],
+                          2, fragment, {**DATA, **ship}))
+        cases.append(case("ship range: evaluate", ["evaluate", "model.json", "data.csv",
+                          "--ship", "ship.toml"], 2, fragment, {**MODEL, **ship}))
+        cases.append(case("ship range: diagnose", DIAG + ["--ship", "ship.toml"], 2, fragment,
+                          {**DIAG_FILES, **ship}))
+    for option in ("rts:1e300", "savgol:1e300", "rts:0", "rts:-5", "rts:nan", "savgol:21:9",
+                   "kalman:21", "savgol:21:3:1"):
+        cases.append(case("number: fit --smoothing", FIT + ["--smoothing", option, "--out",
+                          "m.json"], 2, "smoothing", DATA))
+        cases.append(case("number: diagnose --smoothing", DIAG + ["--smoothing", option], 2,
+                          "smoothing", DIAG_FILES))
+    for value in ("100000", "1", "0", "nan", "2.5"):
+        cases.append(case("number: captive --points", ["captive", "--test", "rudder",
+                          "--points", value, "--out", "c.csv"], 2, "--points"))
+    for value in ("1e300", "-1", "0", "nan", "inf"):
+        cases.append(case("number: captive --speed", ["captive", "--test", "rudder",
+                          "--points", "3", "--speed", value, "--out", "c.csv"], 2, "--speed"))
+    refine_options = [("--refine", "-1"), ("--refine", "1e9"), ("--refine", "nan"),
+                      ("--segment", "-1"), ("--segment", "0"), ("--segment", "1e9"),
+                      ("--refine-weight", "-1"), ("--refine-weight", "nan"),
+                      ("--prior-strength", "2")]
+    for option, value in refine_options:
+        cases.append(case(f"number: fit {option}", FIT + [option, value, "--out", "m.json"],
+                          2, option, DATA))
+    long_name = "m" * 251 + ".json"  # 256 bytes
+    for argv in (FIT + ["--out", long_name], ["export", "model.json", "--latex", long_name],
+                 ["simulate", "--manoeuvre", "straight", "--duration", "30", "--out",
+                  long_name], CAPTIVE + [long_name], ["discover", "data.csv", "--out", long_name]):
+        cases.append(case(f"output name: {argv[0]}", argv, 2, "name", MODEL))
+    for files, fragment in (({**MODEL, "model.json": "fifo:"}, "FIFO"),
+                            ({**FORCES_FILES, "captive.csv": "fifo:"}, "FIFO"),
+                            ({**FORCES_FILES, "captive.csv": "link:/dev/zero"}, "device"),
+                            ({**FORCES_FILES, "captive.csv": "dir:"}, "folder")):
+        cases.append(case("special input: forces", FORCES, 2, fragment,
+                          {**FORCES_FILES, **files}, sub=True))
+    for verb, argv in (("fit", ["fit", "none-*.csv", "--out", "m.json"]),
+                       ("evaluate", ["evaluate", "model.json", "none-*.csv"]),
+                       ("diagnose", ["diagnose", "none-*.csv"])):
+        cases.append(case(f"glob matching nothing: {verb}", argv, 2, "none-*.csv", MODEL))
+    cases.append(case("huge integer: fit --library", FIT + ["--library", "lib.toml", "--out",
+                      "m.json"], 2, "lib.toml", {**DATA, "lib.toml":
+                      f'name = "x"\n[terms]\nX = ["du"]\nY = ["v"]\nN = ["r"]\nscale = {HUGE}\n'}))
+    for verb in ("evaluate", "export"):
+        argv = ["evaluate", "model.json", "data.csv"] if verb == "evaluate" else \
+            ["export", "model.json"]
+        cases.append(case(f"huge integer: {verb} model", argv, 2, "model.json",
+                          {"model.json": f"@model:version={HUGE}", "data.csv": "@csv"}))
+    cases.append(case("identification ship: captive", ["captive", "--ship", "mine.toml",
+                      "--out", "c.csv"], 2, "no MMG", {"mine.toml": IDENTIFICATION_SHIP}))
+    cases.append(case("identification ship: simulate", ["simulate", "--manoeuvre", "straight",
+                      "--duration", "30", "--ship", "mine.toml", "--out", "o.csv"], 2, "no MMG",
+                      {"mine.toml": IDENTIFICATION_SHIP}))
+    return cases
+
+
+CASES = (_output_cases() + _number_cases() + _ship_cases() + _input_cases() + _model_cases()
+         + _trust_cases())
 
 
 # ---------------------------------------------------------------------------------------------
@@ -384,7 +465,11 @@ def _model_variant(text: str, variant: str) -> str:
     elif variant == "nan":
         return text.replace(json.dumps(document["coefficients"]["Y"]["v"]), "NaN", 1)
     elif variant.startswith("version="):
-        document["format_version"] = json.loads(variant.split("=", 1)[1])
+        value = variant.split("=", 1)[1]
+        if value.isdigit():  # written as it is: a JSON integer of any length
+            document["format_version"] = "@version@"
+            return json.dumps(document, indent=2).replace('"@version@"', value)
+        document["format_version"] = json.loads(value)
     return json.dumps(document, indent=2)
 
 
@@ -531,7 +616,7 @@ def test_the_corpus_covers_every_verb_with_enough_cases():
     verbs = {c["argv"][0] for c in CASES}
     assert verbs == {"simulate", "fit", "evaluate", "reproduce", "diagnose", "export",
                      "captive", "discover", "forces"}
-    assert len(CASES) >= 150
+    assert len(CASES) >= 400
     assert len({json.dumps(c, sort_keys=True) for c in CASES}) == len(CASES)  # no repeats
 
 
@@ -593,7 +678,8 @@ def test_a_failed_folder_output_leaves_the_previous_folder_whole(tmp_path):
     with output_folder(previous) as tmp:
         (tmp / "results.json").write_text("new\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
-    assert [p.name for p in previous.iterdir()] == ["results.json"]
+    assert sorted(p.name for p in previous.iterdir()) == [".sindyship-output", "results.json"]
+    assert (previous / ".sindyship-output").read_text() == "results.json\n"
     assert (previous / "results.json").read_text() == "new\n"
 
 

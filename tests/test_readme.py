@@ -160,11 +160,19 @@ def test_the_marin_numbers_are_pinned():
     saved = dict(NUMBERS["marin"])
     assert fresh["top"] == saved["top"] and fresh["confirmed"] == saved["confirmed"]
     assert fresh["not_testable"] == saved["not_testable"]
-    # the refinements' Gauss-Newton paths may round differently with other BLAS threads
-    refined_fresh, refined_saved = fresh.pop("refined"), saved.pop("refined")
-    assert _numbers_in(refined_fresh) == pytest.approx(_numbers_in(refined_saved), rel=1e-3,
+    # the default fit's refinement is an iterative search: pinned at a tolerance
+    default_fresh, default_saved = fresh.pop("default_fit"), saved.pop("default_fit")
+    assert _numbers_in(default_fresh) == pytest.approx(_numbers_in(default_saved), rel=1e-3,
                                                        abs=1e-9)
     assert _numbers_in(fresh) == pytest.approx(_numbers_in(saved), rel=1e-6, abs=1e-12)
+    # identified on the zig-zags, the default fit flies both 35 deg turns as recorded without
+    # diverging, advance and tactical diameter within 10 % of the measured; its speed loss
+    # misses by up to 0.2 alone, and by less than 0.1 with cross-flow drag
+    misses = _script().marin_misses
+    plain = misses(default_fresh["plain"], fresh["measured_turns"])
+    assert plain["figures"] < 0.10 and plain["speed_loss"] < 0.20
+    crossflow = misses(default_fresh["crossflow"], fresh["measured_turns"])
+    assert crossflow["figures"] < 0.10 and crossflow["speed_loss"] < 0.10
 
 
 def test_the_noise_ratios_are_pinned(kcs, protocol_runs):

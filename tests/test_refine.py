@@ -91,7 +91,9 @@ def test_a_segment_flies_as_the_model_flies_the_same_stretch_alone(runs, fitted)
     states, _ = fly_segments(fitted, segments)
     record = runs[0]
     stretch = record.data.iloc[100:201].drop(columns=["delta_c"]).reset_index(drop=True)
-    (alone,) = fly_like_batch(fitted, [Trajectory(stretch, name="stretch")])
+    start = {"time": float(stretch["t"].iloc[0]), "kind": "record", "reason": "the stretch"}
+    (alone,) = fly_like_batch(fitted, [Trajectory(stretch, name="stretch",
+                                                  meta={"flight_start": start})])
     rows = 2 * np.arange(1, 51)
     np.testing.assert_allclose(states[1, :, 3], alone["x"][rows], atol=1.0)
     np.testing.assert_allclose(states[1, :, 4], alone["y"][rows], atol=1.0)
@@ -164,10 +166,10 @@ def test_refine_refuses_bad_settings_in_one_sentence(runs, fitted, kwargs, error
 def test_refine_refuses_what_is_not_a_model_or_records(runs, fitted):
     with pytest.raises(SindyshipInputError, match=r"at least one record"):
         refine(fitted, [])
-    with pytest.raises(TypeError, match="records must be a list of Trajectory"):
+    with pytest.raises(SindyshipInputError, match=r"^zz.csv: no such file; records are"):
         refine(fitted, "zz.csv")
     with pytest.raises(TypeError, match="records must be a list of Trajectory"):
-        refine(fitted, (r for r in runs))
+        refine(fitted, 3)
     with pytest.raises(TypeError, match="model must be an AbkowitzModel"):
         refine("model.json", runs)
 
@@ -204,6 +206,40 @@ def test_a_refined_prior_fit_keeps_its_prior_and_its_stability(runs, kcs):
     assert report["flight_rms_after"] < report["flight_rms_before"]
 
 
+@pytest.fixture(scope="module")
+def four(kcs):
+    """Four short records: enough for the refinement to validate itself on two halves."""
+    return fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=300),
+                               Manoeuvre("turning-circle", rudder=-25, duration=300),
+                               Manoeuvre("zigzag", rudder=10, check=10, duration=300),
+                               Manoeuvre("turning-circle", rudder=25, duration=300)])
+
+
+def test_a_refinement_that_does_not_carry_over_keeps_the_fit(four, kcs, monkeypatch):
+    """Fitted and refined on every other record, the model flies the others; a refinement
+    that does not fly them closer than the fit alone is refused (here: by a ratio of 0)."""
+    import sindyship.refine_checks as checks
+
+    prior = fit(four, kcs, library="abkowitz-vr", optimizer="prior")
+    refined = refine(prior, four, max_evaluations=4)
+    check = refined.info["refined"]["validation"]
+    assert check["refined_on"] == ["zz20_20", "zz10_10"]
+    assert check["flown"] == ["tc25_port", "tc25_stbd"]
+    assert 0 < check["ratio"] < checks.VALIDATION_RATIO and check["accepted"]
+    assert refined.coefficients != prior.coefficients
+    monkeypatch.setattr(checks, "VALIDATION_RATIO", 0.0)
+    kept = refine(prior, four, max_evaluations=4)
+    report = kept.info["refined"]
+    assert report["refused_validation"] and not report["validation"]["accepted"]
+    assert kept.coefficients == prior.coefficients and report["largest_change"] is None
+    assert "the fitted coefficients are kept" in report["stopped"]
+    assert report["flight_rms_after"] == report["flight_rms_before"]
+    # without the check, the refinement is kept as it is
+    unchecked = refine(prior, four, max_evaluations=4, validate=False)
+    assert "validation" not in unchecked.info["refined"]
+    assert unchecked.coefficients == refined.coefficients
+
+
 def test_a_prior_fit_stays_stable_in_straight_running(runs, kcs, fitted, monkeypatch):
     """A refinement that would make a straight-run-stable prior fit unstable keeps the fit;
     a least-squares fit, which promises nothing, is refined and reported unstable."""
@@ -224,3 +260,13 @@ def test_a_prior_fit_stays_stable_in_straight_running(runs, kcs, fitted, monkeyp
     refined_ls = refine(fitted, runs, max_evaluations=4)
     assert refined_ls.info["refined"]["straight_run_stable"] is False
     assert refined_ls.info["refined"]["refused_unstable"] is False
+
+
+def test_a_model_with_a_coefficient_no_saved_model_may_hold_is_not_saved(fitted, tmp_path):
+    """A fit on records that do not belong to the ship can give coefficients near 1e295;
+    saving refuses them in one sentence (loading would) and writes nothing."""
+    absurd = _with(fitted, {("N", "r"): 1e295})
+    with pytest.raises(SindyshipInputError, match=r"^the fit gave a coefficient of magnitude "
+                       r"1e\+295, beyond the 1e\+06 a saved model may hold; check"):
+        absurd.save(tmp_path / "m.json")
+    assert list(tmp_path.iterdir()) == []

@@ -1,4 +1,4 @@
-"""The Taylor reference: Abkowitz derivatives implied by the MMG model (PROTOCOL.md).
+"""The Taylor reference: Abkowitz derivatives implied by the MMG model (docs/protocol.md).
 
 The MMG physics is evaluated by :func:`sindyship.mmg.force_components` itself on sympy
 values and on truncated Taylor series; these tests check both routes against plain numpy

@@ -306,13 +306,16 @@ def check_inputs(paths) -> None:
             )
 
 
-def load_cli_ship(name):
+def load_cli_ship(name, *, simulated: bool = False):
     """The ship ``--ship`` names (:func:`sindyship.ships.load_ship`), with each value it assumes
     (a ship file made for identification leaves out the servo or added masses) named on
-    stderr."""
+    stderr; for a verb that ``simulated`` it with the MMG model, a ship without one is returned
+    without them (the verb refuses it in one line)."""
     from ..ships import load_ship
 
     ship = load_ship(name)
+    if simulated and not ship.has_mmg:
+        return ship
     for assumption in ship.assumptions:
         progress(f"note: ship {ship.name!r} assumes {assumption}.")
     return ship
@@ -374,6 +377,21 @@ def add_record_options(p) -> None:
                    "START:STOP the samples between two times (default: auto)")
 
 
+def smoothing_option(text: str) -> str:
+    """``--smoothing``: ``none``, ``auto`` or a setting :class:`SmoothingSetting` reads
+    (checked when the command line is read)."""
+    if text in ("none", "auto"):
+        return text
+    from ..errors import SindyshipInputError
+    from ..smoothing import SmoothingSetting
+
+    try:
+        SmoothingSetting.parse(text)
+    except SindyshipInputError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+    return text
+
+
 def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool = True,
                          workers: bool = True, recommended: bool = False) -> None:
     """What every verb that fits a library on records takes (``fit``, ``diagnose``,
@@ -385,6 +403,7 @@ def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool =
     add_ship(p)
     add_identification(p, optimizer=optimizer, recommended=recommended)
     p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",
+                   type=smoothing_option,
                    help="smooth noisy training records before differencing: a Savitzky-Golay "
                    "or a Kalman (RTS) smoother over W seconds, or 'auto' to choose the setting "
                    "by leave-one-manoeuvre-out flights on the training records (its windows "

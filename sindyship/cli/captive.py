@@ -36,7 +36,7 @@ def run(args) -> int:
 
     check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}",
                  suffixes=(".csv",))
-    ship = load_cli_ship(args.ship)
+    ship = load_cli_ship(args.ship, simulated=True)
     frame = captive_tests(ship, args.test, points=args.points, speed=args.speed)
     write_captive_csv(frame, args.out)
     progress(f"wrote {args.out}: {len(frame)} captive conditions ({args.test}) of {ship.name}")

@@ -180,6 +180,13 @@ def _refined(model, records, args, n_jobs=1):
     done = refined.info["refined"]
     if done["refused_unstable"]:
         progress(f"not refined: {done['stopped']} (the prior fit's stability requirement).")
+    elif done.get("refused_validation"):
+        progress(f"not refined: {done['stopped']}: the records' flights would be matched by "
+                 "terms they do not pin down.")
+    elif done.get("refused_turning"):
+        progress(f"not refined: {done['stopped']}: the records do not span those turns, and "
+                 "their flights pulled terms they do not pin down (add turning circles to the "
+                 "records, or fly the fitted model).")
     elif done["cost_after"] < done["cost_before"]:
         change = done["largest_change"]
         progress(f"refined: flight error (rms over the compared samples) "
@@ -190,7 +197,8 @@ def _refined(model, records, args, n_jobs=1):
     else:
         progress(f"not refined: no step lowered the error ({done['cost_before']:.4g}); the "
                  "fitted coefficients are kept.")
-    if not done["converged"] and not done["refused_unstable"]:
+    if not done["converged"] and not done["refused_unstable"] \
+            and not done.get("refused_turning") and not done.get("refused_validation"):
         progress(f"note: the refinement stopped before it converged ({done['stopped']}); a "
                  "larger --refine lets it finish.")
     if not done["straight_run_stable"]:

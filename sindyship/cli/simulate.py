@@ -86,7 +86,7 @@ def _check_flown(record) -> None:
 
 
 def _protocol(args, ship, effects) -> int:
-    """The paper's manoeuvres (PROTOCOL.md) as OUT/train/*.csv and OUT/test/*.csv."""
+    """The paper's manoeuvres (docs/protocol.md) as OUT/train/*.csv and OUT/test/*.csv."""
     from pathlib import Path
 
     from ..effects import simulate_with_effects
@@ -114,7 +114,7 @@ def run(args) -> int:
     check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}",
                  kind="folder" if args.protocol else "file", suffixes=(".csv",))
     check_inputs(ship_file(args.ship))
-    ship = load_cli_ship(args.ship)
+    ship = load_cli_ship(args.ship, simulated=True)
     check_rudder(args.rudder, ship, "--rudder")
     check_rudder(args.check, ship, "--check")
     check_simulation_cost(ship, args.duration, args.dt)

@@ -11,6 +11,7 @@ __all__ = [
     "SIGNIFICANCE",
     "COLLINEAR_VIF",
     "CONFIRMING_RATIO",
+    "FLIGHT_OVERRIDE_RATIO",
     "DOF_NAMES",
     "MEANINGFUL_SHARE",
     "SETS",
@@ -24,6 +25,11 @@ MEANINGFUL_SHARE = 0.05
 #: manoeuvres) that confirms an effect: a 10 % gain, above the few per cent by which any
 #: extra term moves a flight.
 CONFIRMING_RATIO = 0.9
+#: An effect below the force-share threshold is still added when re-flying the training
+#: records with it brings them at least this much closer (geometric mean of after over before,
+#: as a confirmation): under noise a force share can hide what the flights show, and a verdict
+#: never disagrees with a confirmation.
+FLIGHT_OVERRIDE_RATIO = CONFIRMING_RATIO
 #: Share of a measured force (squared relative RMS error of the leave-one-manoeuvre-out
 #: predictions) above which most of it is unexplained and the library cannot be complete.
 UNEXPLAINED_SHARE = 0.5

@@ -96,7 +96,7 @@ class BeforeAfter:
 
     def ratio(self, kind: str = "training") -> float:
         """Geometric mean of after/before mean distance over the set's flights, each pair
-        compared over the window both flights cover (PROTOCOL.md, "Comparing two flights")."""
+        compared over the window both flights cover (docs/protocol.md, "Comparing two flights")."""
         return _geometric_mean_ratio(row for row in self.rows if row["set"] == kind)
 
     def divergences(self, kind: str = "training") -> tuple[int, int]:
@@ -112,7 +112,7 @@ class BeforeAfter:
         """Whether re-flying the training manoeuvres confirms the effect.
 
         A flight that diverges where the other does not, or earlier, is the worse one
-        whatever the means (PROTOCOL.md): False when some training flight diverges after
+        whatever the means (docs/protocol.md): False when some training flight diverges after
         adding the effect where it did not before (or earlier), True when only divergences
         before are cured, else True when the geometric-mean distance over the common windows
         falls below :data:`CONFIRMING_RATIO` times its value before.  None without training

@@ -27,6 +27,7 @@ from ..uncertainty import library_conditioning
 from ._constants import (
     COLLINEAR_VIF,
     DOF_NAMES,
+    FLIGHT_OVERRIDE_RATIO,
     MEANINGFUL_SHARE,
     NOISE_CAP,
     NOISE_VISIBLE,
@@ -40,6 +41,7 @@ from .noise import channel_noise
 from .ranking import rank_effects
 from .residuals import Residuals
 from .scoring import EffectScore, NotTestable
+from .speed import SpeedForms, speed_forms
 
 
 @dataclass
@@ -73,6 +75,9 @@ class Diagnosis:
         The search beyond the catalogue (:func:`sindyship.diagnose.discover`), run when no
         catalogued effect is meaningful and the model is visibly wrong (a training flight
         diverged, or a force's cross-validated error stands above its noise floor).
+    speed : SpeedForms or None
+        The records' speed range and which speed form they need
+        (:func:`sindyship.diagnose.speed.speed_forms`).
     """
 
     ship: Ship
@@ -92,6 +97,7 @@ class Diagnosis:
     noise_floor: dict[str, float] = field(default_factory=dict)
     noise_level: dict[str, float] = field(default_factory=dict)
     discovery: Discovery | None = None
+    speed: SpeedForms | None = None
 
     @property
     def diverged(self) -> dict[str, float]:
@@ -169,8 +175,18 @@ class Diagnosis:
 
     @property
     def top(self) -> EffectScore | None:
-        """The best meaningful effect, or None when the library is complete."""
-        return next((s for s in self.ranking if s.meaningful), None)
+        """The effect to add, or None when the library is complete: the best meaningful effect
+        that re-flying does not refute (its confirmation is not False), else the best other
+        effect whose confirmation brings the training flights closer by a clear margin
+        (:data:`FLIGHT_OVERRIDE_RATIO`): the verdict never disagrees with the flights."""
+        for score in self.ranking:
+            if score.meaningful and (score.confirmation is None
+                                     or score.confirmation.confirmed is not False):
+                return score
+        for score in self.ranking:
+            if not score.meaningful and flight_confirmed(score):
+                return score
+        return None
 
     def score(self, name: str) -> EffectScore:
         """The score of one effect by name."""
@@ -219,6 +235,7 @@ class Diagnosis:
                 "noise": {"floor_share_of_error": self.noise_floor, "level": self.noise_level},
                 "ranking": [score.to_json() for score in self.ranking],
                 "discovery": None if self.discovery is None else self.discovery.to_json(),
+                "speed": None if self.speed is None else self.speed.to_json(),
                 "not_testable": [item.to_json() for item in self.not_testable],
                 "in_library": list(self.in_library),
                 "warnings": self.warnings,
@@ -233,6 +250,18 @@ class Diagnosis:
         )
 
     # ------------------------------------------------------------------------------- figures
+
+def flight_confirmed(score: EffectScore) -> bool:
+    """Whether re-flying the training records with an effect brings them closer by a clear
+    margin (geometric mean of after over before at most :data:`FLIGHT_OVERRIDE_RATIO`, no new
+    divergence), whatever its share of the force error."""
+    confirmation = score.confirmation
+    if confirmation is None or confirmation.confirmed is not True:
+        return False
+    return bool(confirmation.ratio("training") <= FLIGHT_OVERRIDE_RATIO
+                or confirmation.divergences("training")[1]
+                < confirmation.divergences("training")[0])
+
 
 def _stability(model: AbkowitzModel) -> Stability | None:
     """Straight-run stability, or None when the model has no linear sway-yaw dynamics."""
@@ -338,7 +367,11 @@ def diagnose(
 
     sets = ([("training", records)] if fly_training else []) + [("held-out", test)]
     sets = [(kind, recs) for kind, recs in sets if recs]
-    chosen = [s for s in ranking if s.meaningful][: max(int(confirm), 0)] if sets else []
+    # the meaningful effects first; then the best of the others, so that a verdict of
+    # "complete" rests on flights too (a force share can hide under the noise)
+    candidates = [s for s in ranking if s.meaningful] + [
+        s for s in ranking if not s.meaningful]
+    chosen = candidates[: max(int(confirm), 0)] if sets else []
     models = [model]
     for score in chosen:
         lib = base.extended(score.effect)
@@ -399,6 +432,7 @@ def diagnose(
         },
         seconds=time.perf_counter() - start,
     )
+    result.speed = speed_forms(fitted, ship, base, settings)
     if search_beyond:
         _search_beyond(result, fitted, settings, n_jobs)
         result.seconds = time.perf_counter() - start

@@ -143,10 +143,10 @@ def diagnose_iteratively(
 ) -> IterativeDiagnosis:
     """Diagnose, add the best effect, diagnose again, until the library is complete.
 
-    Each round adds the best meaningful effect that re-flying the training records
-    confirms (the best meaningful one when training records are not flown); the iteration
-    stops when no effect explains a meaningful share, when no meaningful effect is
-    confirmed, or after ``max_rounds`` additions.  Held-out records are flown every round
+    Each round adds the effect the round's diagnosis names (:attr:`Diagnosis.top`: the best
+    meaningful effect that re-flying the training records does not refute, else one that
+    brings them clearly closer); the iteration stops when there is none, or after
+    ``max_rounds`` additions.  Held-out records are flown every round
     and never used to choose.
 
     Parameters
@@ -179,23 +179,13 @@ def diagnose_iteratively(
     bar = tqdm(total=max_rounds, desc="rounds", file=sys.stderr, disable=not progress)
     for _ in range(max_rounds):
         result = diagnose(records, ship, library=lib, test=test, progress=progress, **options)
-        meaningful = [s for s in result.ranking if s.meaningful]
-        if not meaningful:
-            rounds.append(Round(result, None, None))
-            stopped = "no effect explains a meaningful share"
-            break
-        verdicts = [
-            s
-            for s in meaningful
-            if s.confirmation is not None and s.confirmation.confirmed is not None
-        ]
-        if verdicts:
-            pick = next((s for s in verdicts if s.confirmation.confirmed), None)
-        else:
-            pick = meaningful[0]
+        pick = result.top  # the diagnosis's own verdict: never one the flights refute
         if pick is None:
             rounds.append(Round(result, None, None))
-            stopped = "no meaningful effect was confirmed by re-flying the training records"
+            meaningful = any(s.meaningful for s in result.ranking)
+            stopped = ("no meaningful effect was confirmed by re-flying the training records"
+                       if meaningful else "no effect explains a meaningful share, and none "
+                       "brings the training flights clearly closer")
             break
         change = pick.confirmation
         if change is None:

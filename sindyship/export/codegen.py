@@ -393,6 +393,17 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
             "simulator does not pass to its forces; fly this model with sindyship evaluate "
             "instead."
         )
+    if {"wind_app_speed", "wind_app_angle"} & set(model.library.variables):
+        raise SindyshipInputError(
+            "the model's terms use the apparent wind, which the generated simulator does not "
+            "make from the flown motion; fly this model with sindyship evaluate instead."
+        )
+    if model.library.speed != "design":
+        raise SindyshipInputError(
+            "the model's forces scale with the instantaneous speed, and the generated "
+            "simulator carries the design-speed form only; fly this model with sindyship "
+            "evaluate instead."
+        )
     # channels without a default value must be given when the module flies (NaN until then)
     defaults = {name: math.nan for name in model.recorded_channels} | dict(channels or {})
     dynamics = model.dynamics(defaults)

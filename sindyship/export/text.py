@@ -115,6 +115,9 @@ def _header(model: AbkowitzModel) -> str:
     text = (f"Abkowitz model of {model.ship.name} (eq. 14-15, Prime I): library "
             f"{model.library.name}, optimizer {model.optimizer.get('name', 'given')}, "
             f"{model.rudder_signal} rudder")
+    if model.library.speed == "instantaneous":
+        text += ("; forces over the instantaneous speed U = sqrt(u^2 + v^2): v, r and the "
+                 "channels' speeds and rates over U, every hydrodynamic term times (U/U0)^2")
     return " ".join(text.split())
 
 

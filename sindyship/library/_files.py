@@ -100,6 +100,9 @@ def _read_toml(file: Traversable) -> tuple[dict[str, Any], str]:
         return tomllib.loads(raw), raw
     except tomllib.TOMLDecodeError as error:
         raise SindyshipInputError(f"{file}: not valid TOML ({error}).") from None
+    except ValueError as error:  # an integer of thousands of digits
+        raise SindyshipInputError(f"{file}: holds a number too long to read ({error}); write "
+                                  "it with fewer digits.") from None
 
 
 def load_library(name_or_path: str | Path) -> TermLibrary:

@@ -49,6 +49,16 @@ _POSITIVE = {
 #: displacement ship can be: a servo time constant of 1e-7 L/U0 would take billions of steps.
 _RANGES = {
     ("particulars", "L"): (0.1, 1000.0, "[]", "m"),
+    ("particulars", "B"): (0.01, 500.0, "[]", "m"),
+    ("particulars", "d"): (0.01, 100.0, "[]", "m"),
+    ("particulars", "displacement"): (1e-6, 1e8, "[]", "m^3"),
+    ("particulars", "scale"): (0.0, 1000.0, "(]", "the model scale of the measurements, 1 at "
+                                                  "full scale"),
+    ("mass", "m"): (0.0, 10.0, "(]", "mass / (0.5 rho L^2 d): the KCS has 0.18"),
+    ("mass", "I_zz"): (0.0, 10.0, "(]", "yaw inertia / (0.5 rho L^4 d): the KCS has 0.011"),
+    ("mass", "m_x"): (0.0, 10.0, "[]", "added mass / (0.5 rho L^2 d)"),
+    ("mass", "m_y"): (0.0, 10.0, "[]", "added mass / (0.5 rho L^2 d)"),
+    ("mass", "J_zz"): (0.0, 10.0, "[]", "added inertia / (0.5 rho L^4 d)"),
     ("particulars", "U0"): (0.0, 50.0, "(]", "m/s"),
     ("particulars", "rho"): (900.0, 1100.0, "[]", "kg/m^3: fresh water is 1000, sea water 1025"),
     ("servo", "T_R"): (0.01, 10.0, "[]", "units of L/U0: the KCS has 1, a model's fast servo 0.1"),
@@ -70,11 +80,25 @@ def _check_range(section: str, key: str, value: float, source: str) -> None:
         )
 
 
-def _check_physics(particulars: Particulars, servo: Servo, source: str) -> None:
-    """Refuse ship values outside their physical ranges (:data:`_RANGES`), each named."""
+def _check_physics(particulars: Particulars, servo: Servo | None, source: str,
+                   mass: MassProperties | None = None) -> None:
+    """Refuse ship values outside their physical ranges (:data:`_RANGES`), each named (the
+    particulars first, before any arithmetic on them)."""
+    groups = {"particulars": particulars, "servo": servo, "mass": mass}
     for (section, key) in _RANGES:
-        group = particulars if section == "particulars" else servo
-        _check_range(section, key, getattr(group, key), source)
+        if groups[section] is not None:
+            _check_range(section, key, getattr(groups[section], key), source)
+    for key, limit in (("B", 1.0), ("d", 1.0)):
+        if getattr(particulars, key) > limit * particulars.L:
+            raise SindyshipInputError(
+                f"{source}: [particulars] {key} = {getattr(particulars, key):g} m is more than the "
+                f"length L = {particulars.L:g} m; check the values and their units."
+            )
+    if abs(particulars.x_G) > 0.5 * particulars.L:
+        raise SindyshipInputError(
+            f"{source}: [particulars] x_G = {particulars.x_G:g} m lies outside the hull (more than "
+            f"L/2 = {0.5 * particulars.L:g} m from midship); give it in metres from midship."
+        )
     froude = particulars.U0 / math.sqrt(9.81 * particulars.L)
     if froude > MAX_FROUDE:
         raise SindyshipInputError(
@@ -152,6 +176,11 @@ def _mass_properties(data: dict, p: Particulars, source: str) -> MassProperties:
     k_zz = mass_table.pop("k_zz", None)
     if k_zz is not None:
         k_zz = _finite(k_zz, "[mass] k_zz", source)
+        if not 0.0 < k_zz <= 1.0:
+            raise SindyshipInputError(
+                f"{source}: [mass] k_zz = {k_zz!r} is outside its physical range (0, 1] (the yaw "
+                "radius of gyration over L: 0.25 for most ships)."
+            )
     scale_m = 0.5 * p.rho * p.L**2 * p.d
     if "m" not in mass_table:
         mass_table["m"] = p.rho * p.displacement / scale_m
@@ -267,6 +296,7 @@ def _identification_ship(data: dict, source: str) -> Ship:
         if section in data and not isinstance(data[section], dict):
             raise SindyshipInputError(f"{source}: [{section}] must be a table of numbers.")
     particulars = _group(Particulars, data.get("particulars"), "particulars", source)
+    _check_physics(particulars, None, source)
     given_mass = dict(data.get("mass") or {})
     k = particulars.d / particulars.L
     mass_table = {"m_x": 0.0, "m_y": 0.0, "J_zz": 0.0, **given_mass}
@@ -308,7 +338,7 @@ def _identification_ship(data: dict, source: str) -> Ship:
             "rudder servo " + ", ".join(values[key] for key in servo_assumed)
             + " (the IMO steering-gear rate, Froude-scaled); give [servo] with the ship's own")
     assumptions.append("Coriolis terms of the rigid body with the added masses (eq. 14)")
-    _check_physics(particulars, servo, source)
+    _check_physics(particulars, servo, source, mass)
     return Ship(
         name=data["name"],
         title=str(data.get("title", data["name"])),
@@ -350,6 +380,7 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
     particulars = _group(Particulars, data.get("particulars"), "particulars", source)
     if particulars.L <= 0 or particulars.d <= 0 or particulars.U0 <= 0 or particulars.rho <= 0:
         raise SindyshipInputError(f"{source}: L, d, U0 and rho in [particulars] must be positive.")
+    _check_physics(particulars, None, source)
     mass = _mass_properties(data, particulars, source)
     propeller = _group(Propeller, data.get("propeller"), "propeller", source)
     if propeller.wake_model not in ("constant", "drift"):
@@ -357,7 +388,7 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
             f"{source}: [propeller] wake_model must be 'constant' or 'drift'."
         )
     servo = _group(Servo, data.get("servo"), "servo", source)
-    _check_physics(particulars, servo, source)
+    _check_physics(particulars, servo, source, mass)
     return Ship(
         name=data["name"],
         title=str(data.get("title", data["name"])),
@@ -441,4 +472,7 @@ def load_ship(name_or_path: str | Path) -> Ship:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise SindyshipInputError(f"{path}: not a valid TOML file ({exc}).") from None
+    except ValueError as exc:  # an integer of thousands of digits
+        raise SindyshipInputError(f"{path}: holds a number too long to read ({exc}); write it "
+                                  "with fewer digits.") from None
     return ship_from_dict(data, source=str(path))

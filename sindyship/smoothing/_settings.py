@@ -21,6 +21,10 @@ _CUTOFF_TIMES_WINDOW = 2.5
 _UNIFORM_TOLERANCE = 0.01
 
 
+#: The longest smoothing window [s]: a day, longer than any trial.
+MAX_WINDOW_S = 86400.0
+
+
 @dataclass(frozen=True)
 class SmoothingSetting:
     """One way to smooth a record (see :func:`smooth_record`).
@@ -53,9 +57,10 @@ class SmoothingSetting:
                 f"{', '.join(SMOOTHING_METHODS)}."
             )
         if not (isinstance(self.window, Real) and math.isfinite(self.window)
-                and self.window > 0):
+                and 0 < self.window <= MAX_WINDOW_S):
             raise SindyshipInputError(
-                f"the smoothing window must be a positive number of seconds, not {self.window!r}."
+                f"the smoothing window must be a number of seconds above 0 and at most "
+                f"{MAX_WINDOW_S:g} (a day), not {self.window!r}."
             )
         if not (isinstance(self.order, Integral) and 1 <= self.order <= 6):
             raise SindyshipInputError(

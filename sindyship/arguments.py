@@ -1,0 +1,149 @@
+"""The arguments of the public functions, checked once: a ship by name or object, records as
+objects or files, a model as an object or a saved file.
+
+Every check raises ``TypeError`` for an argument of the wrong kind and ``ValueError``
+(:class:`~sindyship.errors.SindyshipInputError`) for one of the right kind with a wrong value,
+each naming the argument and saying what to pass.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable
+
+import numpy as np
+
+from .errors import SindyshipInputError
+from .ships import Ship, load_ship
+from .trajectory import Trajectory
+
+__all__ = ["as_records", "as_ship", "check_motion", "check_scale", "positive_number"]
+
+#: Channels a record needs finite in every sample to be fitted or flown against.
+MOTION_CHANNELS = ("t", "u", "v", "r", "x", "y", "psi")
+#: A record whose speed peaks above this many design speeds belongs to another ship (or scale).
+MAX_SPEED_RATIO = 3.0
+
+
+def as_ship(ship, name: str = "ship") -> Ship:
+    """A :class:`Ship` from a ship, a built-in name or a TOML file's path.
+
+    Examples
+    --------
+    >>> as_ship("kcs").name
+    'kcs'
+    >>> as_ship(230.0)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    TypeError: ship must be a Ship, a built-in ship name such as 'kcs' or a ship TOML file, ...
+    """
+    if isinstance(ship, Ship):
+        return ship
+    if isinstance(ship, str | os.PathLike):
+        return load_ship(ship)
+    raise TypeError(f"{name} must be a Ship, a built-in ship name such as 'kcs' or a ship TOML "
+                    f"file, not {type(ship).__name__}.")
+
+
+def as_records(records, name: str = "records", *, allow_empty: bool = False
+               ) -> list[Trajectory]:
+    """A list of records from one record, a file's path, or an iterable of them (read once:
+    a generator is not consumed twice).
+
+    Examples
+    --------
+    >>> as_records("asymmetry")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: asymmetry: no such file; records are Trajectory ...
+    """
+    from .measurements import read_csv
+
+    if isinstance(records, Trajectory | str | os.PathLike):
+        records = [records]
+    if not isinstance(records, Iterable):
+        raise TypeError(f"{name} must be a list of Trajectory (or of measurement CSV paths), "
+                        f"not {type(records).__name__}.")
+    out = []
+    for item in records:
+        if isinstance(item, Trajectory):
+            out.append(item)
+        elif isinstance(item, str | os.PathLike):
+            if not os.path.isfile(item):
+                raise SindyshipInputError(f"{os.fspath(item)}: no such file; records are "
+                                          "Trajectory objects or the paths of measurement CSVs.")
+            out.append(read_csv(item))
+        else:
+            raise TypeError(f"{name} must hold Trajectory objects (or measurement CSV paths), "
+                            f"not {type(item).__name__}.")
+    if not out and not allow_empty:
+        raise SindyshipInputError(f"{name} is empty; pass at least one record.")
+    return out
+
+
+def check_motion(records, name: str = "records") -> None:
+    """Every record's time, motion, position and heading are finite numbers.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> frame = pd.DataFrame({"t": [0.0, 1.0], "u": [1.0, float("nan")], "v": 0.0, "r": 0.0,
+    ...                       "x": 0.0, "y": 0.0, "psi": 0.0, "delta": 0.0})
+    >>> check_motion([Trajectory(frame, "run")])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: records: run has a missing or infinite u at t = 1 s; ...
+    """
+    for record in records:
+        for channel in MOTION_CHANNELS:
+            if not record.has(channel):
+                raise SindyshipInputError(
+                    f"{name}: {record.name or 'a record'} has no column {channel!r}; a record "
+                    "needs t, u, v, r, x, y, psi and a rudder angle."
+                )
+            values = record[channel]
+            bad = ~np.isfinite(values)
+            if bad.any():
+                k = int(np.argmax(bad))
+                when = f"t = {record.t[k]:g} s" if channel != "t" else f"sample {k}"
+                raise SindyshipInputError(
+                    f"{name}: {record.name or 'a record'} has a missing or infinite {channel} at "
+                    f"{when}; give records with every sample of u, v, r, x, y and psi."
+                )
+
+
+def check_scale(records, ship: Ship, name: str = "records") -> None:
+    """Refuse records far faster than the ship's design speed (another ship, or full-scale
+    records given a model's particulars)."""
+    for record in records:
+        if not record.has("u") or record.n_samples == 0:
+            continue
+        top = float(np.nanmax(record["u"]))
+        if top > MAX_SPEED_RATIO * ship.U0:
+            raise SindyshipInputError(
+                f"{name}: {record.name or 'a record'} reaches {top:.4g} m/s, "
+                f"{top / ship.U0:.3g} times the design speed U0 = {ship.U0:.4g} m/s of ship "
+                f"{ship.name!r}; give the ship (and scale) the records were measured on."
+            )
+
+
+def positive_number(value, name: str, *, allow_zero: bool = False) -> float:
+    """A finite positive number (or zero when allowed), else an error naming the argument.
+
+    Examples
+    --------
+    >>> positive_number(-1, "window")
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: window must be a positive number, not -1.
+    """
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+        raise TypeError(f"{name} must be a number, not {type(value).__name__}.")
+    number = float(value)
+    ok = math.isfinite(number) and (number > 0 or (allow_zero and number == 0))
+    if not ok:
+        raise SindyshipInputError(
+            f"{name} must be a {'non-negative' if allow_zero else 'positive'} number, not "
+            f"{value!r}.")
+    return number

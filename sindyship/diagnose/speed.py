@@ -1,0 +1,99 @@
+"""Which speed form the records need: the speed range they span, and the force error of the
+library made non-dimensional with the design speed and with the instantaneous speed, each
+leaving one manoeuvre out (:attr:`sindyship.library.TermLibrary.speed`)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..identify import design
+from ..library import DOFS, TermLibrary
+from ..optimizers import GroupedProblem
+from ..ships import Ship
+from ..trajectory import Trajectory
+
+__all__ = ["SPEED_FORM_GAIN", "SpeedForms", "speed_forms"]
+
+#: The other speed form is recommended when it leaves this much less of the force error
+#: (leave-one-manoeuvre-out, summed over X, Y and N).
+SPEED_FORM_GAIN = 0.9
+
+
+@dataclass(frozen=True)
+class SpeedForms:
+    """The records' speed range and both forms' force errors.
+
+    Attributes
+    ----------
+    form : str
+        The library's speed form.
+    low, high : float
+        The least and largest speed U/U0 of the records (U = sqrt(u^2 + v^2)).
+    errors : dict of str to float
+        Per form: the leave-one-manoeuvre-out force error of least squares, its sum of
+        squares over the forces' summed over X, Y and N.
+    recommended : str
+        The form to fit with: the other one when it leaves at most :data:`SPEED_FORM_GAIN`
+        times the error, else the library's.
+    """
+
+    form: str
+    low: float
+    high: float
+    errors: dict
+    recommended: str
+
+    def to_json(self) -> dict:
+        return {"form": self.form, "range": [self.low, self.high], "errors": dict(self.errors),
+                "recommended": self.recommended}
+
+    def text(self) -> str:
+        """One sentence for the report."""
+        other = "instantaneous" if self.form == "design" else "design"
+        ratio = self.errors[other] / max(self.errors[self.form], 1e-300)
+        span = f"the records span U/U0 {self.low:.2f} to {self.high:.2f}"
+        if self.recommended == self.form:
+            return (f"Speed form: {self.form} (the forces over {_speed(self.form)}); {span}, "
+                    f"and the {other} form leaves {ratio:.2f} times its force error on "
+                    "manoeuvres left out: keep it.")
+        return (f"Speed form: {self.form}; {span}, and the {other} form (forces over "
+                f"{_speed(other)}) leaves {ratio:.2f} times its force error on manoeuvres left "
+                f"out: fit with --speed {other}.")
+
+
+def _speed(form: str) -> str:
+    return "U0" if form == "design" else "U = sqrt(u^2 + v^2), times (U/U0)^2"
+
+
+def speed_forms(records: Sequence[Trajectory], ship: Ship, library: TermLibrary,
+                settings: Mapping) -> SpeedForms:
+    """The records' speed range and the force error of both speed forms of ``library``.
+
+    Parameters
+    ----------
+    records : sequence of Trajectory
+        The training records as fitted.
+    ship, library
+    settings : mapping
+        ``rudder_signal``, ``derivative`` and ``window`` of :func:`sindyship.identify.fit`.
+    """
+    speeds = np.concatenate([np.hypot(r["u"], r["v"]) for r in records]) / ship.U0
+    errors = {}
+    for form in ("design", "instantaneous"):
+        problems = design(records, ship, library.with_speed(form), **settings)
+        total = 0.0
+        for dof in DOFS:
+            problem = problems[dof]
+            grouped = GroupedProblem(problem.features, problem.target, problem.groups)
+            residual = grouped.lomo_errors(np.arange(problem.features.shape[1]))
+            total += float(residual @ residual) / max(float(problem.target @ problem.target),
+                                                      1e-300)
+        errors[form] = total
+    other = "instantaneous" if library.speed == "design" else "design"
+    recommended = other if errors[other] <= SPEED_FORM_GAIN * errors[library.speed] \
+        else library.speed
+    return SpeedForms(library.speed, float(np.min(speeds)), float(np.max(speeds)), errors,
+                      recommended)
