@@ -462,3 +462,27 @@ def test_a_flight_diverging_at_its_first_sample_has_no_mean(kcs):
     errors = distance_errors(failed, run, kcs.L)
     assert np.isnan(errors["mean_distance_L"]) and errors["completed"] is False
     assert errors["flown_s"] == 0.0
+
+
+def test_a_library_missing_an_effect_that_halves_the_error_is_never_complete(kcs):
+    """The README's current + 1 % noise records: after `environment` is added, the KCS rudder
+    asymmetry is still in the data, and adding it at least halves the held-out error; the
+    diagnosis of the library with `environment` must not call it complete, and names it."""
+    from sindyship.evaluation import evaluate
+    from sindyship.identify import fit
+
+    plan = protocol_manoeuvres()
+    hidden = parse_effects(["current=0.5", "current_dir=90", "noise=0.01"])
+    train, test = (simulate_with_effects(kcs, plan[key], hidden) for key in ("train", "test"))
+    result = diagnose(train, kcs, library=resolve_library("abkowitz", ["environment"]),
+                      test=test)
+    assert not result.complete
+    assert result.top is not None and result.top.effect.name == "asymmetry"
+
+    def mean(model):
+        errors = [e["mean_distance_L"] for e in evaluate(model, test).values()]
+        return math.exp(sum(math.log(e) for e in errors) / len(errors))
+
+    before = mean(fit(train, kcs, effects=["environment"], optimizer="ls"))
+    after = mean(fit(train, kcs, effects=["environment", "asymmetry"], optimizer="ls"))
+    assert after < 0.5 * before

@@ -425,11 +425,20 @@ def _trust_cases() -> list[dict]:
     cases.append(case("huge integer: fit --library", FIT + ["--library", "lib.toml", "--out",
                       "m.json"], 2, "lib.toml", {**DATA, "lib.toml":
                       f'name = "x"\n[terms]\nX = ["du"]\nY = ["v"]\nN = ["r"]\nscale = {HUGE}\n'}))
-    for verb in ("evaluate", "export"):
-        argv = ["evaluate", "model.json", "data.csv"] if verb == "evaluate" else \
-            ["export", "model.json"]
+    cases.append(case("huge integer: diagnose --library", DIAG + ["--library", "lib.toml"], 2,
+                      "lib.toml", {**DIAG_FILES, "lib.toml":
+                      f'name = "x"\n[terms]\nX = ["du"]\nY = ["v"]\nN = ["r"]\nscale = {HUGE}\n'}))
+    cases.append(case("huge integer: fit --effects", FIT + ["--effects", "eff.toml", "--out",
+                      "m.json"], 2, "eff.toml", {**DATA, "eff.toml":
+                      f'name = "x"\ntitle = "x"\n[terms]\nY = ["v"]\nscale = {HUGE}\n'}))
+    cases.append(case("huge integer: export --ship", ["export", "model.json", "--ship",
+                      "ship.toml"], 2, "ship.toml",
+                      {**MODEL, "ship.toml": ship_edit("particulars", "L", HUGE)}))
+    for verb in ("evaluate", "export", "forces"):
+        argv = {"evaluate": ["evaluate", "model.json", "data.csv"],
+                "export": ["export", "model.json"], "forces": FORCES}[verb]
         cases.append(case(f"huge integer: {verb} model", argv, 2, "model.json",
-                          {"model.json": f"@model:version={HUGE}", "data.csv": "@csv"}))
+                          {**FORCES_FILES, "model.json": f"@model:version={HUGE}"}))
     cases.append(case("identification ship: captive", ["captive", "--ship", "mine.toml",
                       "--out", "c.csv"], 2, "no MMG", {"mine.toml": IDENTIFICATION_SHIP}))
     cases.append(case("identification ship: simulate", ["simulate", "--manoeuvre", "straight",
