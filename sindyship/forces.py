@@ -85,6 +85,8 @@ def model_captive_forces(model: AbkowitzModel, captive: pd.DataFrame) -> pd.Data
     captive : pandas.DataFrame
         Captive conditions: ``u``, ``v`` [m/s], ``r`` [rad/s], ``delta`` [rad] and any channel
         the model's library uses (``n`` [rps], ...), SI (as :func:`read_captive_csv` gives).
+        Each row is a steady condition: a channel the library delays reads the value given,
+        and the rudder rate (``delta_rate``) is zero.
 
     Returns
     -------
@@ -109,10 +111,17 @@ def model_captive_forces(model: AbkowitzModel, captive: pd.DataFrame) -> pd.Data
         raise SindyshipInputError(
             f"the captive table lacks the column '{missing[0]}'; give u, v, r and delta."
         )
-    # a steady condition: the commanded rudder is the actual one; the model's own variables
-    # (and their error for a channel the table lacks) come from Trajectory columns
+    # a steady condition: the commanded rudder is the actual one, a delayed channel reads
+    # what the table gives (it has held that value) and the rudder does not move; the
+    # model's own variables (and their error for a channel the table lacks) come from
+    # Trajectory columns, and each row stands alone (its time is only its place)
     conditions = captive.assign(delta_c=captive["delta"]).reset_index(drop=True)
-    values = model.variables(Trajectory(conditions, name="captive"))
+    conditions["t"] = np.arange(len(conditions), dtype=float)
+    steady = Trajectory(conditions, name="captive",
+                        meta={"aligned": dict(model.library.delays)})
+    values = model.variables(steady)
+    if "delta_rate" in values:
+        values["delta_rate"] = np.zeros(len(conditions))
     fitted = model.forces_from_values(values)
     u = values["du"] + 1.0
     full = coriolis(ship, u, values["v"], values["r"])

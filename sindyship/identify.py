@@ -100,7 +100,7 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
         forces = regression_targets(record, ship, method=derivative, window=window)
         for dof in DOFS:
             for j, term in enumerate(library.terms[dof]):
-                features[dof][start:stop, j] = term.evaluate(values) * factor
+                features[dof][start:stop, j] = _term_column(term, values, factor, record)
             target[dof][start:stop] = forces[dof]
         group_array[start:stop] = index
         start = stop
@@ -109,6 +109,45 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
                     terms=tuple(t.text for t in library.terms[dof]))
         for dof in DOFS
     }
+
+
+#: Largest magnitude a term may reach in a record: beyond it the squares that least squares
+#: forms overflow (non-dimensional terms are of order one; a channel in odd units is not).
+MAX_TERM_VALUE = 1e100
+
+
+def _term_column(term, values: dict, factor, record: Trajectory) -> np.ndarray:
+    """A term's column of the regression matrix on one record, refused in one line when it
+    is not finite or so large that the fit would overflow."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        column = term.evaluate(values) * factor
+    column = np.broadcast_to(np.asarray(column, dtype=float), (record.n_samples,))
+    if np.isfinite(column).all() and float(np.abs(column).max(initial=0.0)) <= MAX_TERM_VALUE:
+        return column
+    channels = ", ".join(sorted(set(term.variables) - {"du", "v", "r", "delta"})) or "the motion"
+    raise SindyshipInputError(
+        f'the term "{term.text}" is not finite or beyond {MAX_TERM_VALUE:.0e} on record '
+        f'"{record.name}" (from {channels}); give the channel in units that keep it near one, '
+        "or leave the term out.")
+
+
+def check_term_values(library: TermLibrary, records: Sequence[Trajectory], ship: Ship, *,
+                      rudder_signal: str = "actual") -> None:
+    """Every term of ``library`` finite and within :data:`MAX_TERM_VALUE` on every record, as
+    :func:`design` requires; a check to run before long work that builds designs later.
+
+    Raises
+    ------
+    SindyshipInputError
+        Naming the first term and record that break it.
+    """
+    check_channels(library, records)
+    for record in records:
+        values = record_variables(record, library, ship.L, ship.U0, rudder_signal)
+        factor = values.get(SPEED_FACTOR, 1.0)
+        for dof in DOFS:
+            for term in library.terms[dof]:
+                _term_column(term, values, factor, record)
 
 
 def check_delays(library: TermLibrary, records: Sequence[Trajectory], rudder_signal: str

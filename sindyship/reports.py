@@ -462,7 +462,11 @@ def forces_report(result) -> str:
 
 def _finding_lines(k: int, finding) -> list[str]:
     mark = "meaningful" if finding.meaningful else "not meaningful"
-    what = (", ".join(f"{c} read {d:+.2f} s later" for c, d in finding.delays.items())
+    what = (", ".join(f"{c} read {d:+.2f} s later" + (
+                f" (95 % interval {finding.intervals[c][0]:+.2f} to "
+                f"{finding.intervals[c][1]:+.2f} s when the manoeuvres are resampled)"
+                if c in getattr(finding, "intervals", {}) else "")
+                      for c, d in finding.delays.items())
             if finding.delays else
             "; ".join(f"{dof}: {', '.join(ts)}" for dof, ts in finding.terms.items() if ts))
     shares = ", ".join(f"{dof} {finding.signal_by_dof[dof]:.0%}"
@@ -492,6 +496,12 @@ def discovery_report(discovery, effect_file: str | None = None) -> str:
         lines.append(_fill(
             f"Catalogued effects meaningful here: {named}; the discovery below explains more "
             "than any of them.", indent="", subsequent=""))
+    if discovery.unnamed_channels:
+        listed = ", ".join(repr(c) for c in discovery.unnamed_channels)
+        lines.append(_fill(
+            f"Not searched: the columns {listed}, whose names no term can use; rename them "
+            "with lower-case letters, digits and single underscores (heel, wave_height) to "
+            "search them.", indent="", subsequent=""))
     floor = ", ".join(f"{dof} {share:.0%}" for dof, share in discovery.noise_floor.items())
     lines.append(f"Noise floor (share of the leave-one-manoeuvre-out error): {floor}.")
     if not discovery.findings:

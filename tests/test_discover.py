@@ -114,6 +114,10 @@ def test_a_lagging_rudder_sensor_is_discovered_and_its_effect_flies(symmetric, l
     found = discover(train, symmetric)
     assert found.best.family == "delay:delta"
     assert found.best.delays["delta"] == pytest.approx(4.0, abs=1.0)
+    low, high = found.best.intervals["delta"]  # resampling the five manoeuvres
+    assert low <= 4.0 <= high and high - low < 1.0
+    assert low <= found.best.delays["delta"] <= high
+    assert "95 % interval" in found.report() and "95 % interval" in found.effect_toml()
     assert found.best.explained_signal > 0.5
     plain = fly_like(fit(train, symmetric), test)
     assert all(f.meta.get("diverged_at") is not None for f in plain)
@@ -126,21 +130,21 @@ def test_a_lagging_rudder_sensor_is_discovered_and_its_effect_flies(symmetric, l
 
 def test_a_delay_candidate_re_evaluates_only_the_delayed_columns_and_equals_a_full_design(
         symmetric, lagged):
-    from sindyship.diagnose.discovery import _delay_errors, _lomo, _unshifted
+    from sindyship.diagnose.delays import delay_errors, lomo_errors, unshifted_variables
     from sindyship.identify import design
 
     train, _ = lagged
     library = load_library("abkowitz")
     settings = {"rudder_signal": "actual", "derivative": "five-point", "window": 21.0}
     problems = design(train, symmetric, library, **settings)
-    base = (problems, _unshifted(train, symmetric, library, settings))
-    fast = _delay_errors(train, symmetric, library, "delta", 3.7, settings, base)
+    base = (problems, unshifted_variables(train, symmetric, library, settings))
+    fast = delay_errors(train, symmetric, library, "delta", 3.7, settings, base)
     delayed = TermLibrary(library.name, library.system, library.description, library.terms,
                           delays={"delta": 3.7})
     full = design(train, symmetric, delayed, **settings)
     for dof in "XYN":
-        np.testing.assert_array_equal(fast[dof], _lomo(full[dof]))
-        assert not np.allclose(fast[dof], _lomo(problems[dof]))  # the delay moved the fit
+        np.testing.assert_array_equal(fast[dof], lomo_errors(full[dof]))
+        assert not np.allclose(fast[dof], lomo_errors(problems[dof]))  # the delay moved the fit
 
 
 def test_nothing_is_discovered_in_records_flown_by_an_abkowitz_model(kcs):
@@ -306,3 +310,25 @@ def test_the_rudder_rate_is_read_from_records_and_flown_from_the_servo(kcs, lagg
     np.testing.assert_allclose(with_rate[1]["y"], without[1]["y"], atol=1e-9)
     assert any(f.family == "rate" for f in discover(train, kcs.with_rudder(
         gamma_R_stbd=0.415, gamma_R_port=0.415), check_catalogue=False).findings)
+
+
+def test_columns_no_term_can_name_are_left_out_and_reported(symmetric, lagged):
+    """A column named "Heel" or "wave height" cannot be a term: the search goes on without
+    it, finds the lag as on the plain records, and the report says how to include it."""
+    records = []
+    for k, record in enumerate(lagged[0]):
+        data = record.data.copy()
+        data["Heel"] = 0.01 * np.sin(data["t"] / (40.0 + k))
+        data["wave height"] = 1.0 + 0.1 * np.cos(data["t"] / 30.0)
+        # the first record's file name had a byte that is not UTF-8 (os.fsdecode's surrogate)
+        records.append(Trajectory(data, name=record.name + ("\udcff" if k == 0 else "")))
+    found = discover(records, symmetric, max_rounds=1)
+    assert found.unnamed_channels == ["Heel", "wave height"]
+    assert found.best is not None and found.best.family == "delay:delta"
+    assert found.best.delays["delta"] == pytest.approx(4.0, abs=0.1)
+    assert not any("Heel" in f.family for f in found.findings)
+    text = " ".join(found.report().split())
+    assert "Not searched: the columns 'Heel', 'wave height'" in text
+    assert found.to_json()["unnamed_channels"] == ["Heel", "wave height"]
+    written = tomllib.loads(found.effect_toml())  # the odd byte is written as \xff
+    assert "\\xff" in written["physics"] and written["name"] == found.effect().name

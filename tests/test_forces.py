@@ -116,3 +116,27 @@ def test_envelope_from_records_or_model_info(kcs, protocol_runs):
     figure = plot_captive_forces(result)
     assert len(figure.axes) == 3 * 4
     assert figure.axes[1].get_title().startswith("static-drift: Y, r = ")
+
+
+def test_a_delayed_channel_or_a_rudder_rate_term_leaves_steady_captive_forces_unchanged(kcs):
+    """A captive condition is steady: a delayed rudder has held the angle the table gives, and
+    the rudder does not move, so a delay and a ``delta_rate`` term change nothing."""
+    from sindyship.library import Effect
+
+    reference = AbkowitzModel(kcs, load_library("abkowitz"), taylor_reference(kcs))
+    captive = captive_tests(kcs, "all")
+    lag = Effect("lag", "Lag", "A late rudder sensor.", (), {}, delays={"delta": 3.0})
+    rate = Effect("rate", "Rate", "The rudder's rate.", ("delta_rate",),
+                  {"Y": ["delta_rate"], "N": ["delta_rate"]})
+    expected = model_captive_forces(reference, captive)
+    for effect in (lag, rate):
+        library = reference.library.extended(effect)
+        coefficients = {dof: dict(terms) for dof, terms in reference.coefficients.items()}
+        for dof in ("Y", "N"):
+            for term in effect.terms.get(dof, []):
+                coefficients[dof][term.text] = 5.0
+        model = AbkowitzModel(kcs, library, coefficients)
+        got = model_captive_forces(model, captive)
+        for dof in "XYN":
+            np.testing.assert_allclose(got[dof], expected[dof], rtol=1e-12, atol=1e-6)
+    assert float(np.abs(expected["Y"]).max()) > 1e5  # the forces compared are not all zero

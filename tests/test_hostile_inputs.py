@@ -447,8 +447,32 @@ def _trust_cases() -> list[dict]:
     return cases
 
 
+def _scheduler_and_channel_cases() -> list[dict]:
+    """Scheduler addresses no Dask client can use or reach, and recorded channels so large
+    that a term of them overflows the fit."""
+    cases = []
+    for address, fragment in (("", "empty"), ("ucx://h:1", "ucx://"), ("tls://h:8786", "tls://"),
+                              ("tcp://h", "port"), ("h:99999", "port"),
+                              ("tcp://127.0.0.1:1", "cannot reach")):
+        for verb, argv, files in (("fit", FIT + ["--stream", "--out", "m.json"], DATA),
+                                  ("diagnose", DIAG, DIAG_FILES),
+                                  ("discover", ["discover", "data.csv"], DATA)):
+            cases.append(case(f"scheduler: {verb}", argv + ["--scheduler", address], 2,
+                              fragment, files))
+    heel = ('name = "heel"\ntitle = "heel"\nphysics = "heel"\nchannels = ["heel"]\n'
+            '[terms]\nY = ["heel v", "heel^2"]\nN = ["heel"]\n')
+    for scale in ("1e300", "1e120", "1e60"):
+        files = {"data.csv": f"@csv:heel={scale}", "other.csv": f"@csv:heel={scale}",
+                 "heel.toml": heel}
+        cases.append(case("huge channel: fit", FIT + ["--effects", "heel.toml", "--out",
+                          "m.json"], 2, "heel", files))
+        cases.append(case("huge channel: diagnose", DIAG + ["--candidates", "heel.toml"], 2,
+                          "heel", files))
+    return cases
+
+
 CASES = (_output_cases() + _number_cases() + _ship_cases() + _input_cases() + _model_cases()
-         + _trust_cases())
+         + _trust_cases() + _scheduler_and_channel_cases())
 
 
 # ---------------------------------------------------------------------------------------------
@@ -489,6 +513,11 @@ def _content(spec: str, kit: dict) -> str:
         return kit["model"]
     if spec.startswith("@model:"):
         return _model_variant(kit["model"], spec.split(":", 1)[1])
+    if spec.startswith("@csv:"):  # an extra channel: @csv:name=scale, varying about scale
+        name, scale = spec[len("@csv:"):].split("=")
+        header, *rows = kit["csv"].strip().splitlines()
+        rows = [f"{row},{float(scale) * (1 + 0.01 * (i % 7))!r}" for i, row in enumerate(rows)]
+        return "\n".join([f"{header},{name}", *rows]) + "\n"
     if spec.startswith("@ship:"):
         target, value = spec[len("@ship:"):].split("=", 1)
         section, key = target.split(".")

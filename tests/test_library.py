@@ -649,7 +649,11 @@ def test_the_library_in_discrete_sindy_prints_with_default_and_own_names():
 
     x, _ = _composition_data()
     lib = AbkowitzFeatureLibrary(terms=("v", "r^2"), input_names=("v", "r"))
-    model = ps.DiscreteSINDy(feature_library=lib, optimizer=ps.STLSQ(threshold=0.0))
+    if hasattr(ps, "DiscreteSINDy"):
+        model = ps.DiscreteSINDy(feature_library=lib, optimizer=ps.STLSQ(threshold=0.0))
+    else:  # pysindy 2.0: the discrete-time form of SINDy
+        model = ps.SINDy(feature_library=lib, optimizer=ps.STLSQ(threshold=0.0),
+                         discrete_time=True)
     model.fit(x[:, 1:], t=1)
     assert model.get_feature_names() == ["v", "r^2"]  # default names x0[k], x1[k]: no rename
     with pytest.warns(UserWarning, match="by position"):

@@ -252,3 +252,47 @@ def test_a_streamed_fit_sends_the_workers_absolute_paths(files, kcs, monkeypatch
     monkeypatch.chdir(first.parent)
     reduce_files([first.name, second.name], stream_settings(kcs))
     assert seen == [str(first.resolve()), str(second.resolve())]
+
+
+@pytest.mark.parametrize("answer", [None, b"\xff" * 64])
+def test_a_server_that_is_no_dask_scheduler_ends_in_one_line_within_the_timeout(
+        answer, monkeypatch):
+    """A port that takes the connection and never answers (Dask's own timeout does not cover
+    its handshake) and one that answers with garbage: both end in one line, in time."""
+    import socket
+    import threading
+    import time
+
+    pytest.importorskip("distributed")
+    from sindyship.errors import SindyshipInputError
+    from sindyship.streaming import _cluster, connect
+
+    monkeypatch.setattr(_cluster, "CONNECT_TIMEOUT_S", 2)
+    server = socket.create_server(("127.0.0.1", 0))
+    held = []
+
+    def serve():
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            held.append(conn)
+            if answer is not None:
+                conn.sendall(answer)
+
+    threading.Thread(target=serve, daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    start = time.perf_counter()
+    try:
+        with pytest.raises(SindyshipInputError, match="127.0.0.1") as raised:
+            with connect(address):
+                pass
+    finally:
+        server.close()
+        for conn in held:
+            conn.close()
+    assert time.perf_counter() - start < 2 + 3
+    assert "\n" not in str(raised.value)
+    if answer is None:
+        assert "did not answer as a Dask scheduler within 2 s" in str(raised.value)

@@ -122,6 +122,16 @@ def n_jobs(text: str) -> int:
     return value
 
 
+def scheduler_address(text: str) -> str:
+    """An argparse ``type=`` for ``--scheduler``: a ``tcp://host:port`` address."""
+    from ..streaming import check_scheduler_address
+
+    try:
+        return check_scheduler_address(text)
+    except SindyshipInputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removesuffix(".")) from None
+
+
 SEED = bounded_int(0, 2**63 - 1, "a whole number")
 
 
@@ -250,7 +260,7 @@ def add_n_jobs(p, *, default: int | None = 1) -> None:
 
 def add_scheduler(p, *, work: str) -> None:
     """``--scheduler``: run a verb's parallel work on a Dask cluster (:func:`on_cluster`)."""
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+    p.add_argument("--scheduler", type=scheduler_address, default=None, metavar="ADDRESS",
                    help=f"run {work} on every worker of the Dask cluster of this scheduler "
                    "(tcp://host:8786) through joblib's dask backend (--n-jobs is then not "
                    "used); the records are read in this process (default: this machine)")
@@ -263,7 +273,7 @@ def on_cluster(scheduler: str | None, n_jobs: int | None):
     Yields the ``n_jobs`` to pass on: ``n_jobs`` itself without a scheduler; with one, -1
     (every worker: ``--n-jobs`` counts this machine's cores, so it is not used there).
     """
-    if not scheduler:
+    if scheduler is None:
         yield n_jobs
         return
     import joblib

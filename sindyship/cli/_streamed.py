@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import progress
+from ._common import progress, scheduler_address
 
 
 def add_stream_options(p) -> None:
@@ -15,7 +15,7 @@ def add_stream_options(p) -> None:
                    "file at a time, never all samples in memory); needs the cluster extra, "
                    'python3 -m pip install "sindyship[cluster]" (default: read every record '
                    "into memory)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+    p.add_argument("--scheduler", type=scheduler_address, default=None, metavar="ADDRESS",
                    help="address of a running Dask scheduler (tcp://host:8786) to stream the "
                    "fit on; implies --stream (default: a local cluster of --n-jobs worker "
                    "processes, every core when unset)")

@@ -85,7 +85,8 @@ def run(args) -> int:
     """Run ``sindyship diagnose``; text report on stdout, or one JSON document with --json."""
     from .._io import check_output, output_folder
     from ..diagnose import diagnose, diagnose_iteratively
-    from ..identify import resolve_library
+    from ..identify import check_term_values, resolve_library
+    from ..library import load_effect
     from ..records import expand_paths
     from ._common import load_cli_ship
 
@@ -101,6 +102,14 @@ def run(args) -> int:
                                      time_range=args.time_range)
     check_simulation_cost(ship, max(record.duration for record in records + test))
     library = resolve_library(args.library, split_names(args.effects), speed_form(args, ship))
+    # the terms of the user's own effect files, checked on the records before the long work
+    # (an effect whose channels the records lack is reported untestable by the diagnosis)
+    own = [load_effect(name) for name in split_names(args.candidates)
+           if name.endswith(".toml") or "/" in name]
+    testable = [e for e in own if all(r.has(c) for c in e.channels for r in records + test)]
+    if testable:
+        check_term_values(library.extended(*testable), records + test, ship,
+                          rudder_signal=args.rudder_signal)
     if args.optimizer == "prior":
         report_prior_coverage(ship, library)
     options = {
@@ -115,10 +124,10 @@ def run(args) -> int:
         "smoothing": None if args.smoothing == "none" else args.smoothing,
     }
     bar = sys.stderr.isatty()
-    progress(f"sindyship diagnose: {len(records)} training and {len(test)} held-out records, "
-             f"library {library.name}")
     iterative = None
     with on_cluster(args.scheduler, args.n_jobs) as n_jobs:
+        progress(f"sindyship diagnose: {len(records)} training and {len(test)} held-out "
+                 f"records, library {library.name}")
         options["n_jobs"] = n_jobs
         if args.rounds > 1:
             iterative = diagnose_iteratively(records, ship, library=library, test=test,

@@ -62,8 +62,8 @@ def run(args) -> int:
     ship = load_cli_ship(args.ship)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
-    progress(f"sindyship discover: {len(records)} records, library {args.library}")
     with on_cluster(args.scheduler, args.n_jobs) as n_jobs:
+        progress(f"sindyship discover: {len(records)} records, library {args.library}")
         from ..identify import resolve_library
 
         found = discover(records, ship, library=resolve_library(args.library, (),

@@ -84,9 +84,12 @@ def _fly_many(
                    leave=False)
         from joblib import Parallel, delayed
 
-        results = Parallel(n_jobs=n_jobs, return_as="generator")(
-            delayed(_fly_payload)(_model_payload(model), records) for model, records in jobs
-        )
+        calls = [delayed(_fly_payload)(_model_payload(model), records)
+                 for model, records in jobs]
+        try:  # each flight counted as it lands
+            results = Parallel(n_jobs=n_jobs, return_as="generator")(calls)
+        except ValueError:  # a backend that cannot hand results on one by one (joblib < 1.4
+            results = Parallel(n_jobs=n_jobs)(calls)  # with Dask): all at the end
         out = []
         for flown in results:
             out.append(flown)

@@ -44,6 +44,16 @@ from ..terms import CORE_VARIABLES, Term
 #: Channels that are never candidates of their own (time, motion, positions, heading, rudder).
 NOT_CHANNELS = frozenset({"t", "u", "v", "r", "x", "y", "psi", "delta", "delta_c"})
 
+#: A recorded column a term can name: lower-case letters, digits, single underscores.
+_TERM_NAME = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
+
+
+def unnamed_channels(records: Sequence) -> list[str]:
+    """Columns every record has that no term can name (``"Heel"``, ``"wave height"``): the
+    search leaves them out and the report says how to search them (rename the column)."""
+    shared = set.intersection(*(set(r.data.columns) for r in records)) if records else set()
+    return sorted(c for c in shared - NOT_CHANNELS if not _TERM_NAME.fullmatch(str(c)))
+
 
 @dataclass(frozen=True)
 class Family:
@@ -136,7 +146,8 @@ def families(records: Sequence, library, ship) -> list[Family]:
                    "N": [t.text for t in hull if t.degree == 5]}, ["v", "r"])
 
     shared = set.intersection(*(set(r.data.columns) for r in records)) if records else set()
-    for channel in sorted(shared - NOT_CHANNELS - set(library.variables)):
+    for channel in sorted(shared - NOT_CHANNELS - set(library.variables)
+                          - set(unnamed_channels(records))):
         values = np.concatenate([r[channel] for r in records])
         finite = values[np.isfinite(values)]
         if finite.size == 0 or np.ptp(finite) <= 1e-12 * max(1.0, float(np.abs(finite).max())):

@@ -34,19 +34,20 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .._io import clean_json
 from ..identify import design, resolve_library
-from ..library import DOFS, Effect, TermLibrary, record_variables
+from ..library import DOFS, Effect, TermLibrary
 from ..optimizers import ForwardSelection, GroupedProblem, one_blas_thread
 from ..ships import Ship
 from ..smoothing import resolve_smoothing, smooth_records
 from ..trajectory import Trajectory
 from ._constants import MEANINGFUL_SHARE
-from .candidates import Family, families, family_columns
+from .candidates import Family, families, family_columns, unnamed_channels
+from .delays import lomo_errors, search_delay
 from .noise import noise_sse
 from .ranking import rank_effects
 from .scoring import _dof_shares
@@ -61,11 +62,6 @@ MIN_EQUATIONS = 2
 #: Least fall of the leave-one-manoeuvre-out error (share of the library's) for which the
 #: forward selection adds another term.
 MIN_STEP_GAIN = 0.01
-#: Half-width of the delay grid [L/U0] and its step [L/U0]; a best delay at the edge of the
-#: grid doubles its half-width, up to DELAY_MAX [L/U0].
-DELAY_RANGE = 1.5
-DELAY_STEP = 0.05
-DELAY_MAX = 4.0
 
 
 @dataclass
@@ -96,6 +92,9 @@ class Finding:
         What such a finding usually means physically, from its variables.
     curve : list of [float, float]
         For a delay: (delay [s], leave-one-manoeuvre-out error relative to no delay).
+    intervals : dict of str to [float, float]
+        For a delay: channel -> the 95 % interval of the delay [s] when the records are
+        resampled (:func:`delay_interval`).
     """
 
     family: str
@@ -110,10 +109,12 @@ class Finding:
     variables: list[str]
     hint: str
     curve: list[list[float]] = field(default_factory=list)
+    intervals: dict[str, list[float]] = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return clean_json({
             "family": self.family, "terms": self.terms, "delays": self.delays,
+            "intervals": self.intervals,
             "explained": self.explained, "explained_signal": self.explained_signal,
             "explained_by_dof": self.explained_by_dof, "signal_by_dof": self.signal_by_dof,
             "significant": self.significant, "meaningful": self.meaningful,
@@ -146,6 +147,8 @@ class Discovery:
         family could be standing in for a catalogued effect that is missing).
     smoothing : dict or None
         The smoothing applied to the records (:meth:`SmoothingSetting.as_dict`).
+    unnamed_channels : list of str
+        Recorded columns left out of the search because no term can name them.
     """
 
     library: TermLibrary
@@ -157,6 +160,7 @@ class Discovery:
     seconds: float
     catalogue: dict[str, float] = field(default_factory=dict)
     smoothing: dict | None = None
+    unnamed_channels: list[str] = field(default_factory=list)
 
     @property
     def findings(self) -> list[Finding]:
@@ -191,12 +195,15 @@ class Discovery:
         """The best finding as an effect file in the catalogue's format (docs/effects.md)."""
         effect = self.effect(name)
         lines = ["# Discovered by sindyship discover.  Format: see docs/effects.md.",
-                 f"name = {json.dumps(effect.name)}", f"title = {json.dumps(effect.title)}",
-                 f"physics = {json.dumps(effect.physics)}",
+                 f"name = {_toml_string(effect.name)}", f"title = {_toml_string(effect.title)}",
+                 f"physics = {_toml_string(effect.physics)}",
                  f"channels = {json.dumps(list(effect.channels))}"]
         if effect.delays:
+            intervals = {c: i for f in self.accepted for c, i in f.intervals.items()}
             lines += ["", "[delays]  # seconds by which the recorded channel lags the force"]
-            lines += [f"{c} = {d:.2f}" for c, d in effect.delays.items()]
+            lines += [f"{c} = {d:.2f}" + (f"  # 95 % interval {intervals[c][0]:.2f} to "
+                                          f"{intervals[c][1]:.2f} s" if c in intervals else "")
+                      for c, d in effect.delays.items()]
         if any(effect.terms.values()):
             lines += ["", "[terms]"]
             lines += [f"{dof} = {json.dumps([t.text for t in effect.terms[dof]])}"
@@ -228,8 +235,18 @@ class Discovery:
             "accepted": [f.to_json() for f in self.accepted],
             "rounds": [[f.to_json() for f in found] for found in self.rounds],
             "catalogue_meaningful": self.catalogue, "smoothing": self.smoothing,
-            "seconds": self.seconds,
+            "unnamed_channels": self.unnamed_channels, "seconds": self.seconds,
         })
+
+
+def _toml_string(text: str) -> str:
+    """A TOML basic string of ``text``; a byte of a file name that was not UTF-8 (held as a
+    lone surrogate, which TOML cannot carry) is written as ``\\xff``."""
+    try:
+        readable = text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    except UnicodeEncodeError:  # a surrogate that no byte gave
+        readable = text.encode("utf-8", "backslashreplace").decode("utf-8")
+    return json.dumps(readable)
 
 
 # ------------------------------------------------------------------------------- words
@@ -290,14 +307,8 @@ def _physics(finding: Finding, records: Sequence[str]) -> str:
 
 
 # ------------------------------------------------------------------------------- search
-def _lomo(problem) -> np.ndarray:
-    """Leave-one-manoeuvre-out errors of a least-squares fit on all of a design's columns."""
-    grouped = GroupedProblem(problem.features, problem.target, problem.groups)
-    return grouped.lomo_errors(np.arange(problem.features.shape[1]))
-
-
 def _finding(family, terms, delays, e0, e1, noise, groups, threshold, variables, curve=(),
-             logged_wind=False):
+             logged_wind=False, intervals=None):
     explained, signal, significant = {}, {}, {}
     for dof in DOFS:
         if e1.get(dof) is None or not float(e0[dof] @ e0[dof]) > 0:
@@ -311,96 +322,8 @@ def _finding(family, terms, delays, e0, e1, noise, groups, threshold, variables,
     return Finding(family, {d: list(terms.get(d, [])) for d in DOFS}, dict(delays), explained,
                    signal, significant, share, share_signal, meaningful,
                    sorted(variables), _hint(family, delays, terms, logged_wind),
-                   [list(map(float, p)) for p in curve])
-
-
-def _delay_grid(ship: Ship, dt: float) -> np.ndarray:
-    """Candidate delays [s]: steps of 0.05 L/U0 (at least one sample) out to 1.5 L/U0 (at
-    least ten samples) on either side of zero."""
-    step = max(dt, DELAY_STEP * ship.time_scale)
-    reach = max(DELAY_RANGE * ship.time_scale, 10 * dt)
-    half = np.arange(step, reach + 0.5 * step, step)
-    return np.concatenate([-half[::-1], half])
-
-
-def _delay_errors(records, ship, library, channel, tau, settings, base):
-    """Leave-one-manoeuvre-out errors of the library refitted with ``channel`` read ``tau``
-    seconds later.
-
-    ``base`` is ``(problems, variables)``: the library's design and each record's variables.
-    Only the columns of terms in a variable the delay moves are evaluated again; the others
-    and the targets are the base design's (the design of the delayed library, unchanged).
-    """
-    problems, unshifted = base
-    delays = {**library.delays, channel: tau}
-    shifted = TermLibrary(library.name, library.system, library.description, library.terms,
-                          effects=library.effects, delays=delays)
-    features = {dof: problems[dof].features.copy(order="F") for dof in DOFS}
-    start = 0
-    for record, before in zip(records, unshifted, strict=True):
-        stop = start + record.n_samples
-        after = record_variables(record, shifted, ship.L, ship.U0, settings["rudder_signal"])
-        moved = {name for name in after if not np.array_equal(after[name], before[name])}
-        for dof in DOFS:
-            for j, term in enumerate(library.terms[dof]):
-                if term.variables & moved:
-                    features[dof][start:stop, j] = term.evaluate(after)
-        start = stop
-    return {dof: _lomo(replace(problems[dof], features=features[dof])) for dof in DOFS}
-
-
-def _unshifted(records, ship, library, settings) -> list[dict[str, np.ndarray]]:
-    """Each record's variables as the library reads them (the base of :func:`_delay_errors`)."""
-    return [record_variables(r, library, ship.L, ship.U0, settings["rudder_signal"])
-            for r in records]
-
-
-def _search_delay(records, ship, library, channel, e0, settings, problems, n_jobs=1):
-    """The delay of ``channel`` with the least leave-one-manoeuvre-out error, its errors and
-    the error curve over the grid (grid points refitted by ``n_jobs`` joblib workers)."""
-    from joblib import Parallel, delayed
-
-    sse0 = {dof: float(e0[dof] @ e0[dof]) or 1.0 for dof in DOFS}
-    dt = float(np.median([r.dt for r in records]))
-
-    def cost(errors):
-        return float(np.mean([errors[d] @ errors[d] / sse0[d] for d in DOFS]))
-
-    base = (problems, _unshifted(records, ship, library, settings))
-    tried = {0.0: (1.0, e0)}
-    grid = _delay_grid(ship, dt)
-    reach = float(grid[-1])
-    while True:
-        todo = [float(tau) for tau in grid if float(tau) not in tried]
-        refits = Parallel(n_jobs=n_jobs)(
-            delayed(_delay_errors)(records, ship, library, channel, tau, settings, base)
-            for tau in todo)
-        for tau, errors in zip(todo, refits, strict=True):
-            tried[tau] = (cost(errors), errors)
-        taus = np.array(sorted(tried))
-        costs = np.array([tried[t][0] for t in taus])
-        k = int(np.argmin(costs))
-        at_edge = k in (0, len(taus) - 1)
-        if not at_edge or reach >= DELAY_MAX * ship.time_scale:
-            break  # the best delay lies inside the grid, or the grid is as wide as it goes
-        reach = min(2.0 * reach, DELAY_MAX * ship.time_scale)
-        step = float(grid[1] - grid[0])
-        half = np.arange(step, reach + 0.5 * step, step)
-        grid = np.concatenate([-half[::-1], half])
-    if 0 < k < len(taus) - 1:  # a parabola through the best point and its neighbours
-        (a, b, c), (fa, fb, fc) = taus[k - 1:k + 2], costs[k - 1:k + 2]
-        denom = (a - b) * (a - c) * (b - c)
-        A = (c * (fb - fa) + b * (fa - fc) + a * (fc - fb)) / denom
-        B = (c * c * (fa - fb) + b * b * (fc - fa) + a * a * (fb - fc)) / denom
-        if A > 0:
-            vertex = float(np.clip(-B / (2 * A), a, c))
-            if vertex not in tried and abs(vertex) > 1e-9:
-                errors = _delay_errors(records, ship, library, channel, vertex, settings,
-                                       base)
-                tried[vertex] = (cost(errors), errors)
-    best = min(tried, key=lambda t: tried[t][0])
-    curve = [(t, tried[t][0]) for t in sorted(tried)]
-    return best, tried[best][1], curve
+                   [list(map(float, p)) for p in curve],
+                   {c: [float(a), float(b)] for c, (a, b) in (intervals or {}).items()})
 
 
 def _search_family(family: Family, records, ship, library, problems, rudder_signal):
@@ -525,7 +448,7 @@ def discover(
         library_now = library_now.extended(_as_effect(best, len(accepted)))
     return Discovery(base, [r.name for r in records], rounds, accepted, first_floor, threshold,
                      time.perf_counter() - start, catalogue,
-                     None if setting is None else setting.as_dict())
+                     None if setting is None else setting.as_dict(), unnamed_channels(records))
 
 
 def _meaningful_catalogue(records, ship, library, threshold, settings) -> dict[str, float]:
@@ -547,7 +470,7 @@ def _search(records, ship, library, settings, threshold, n_jobs=1
     """One round: every delay and family scored against ``library``'s residual."""
     problems = design(records, ship, library, **settings)
     groups = problems["X"].groups
-    e0 = {dof: _lomo(problems[dof]) for dof in DOFS}
+    e0 = {dof: lomo_errors(problems[dof]) for dof in DOFS}
     window_samples = max(1, int(round(ship.time_scale / float(np.median([r.dt for r in records])))))
     noise = {dof: noise_sse(e0[dof], groups, window_samples) for dof in DOFS}
     findings = []
@@ -557,12 +480,13 @@ def _search(records, ship, library, settings, threshold, n_jobs=1
     for channel in delayable:
         if channel in library.delays or not all(r.has(channel) for r in records):
             continue  # a channel already delayed keeps its delay
-        tau, errors, curve = _search_delay(records, ship, library, channel, e0, settings,
-                                           problems, n_jobs)
+        tau, errors, curve, interval = search_delay(records, ship, library, channel, e0,
+                                                     settings, problems, n_jobs)
         if abs(tau) < dt:  # shorter than a sample: not a delay the records can resolve
             continue
         findings.append(_finding(f"delay:{channel}", {}, {channel: tau}, e0, errors, noise,
-                                 groups, threshold, [channel], curve))
+                                 groups, threshold, [channel], curve,
+                                 intervals={channel: interval}))
     for family in families(records, library, ship):
         chosen, errors = _search_family(family, records, ship, library, problems,
                                         settings["rudder_signal"])

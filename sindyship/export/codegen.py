@@ -61,10 +61,16 @@ def _constant(value: float) -> str:
     return "math.nan" if math.isnan(value) else repr(value)
 
 
-def _forces_source(model: AbkowitzModel, channel_names: Mapping[str, str]) -> list[str]:
-    """Body of the generated ``forces`` function: the channels, then :func:`_forces_body`."""
+def _forces_source(channel_names: Mapping[str, str], body: list[str]) -> list[str]:
+    """Body of the generated ``forces`` function: the channels, then ``body``
+    (:func:`_forces_body`)."""
     return [f"    ch_{name} = {const} if channels is None else channels[{_literal(name)}]"
-            for name, const in channel_names.items()] + _forces_body(model, channel_names)
+            for name, const in channel_names.items()] + body
+
+
+#: Terms of a model (X, Y and N together) up to which the generated forces share their
+#: common products (sympy cse).
+CSE_MAX_TERMS = 600
 
 
 def _forces_body(model: AbkowitzModel, channel_names: Mapping[str, str]) -> list[str]:
@@ -74,8 +80,13 @@ def _forces_body(model: AbkowitzModel, channel_names: Mapping[str, str]) -> list
     rename = {sympy.Symbol(name, real=True): sympy.Symbol(f"ch_{name}", real=True)
               for name in channel_names}
     exprs = [forces[dof].xreplace(rename) for dof in DOFS]
-    replacements, reduced = sympy.cse(exprs, symbols=sympy.numbered_symbols("p"),
-                                      optimizations="basic")
+    # no preprocessing: sympy's "basic" optimisations factor the sums first, which grows
+    # faster than the terms, and the products the terms share are found without it; beyond
+    # CSE_MAX_TERMS the search itself takes minutes, and each term is written out whole
+    if sum(len(sympy.Add.make_args(e)) for e in exprs) <= CSE_MAX_TERMS:
+        replacements, reduced = sympy.cse(exprs, symbols=sympy.numbered_symbols("p"))
+    else:
+        replacements, reduced = [], exprs
     printer = _Printer({"fully_qualified_modules": True})
     lines = []
     if replacements:
@@ -411,6 +422,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     ship = model.ship
     channel_names = {name: f"CHANNEL_{name.upper()}" for name in sorted(model.library.channels)
                      if name != "psi"}
+    body = _forces_body(model, channel_names)  # shared by the numpy and the compiled forces
     Minv = model.inverse_mass
     M = abkowitz_mass_matrix(ship)
     optimizer = model.optimizer.get("name", "given")
@@ -537,7 +549,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "    channels : mapping, optional",
         "        Recorded channels in the library's scaling (default: the CHANNEL_ constants).",
         '    """',
-        *_forces_source(model, channel_names),
+        *_forces_source(channel_names, body),
         "",
         "",
         "def accelerations(u, v, r, delta, psi, branch=None, channels=None):",
@@ -553,7 +565,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     if compiled:
         runtime = _compiled.compiled_runtime(runtime)
         tail = _compiled.compiled_section(
-            channel_names, _forces_body(model, channel_names),
+            channel_names, body,
             _accelerations_body(_compiled.forces_call(channel_names), coriolis_lines))
     # Exotic libraries (long channel names, many factors) can make a line long.
     lines, tail = ([line if len(line) <= 99 else line + "  # noqa: E501" for line in part]

@@ -74,11 +74,11 @@ def force_expressions(model: AbkowitzModel, numeric: bool = False) -> dict[str, 
     """
     out = {}
     for dof in DOFS:
-        total: sympy.Expr = sympy.Integer(0)
-        for term, value in _active_terms(model, dof):
-            coef = sympy.Float(float(value)) if numeric else coefficient_symbol(dof, term)
-            total = total + coef * term.sympy()
-        out[dof] = total
+        # one Add of every term: adding them one at a time re-sorts the sum each time,
+        # quadratic in the number of terms
+        out[dof] = sympy.Add(*(
+            (sympy.Float(float(value)) if numeric else coefficient_symbol(dof, term))
+            * term.sympy() for term, value in _active_terms(model, dof)))
     return out
 
 

@@ -33,7 +33,7 @@ On a cluster (``python3 -m pip install "sindyship[cluster]"``)::
 from __future__ import annotations
 
 from ..records import PARQUET_SUFFIXES, expand_paths, read_record, time_window
-from ._cluster import DASK_INSTALL, connect, reduce_files
+from ._cluster import DASK_INSTALL, check_scheduler_address, connect, reduce_files
 from ._fit import fit_files, fit_reduction, stream_settings
 from ._reduce import Reduction, StreamSettings, merge_reductions, reduce_record
 
@@ -42,6 +42,7 @@ __all__ = [
     "PARQUET_SUFFIXES",
     "Reduction",
     "StreamSettings",
+    "check_scheduler_address",
     "connect",
     "expand_paths",
     "fit_files",

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import logging
 import os
+import socket
 import sys
+import threading
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -17,7 +19,7 @@ from ..errors import SindyshipInputError
 from ..optimizers import pairwise_tree
 from ._reduce import Reduction, StreamSettings, merge_all, merge_reductions, reduce_record
 
-__all__ = ["DASK_INSTALL", "connect", "reduce_files"]
+__all__ = ["DASK_INSTALL", "check_scheduler_address", "connect", "reduce_files"]
 
 #: How to install what the cluster needs.
 DASK_INSTALL = 'python3 -m pip install "sindyship[cluster]"'
@@ -37,6 +39,91 @@ def _distributed():
     return distributed
 
 
+def check_scheduler_address(address: str) -> str:
+    """A Dask scheduler's address, checked before anything connects.
+
+    Parameters
+    ----------
+    address : str
+        ``tcp://host:port`` or ``host:port`` (the scheme Dask uses by default).
+
+    Returns
+    -------
+    str
+        The address with its ``tcp://`` scheme.
+
+    Raises
+    ------
+    SindyshipInputError
+        An empty address, another scheme (``tls://`` needs certificates sindyship is not
+        given, ``ucx://`` and ``inproc://`` are not reachable from a command), no host, or a
+        port outside 1-65535.
+
+    Examples
+    --------
+    >>> check_scheduler_address("scheduler:8786")
+    'tcp://scheduler:8786'
+    """
+    text = str(address).strip()
+    how = "give the address as tcp://host:port, as `dask scheduler` prints it"
+    if not text:
+        raise SindyshipInputError(f"the scheduler address is empty; {how}.")
+    scheme, sep, rest = text.partition("://")
+    if not sep:
+        scheme, rest = "tcp", text
+    if scheme.lower() != "tcp":
+        raise SindyshipInputError(
+            f"the scheduler address {text[:80]!r} uses {scheme[:20]}://, which sindyship "
+            f"cannot connect to; {how}.")
+    host, colon, port = rest.rpartition(":")
+    host = host.strip("[]")
+    if not colon or not host or not port.isdigit() or not 1 <= int(port) <= 65535:
+        raise SindyshipInputError(
+            f"the scheduler address {text[:80]!r} has no host and port 1-65535; {how}.")
+    return f"tcp://{rest}"
+
+
+def _client(distributed, address: str):
+    """A client of the scheduler at ``address``, or a one-line error within the timeout.
+
+    A closed port is refused at once, and a server that accepts the connection but never
+    answers (Dask's own timeout does not cover the handshake) is given up after
+    :data:`CONNECT_TIMEOUT_S` seconds: the client is made on a daemon thread that is left
+    behind.
+    """
+    host, _, port = address.removeprefix("tcp://").rpartition(":")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=CONNECT_TIMEOUT_S):
+            pass
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise SindyshipInputError(
+            f"cannot reach the Dask scheduler at {address} ({reason}); start it (dask "
+            "scheduler) or check the address.") from None
+    made: dict = {}
+
+    def make() -> None:
+        try:
+            made["client"] = distributed.Client(address, timeout=f"{CONNECT_TIMEOUT_S}s")
+        except BaseException as exc:  # reported on the caller's thread
+            made["error"] = exc
+
+    thread = threading.Thread(target=make, name="sindyship-connect", daemon=True)
+    thread.start()
+    thread.join(CONNECT_TIMEOUT_S)
+    if thread.is_alive():
+        raise SindyshipInputError(
+            f"the server at {address} took the connection but did not answer as a Dask "
+            f"scheduler within {CONNECT_TIMEOUT_S} s; check the address and that the "
+            "scheduler is running.")
+    if "error" in made:
+        reason = " ".join(str(made["error"]).split())[:160] or type(made["error"]).__name__
+        raise SindyshipInputError(
+            f"cannot connect to a Dask scheduler at {address} ({reason}); start it (dask "
+            "scheduler) or check the address.") from None
+    return made["client"]
+
+
 @contextmanager
 def connect(scheduler: str | None = None, n_workers: int | None = None) -> Iterator:
     """A ``dask.distributed`` client, closed on leaving the block.
@@ -52,18 +139,13 @@ def connect(scheduler: str | None = None, n_workers: int | None = None) -> Itera
     Raises
     ------
     SindyshipInputError
-        When Dask is not installed, or the scheduler cannot be reached.
+        When Dask is not installed, the address is not a ``tcp://host:port`` address
+        (:func:`check_scheduler_address`), or no scheduler answers there within
+        :data:`CONNECT_TIMEOUT_S` seconds.
     """
     distributed = _distributed()
-    if scheduler:
-        try:
-            client = distributed.Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S}s")
-        except (OSError, TimeoutError, ValueError) as exc:
-            reason = " ".join(str(exc).split())[:160]
-            raise SindyshipInputError(
-                f"cannot reach the Dask scheduler at {scheduler} ({reason}); start it "
-                "(dask scheduler) or check the address."
-            ) from None
+    if scheduler is not None:
+        client = _client(distributed, check_scheduler_address(scheduler))
         with client:
             yield client
         return
