@@ -164,3 +164,14 @@ def test_the_campaign_is_flown_without_divergence_by_the_diagnosed_default_fit()
     assert work["default before"]["diverged"]
     assert result["before_over_recommended"] == pytest.approx(
         work["default before"]["geometric_mean_L"] / recommended["geometric_mean_L"])
+
+
+def test_a_refinement_on_a_two_worker_cluster_equals_the_one_process_refinement():
+    result = _load("cluster-refine.json")
+    assert result["records"] == 26 and result["workers"] == 2
+    assert result["max_evaluations"] == 10
+    assert result["evaluations"]["cluster"] == result["evaluations"]["one_process"]
+    assert result["coefficients_apart"] <= 1e-8  # of the largest coefficient per equation
+    assert result["costs_apart"] <= 1e-8
+    assert result["cost_after"]["one_process"] < 0.1 * result["cost_before"]  # it refined
+    assert result["one_process_s"] > 0 and result["cluster_s"] > 0
