@@ -128,19 +128,20 @@ def test_a_lagging_rudder_sensor_is_discovered_and_its_effect_flies(symmetric, l
         assert distance.mean() < 0.2
 
 
+@pytest.mark.parametrize("speed", ["design", "instantaneous"])
 def test_a_delay_candidate_re_evaluates_only_the_delayed_columns_and_equals_a_full_design(
-        symmetric, lagged):
+        symmetric, lagged, speed):
     from sindyship.diagnose.delays import delay_errors, lomo_errors, unshifted_variables
     from sindyship.identify import design
 
     train, _ = lagged
-    library = load_library("abkowitz")
+    library = load_library("abkowitz").with_speed(speed)
     settings = {"rudder_signal": "actual", "derivative": "five-point", "window": 21.0}
     problems = design(train, symmetric, library, **settings)
     base = (problems, unshifted_variables(train, symmetric, library, settings))
     fast = delay_errors(train, symmetric, library, "delta", 3.7, settings, base)
     delayed = TermLibrary(library.name, library.system, library.description, library.terms,
-                          delays={"delta": 3.7})
+                          delays={"delta": 3.7}, speed=speed)
     full = design(train, symmetric, delayed, **settings)
     for dof in "XYN":
         np.testing.assert_array_equal(fast[dof], lomo_errors(full[dof]))

@@ -140,3 +140,21 @@ def test_a_delayed_channel_or_a_rudder_rate_term_leaves_steady_captive_forces_un
         for dof in "XYN":
             np.testing.assert_allclose(got[dof], expected[dof], rtol=1e-12, atol=1e-6)
     assert float(np.abs(expected["Y"]).max()) > 1e5  # the forces compared are not all zero
+
+
+def test_the_coriolis_part_of_captive_forces_does_not_depend_on_the_speed_form(kcs):
+    """With every coefficient zero the captive force is the Coriolis part alone (added mass
+    and the Munk moment, in the motion over U0): the same whether the library is written in
+    the design speed or the instantaneous one, also at conditions away from U0."""
+    captive = captive_tests(kcs, "drift-yaw", points=5)
+    slow = captive.assign(u=0.7 * captive.u, v=0.7 * captive.v, r=0.7 * captive.r)
+    forces = {}
+    for speed in ("design", "instantaneous"):
+        library = load_library("abkowitz").with_speed(speed)
+        zero = {dof: {t.text: 0.0 for t in library.terms[dof]} for dof in "XYN"}
+        forces[speed] = model_captive_forces(AbkowitzModel(kcs, library, zero), slow)
+    for dof in "XYN":
+        largest = float(np.abs(forces["design"][dof]).max())
+        np.testing.assert_allclose(forces["instantaneous"][dof], forces["design"][dof],
+                                   rtol=1e-10, atol=1e-6 * largest)
+    assert float(np.abs(forces["design"]["N"]).max()) > 0  # the Munk moment is there

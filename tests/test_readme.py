@@ -31,6 +31,14 @@ def test_the_readme_blocks_are_what_the_saved_numbers_render_to():
     )
 
 
+def test_the_saved_numbers_of_the_benchmarks_are_the_benchmarks_own():
+    """The README's speed and campaign figures come from what the benchmarks saved, so a rerun
+    of a benchmark without ``make_readme.py`` fails here."""
+    script = _script()
+    for key, saved in (("speed", script._saved_speed), ("campaign", script._saved_campaign)):
+        assert NUMBERS[key] == json.loads(json.dumps(script.clean_json(saved()))), key
+
+
 def _shell_blocks() -> list[str]:
     first_hour = README.split("## Your first hour", 1)[1].split("\n## ", 1)[0]
     return re.findall(r"```bash\n(.*?)```", first_hour, re.S)

@@ -296,3 +296,26 @@ def test_a_server_that_is_no_dask_scheduler_ends_in_one_line_within_the_timeout(
     assert "\n" not in str(raised.value)
     if answer is None:
         assert "did not answer as a Dask scheduler within 2 s" in str(raised.value)
+
+
+@pytest.mark.parametrize("address, fragment", [
+    ("", "empty"), ("ucx://h:1", "ucx://"), ("h", "port"), ("h:0", "port"),
+    ("h:\u00b2", "port"), ("h:\u0668\u0667", "port"), ("::1:8786", "brackets"),
+    ("tcp:/h:8786", "host"), ("tcp://a b:1", "host"), ("[abc]:1", "host"),
+    ("h:1:2", "host")])
+def test_a_scheduler_address_that_cannot_be_used_is_refused_before_connecting(address,
+                                                                              fragment):
+    from sindyship.errors import SindyshipInputError
+    from sindyship.streaming import check_scheduler_address
+
+    with pytest.raises(SindyshipInputError, match=fragment):
+        check_scheduler_address(address)
+
+
+def test_a_scheduler_address_is_given_its_tcp_scheme():
+    from sindyship.streaming import check_scheduler_address
+
+    assert check_scheduler_address("sched-01.example.org:8786") == \
+        "tcp://sched-01.example.org:8786"
+    assert check_scheduler_address("tcp://[::1]:8786") == "tcp://[::1]:8786"
+    assert check_scheduler_address(" 10.0.0.1:8786 ") == "tcp://10.0.0.1:8786"

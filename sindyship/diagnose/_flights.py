@@ -88,8 +88,10 @@ def _fly_many(
                  for model, records in jobs]
         try:  # each flight counted as it lands
             results = Parallel(n_jobs=n_jobs, return_as="generator")(calls)
-        except ValueError:  # a backend that cannot hand results on one by one (joblib < 1.4
-            results = Parallel(n_jobs=n_jobs)(calls)  # with Dask): all at the end
+        except ValueError as exc:  # a backend that cannot hand results on one by one
+            if "return_as" not in str(exc):  # (Dask under joblib < 1.4): all at the end
+                raise
+            results = Parallel(n_jobs=n_jobs)(calls)
         out = []
         for flown in results:
             out.append(flown)

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..library import DOFS, nondimensional_variables
+from ..library import DOFS, SPEED_FACTOR, nondimensional_variables
 from ..terms import CORE_VARIABLES, Term
 
 #: Channels that are never candidates of their own (time, motion, positions, heading, rudder).
@@ -174,8 +174,9 @@ def family_columns(family: Family, records: Sequence, library, ship, rudder_sign
         extra = set(family.variables) - set(values)
         if extra:
             values.update(nondimensional_variables(aligned, ship.L, ship.U0, needed=extra))
+        factor = values.get(SPEED_FACTOR, 1.0)  # (U/U0)^2 of the instantaneous form
         for dof in DOFS:
             blocks[dof].append(np.column_stack(
-                [Term(t).evaluate(values) for t in family.terms[dof]])
+                [Term(t).evaluate(values) * factor for t in family.terms[dof]])
                 if family.terms[dof] else np.empty((record.n_samples, 0)))
     return {dof: np.vstack(blocks[dof]) for dof in DOFS}

@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..library import DOFS, TermLibrary, record_variables
+from ..library import DOFS, SPEED_FACTOR, TermLibrary, record_variables
 from ..optimizers import GroupedProblem
 from ..ships import Ship
 from ._constants import BOOTSTRAP
@@ -49,17 +49,18 @@ def delay_errors(records, ship, library, channel, tau, settings, base):
     problems, unshifted = base
     delays = {**library.delays, channel: tau}
     shifted = TermLibrary(library.name, library.system, library.description, library.terms,
-                          effects=library.effects, delays=delays)
+                          effects=library.effects, delays=delays, speed=library.speed)
     features = {dof: problems[dof].features.copy(order="F") for dof in DOFS}
     start = 0
     for record, before in zip(records, unshifted, strict=True):
         stop = start + record.n_samples
         after = record_variables(record, shifted, ship.L, ship.U0, settings["rudder_signal"])
         moved = {name for name in after if not np.array_equal(after[name], before[name])}
+        factor = after.get(SPEED_FACTOR, 1.0)  # (U/U0)^2 of the instantaneous form
         for dof in DOFS:
             for j, term in enumerate(library.terms[dof]):
                 if term.variables & moved:
-                    features[dof][start:stop, j] = term.evaluate(after)
+                    features[dof][start:stop, j] = term.evaluate(after) * factor
         start = stop
     return {dof: lomo_errors(replace(problems[dof], features=features[dof])) for dof in DOFS}
 
@@ -71,8 +72,23 @@ def unshifted_variables(records, ship, library, settings) -> list[dict[str, np.n
 
 
 def search_delay(records, ship, library, channel, e0, settings, problems, n_jobs=1):
-    """The delay of ``channel`` with the least leave-one-manoeuvre-out error, its errors and
-    the error curve over the grid (grid points refitted by ``n_jobs`` joblib workers)."""
+    """The delay of ``channel`` with the least leave-one-manoeuvre-out error.
+
+    The grid of :func:`delay_grid` is refitted point by point (``n_jobs`` joblib workers),
+    widened while the best delay sits at its edge, and refined between grid points by a
+    parabola (:func:`best_delay`).
+
+    Returns
+    -------
+    tau : float
+        The delay [s].
+    errors : dict of str to ndarray
+        Leave-one-manoeuvre-out errors per equation at ``tau``.
+    curve : list of (float, float)
+        Every delay tried and its cost (relative to no delay).
+    interval : (float, float)
+        The delay's interval when the manoeuvres are resampled (:func:`delay_interval`).
+    """
     from joblib import Parallel, delayed
 
     sse0 = {dof: float(e0[dof] @ e0[dof]) or 1.0 for dof in DOFS}

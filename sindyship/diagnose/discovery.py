@@ -240,13 +240,24 @@ class Discovery:
 
 
 def _toml_string(text: str) -> str:
-    """A TOML basic string of ``text``; a byte of a file name that was not UTF-8 (held as a
-    lone surrogate, which TOML cannot carry) is written as ``\\xff``."""
+    r"""A TOML basic string of ``text``; a byte of a file name that was not UTF-8 (held as a
+    lone surrogate, which TOML cannot carry) is written as ``\xff``.
+
+    Characters beyond U+FFFF are written as they are (JSON's surrogate-pair escapes are not
+    TOML), control characters as ``\uXXXX``.
+
+    Examples
+    --------
+    >>> import tomllib
+    >>> text = "run\udcff \U0001f600\x7f"
+    >>> tomllib.loads("a = " + _toml_string(text))["a"] == "run\\xff \U0001f600\x7f"
+    True
+    """
     try:
         readable = text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
     except UnicodeEncodeError:  # a surrogate that no byte gave
         readable = text.encode("utf-8", "backslashreplace").decode("utf-8")
-    return json.dumps(readable)
+    return json.dumps(readable, ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 # ------------------------------------------------------------------------------- words

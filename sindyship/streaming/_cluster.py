@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import logging
 import os
+import re
 import socket
 import sys
 import threading
+import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -26,6 +28,9 @@ DASK_INSTALL = 'python3 -m pip install "sindyship[cluster]"'
 
 #: Seconds to wait for a scheduler given by address.
 CONNECT_TIMEOUT_S = 20
+
+#: A host name, an IPv4 address, or (between brackets) an IPv6 address.
+_HOST = re.compile(r"[A-Za-z0-9]([A-Za-z0-9._-]{0,252}[A-Za-z0-9])?|[0-9A-Fa-f:.]{2,45}")
 
 
 def _distributed():
@@ -76,10 +81,19 @@ def check_scheduler_address(address: str) -> str:
             f"the scheduler address {text[:80]!r} uses {scheme[:20]}://, which sindyship "
             f"cannot connect to; {how}.")
     host, colon, port = rest.rpartition(":")
-    host = host.strip("[]")
-    if not colon or not host or not port.isdigit() or not 1 <= int(port) <= 65535:
+    name = host[1:-1] if host.startswith("[") and host.endswith("]") else host
+    bracketed = name is not host
+    if not colon or not (port.isascii() and port.isdigit()) or not 1 <= int(port) <= 65535:
         raise SindyshipInputError(
-            f"the scheduler address {text[:80]!r} has no host and port 1-65535; {how}.")
+            f"the scheduler address {text[:80]!r} has no port 1-65535; {how}.")
+    if ":" in name and not bracketed and re.fullmatch(r"[0-9A-Fa-f:.]+", name):
+        raise SindyshipInputError(
+            f"the scheduler address {text[:80]!r} has an IPv6 host without brackets; write "
+            "it as tcp://[host]:port.")
+    if not _HOST.fullmatch(name) or (":" in name) != bracketed:
+        raise SindyshipInputError(
+            f"the scheduler address {text[:80]!r} has no valid host name or IP address; "
+            f"{how}.")
     return f"tcp://{rest}"
 
 
@@ -91,6 +105,7 @@ def _client(distributed, address: str):
     :data:`CONNECT_TIMEOUT_S` seconds: the client is made on a daemon thread that is left
     behind.
     """
+    deadline = time.monotonic() + CONNECT_TIMEOUT_S
     host, _, port = address.removeprefix("tcp://").rpartition(":")
     try:
         with socket.create_connection((host.strip("[]"), int(port)), timeout=CONNECT_TIMEOUT_S):
@@ -101,21 +116,31 @@ def _client(distributed, address: str):
             f"cannot reach the Dask scheduler at {address} ({reason}); start it (dask "
             "scheduler) or check the address.") from None
     made: dict = {}
+    lock = threading.Lock()
+    left = max(deadline - time.monotonic(), 1.0)
 
     def make() -> None:
         try:
-            made["client"] = distributed.Client(address, timeout=f"{CONNECT_TIMEOUT_S}s")
+            client = distributed.Client(address, timeout=f"{left}s")
         except BaseException as exc:  # reported on the caller's thread
             made["error"] = exc
+            return
+        with lock:
+            if made.get("abandoned"):  # the caller gave up waiting: nobody will close it
+                client.close()
+            else:
+                made["client"] = client
 
     thread = threading.Thread(target=make, name="sindyship-connect", daemon=True)
     thread.start()
-    thread.join(CONNECT_TIMEOUT_S)
-    if thread.is_alive():
-        raise SindyshipInputError(
-            f"the server at {address} took the connection but did not answer as a Dask "
-            f"scheduler within {CONNECT_TIMEOUT_S} s; check the address and that the "
-            "scheduler is running.")
+    thread.join(left)
+    with lock:
+        if thread.is_alive() and "client" not in made:
+            made["abandoned"] = True
+            raise SindyshipInputError(
+                f"the server at {address} took the connection but did not answer as a Dask "
+                f"scheduler within {CONNECT_TIMEOUT_S} s; check the address and that the "
+                "scheduler is running.")
     if "error" in made:
         reason = " ".join(str(made["error"]).split())[:160] or type(made["error"]).__name__
         raise SindyshipInputError(
