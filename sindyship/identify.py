@@ -136,10 +136,28 @@ def check_term_values(library: TermLibrary, records: Sequence[Trajectory], ship:
     """Every term of ``library`` finite and within :data:`MAX_TERM_VALUE` on every record, as
     :func:`design` requires; a check to run before long work that builds designs later.
 
+    Parameters
+    ----------
+    library : TermLibrary
+        The terms to check (with their delays and speed form, as the fit reads them).
+    records : sequence of Trajectory
+        The records the terms are evaluated on.
+    ship : Ship
+        Gives L and U0 for the non-dimensional variables (eq. 15).
+    rudder_signal : {"actual", "commanded"}
+        The rudder angle the terms read.
+
     Raises
     ------
     SindyshipInputError
-        Naming the first term and record that break it.
+        Naming the first term and record that break it, or a channel a record lacks.
+
+    Examples
+    --------
+    >>> from sindyship import load_ship, MMGModel, Manoeuvre, fly
+    >>> ship = load_ship("kcs")
+    >>> runs = fly(MMGModel(ship), [Manoeuvre("zigzag", rudder=10, check=10, duration=100)])
+    >>> check_term_values(load_library("abkowitz"), runs, ship)  # nothing to report
     """
     check_channels(library, records)
     for record in records:

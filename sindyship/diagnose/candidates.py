@@ -50,7 +50,26 @@ _TERM_NAME = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
 
 def unnamed_channels(records: Sequence) -> list[str]:
     """Columns every record has that no term can name (``"Heel"``, ``"wave height"``): the
-    search leaves them out and the report says how to search them (rename the column)."""
+    search leaves them out and the report says how to search them (rename the column).
+
+    Parameters
+    ----------
+    records : sequence of Trajectory
+
+    Returns
+    -------
+    list of str
+        The columns, sorted; term variables are lower-case letters, digits and single
+        underscores (docs/term-grammar.md).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> from sindyship.trajectory import Trajectory
+    >>> frame = pd.DataFrame({"t": [0.0], "u": [1.0], "Heel": [0.0], "depth": [9.0]})
+    >>> unnamed_channels([Trajectory(frame, name="run")])
+    ['Heel']
+    """
     shared = set.intersection(*(set(r.data.columns) for r in records)) if records else set()
     return sorted(c for c in shared - NOT_CHANNELS if not _TERM_NAME.fullmatch(str(c)))
 
