@@ -102,8 +102,8 @@ def _client(distributed, address: str):
 
     A closed port is refused at once, and a server that accepts the connection but never
     answers (Dask's own timeout does not cover the handshake) is given up after
-    :data:`CONNECT_TIMEOUT_S` seconds: the client is made on a daemon thread that is left
-    behind.
+    :data:`CONNECT_TIMEOUT_S` seconds, probe and handshake together: the client is made on a
+    daemon thread that is left behind, and closes its client if it connects after that.
     """
     deadline = time.monotonic() + CONNECT_TIMEOUT_S
     host, _, port = address.removeprefix("tcp://").rpartition(":")
