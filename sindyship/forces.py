@@ -46,10 +46,8 @@ import pandas as pd
 from .captive import CAPTIVE_COLUMNS, FORCE_COLUMNS, classify_tests, force_scales, rigid_body_forces
 from .errors import SindyshipInputError
 from .identify import ENVELOPE_VARIABLES, training_envelope
-from .library import SPEED_FACTOR
-from .model import AbkowitzModel
+from .model import AbkowitzModel, coriolis_of_values
 from .ships import Ship
-from .targets import coriolis
 from .trajectory import Trajectory
 
 __all__ = [
@@ -124,11 +122,7 @@ def model_captive_forces(model: AbkowitzModel, captive: pd.DataFrame) -> pd.Data
     if "delta_rate" in values:
         values["delta_rate"] = np.zeros(len(conditions))
     fitted = model.forces_from_values(values)
-    u = values["du"] + 1.0
-    # the Coriolis terms take the motion over U0: the instantaneous form's v/U and r L/U are
-    # turned back with the speed ratio (as AbkowitzModel's accelerations do)
-    ratio = np.sqrt(values[SPEED_FACTOR]) if SPEED_FACTOR in values else 1.0
-    full = coriolis(ship, u, values["v"] * ratio, values["r"] * ratio)
+    full = coriolis_of_values(ship, values)
     scales = force_scales(ship, "prime-I")
     rigid = rigid_body_forces(ship, captive["u"].to_numpy(float), captive["v"].to_numpy(float),
                               captive["r"].to_numpy(float))

@@ -61,6 +61,14 @@ def channel_series(records, names, L: float, U0: float) -> ChannelSeries:
                          {name: np.vstack([v[name] for v in values]) for name in names})
 
 
+def coriolis_of_values(ship: Ship, values: Mapping) -> tuple:
+    """Coriolis terms (Prime I) of paper eq. 14 at a library's variables: they take the motion
+    over U0, so the instantaneous form's v/U and r L/U are turned back with the speed factor
+    (:data:`sindyship.library.SPEED_FACTOR`)."""
+    ratio = np.sqrt(values[SPEED_FACTOR]) if SPEED_FACTOR in values else 1.0
+    return coriolis(ship, values["du"] + 1.0, values["v"] * ratio, values["r"] * ratio)
+
+
 @dataclass(frozen=True)
 class AbkowitzDynamics:
     """Simulator dynamics of an identified model (paper eq. 14) from its forces of eq. 15.
@@ -133,9 +141,7 @@ class AbkowitzDynamics:
         turned back with the speed factor)."""
         ship = self.ship
         U0, L = ship.U0, ship.L
-        ratio = np.sqrt(values[SPEED_FACTOR]) if SPEED_FACTOR in values else 1.0
-        X_C, Y_C, N_C = coriolis(ship, values["du"] + 1.0, values["v"] * ratio,
-                                 values["r"] * ratio)
+        X_C, Y_C, N_C = coriolis_of_values(ship, values)
         Minv = self.model.inverse_mass
         X = forces["X"] + X_C
         Y = forces["Y"] + Y_C

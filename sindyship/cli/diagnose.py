@@ -86,7 +86,7 @@ def run(args) -> int:
     from .._io import check_output, output_folder
     from ..diagnose import diagnose, diagnose_iteratively
     from ..identify import check_term_values, resolve_library
-    from ..library import load_effect
+    from ..library import load_effect, names_a_file
     from ..records import expand_paths
     from ._common import load_cli_ship
 
@@ -104,8 +104,7 @@ def run(args) -> int:
     library = resolve_library(args.library, split_names(args.effects), speed_form(args, ship))
     # the terms of the user's own effect files, checked on the records before the long work
     # (an effect whose channels the records lack is reported untestable by the diagnosis)
-    own = [load_effect(name) for name in split_names(args.candidates)
-           if name.endswith(".toml") or "/" in name]
+    own = [load_effect(name) for name in split_names(args.candidates) if names_a_file(name)]
     testable = [e for e in own if all(r.has(c) for c in e.channels for r in records + test)]
     if testable:
         check_term_values(library.extended(*testable), records + test, ship,

@@ -39,14 +39,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..library import DOFS, SPEED_FACTOR, nondimensional_variables
-from ..terms import CORE_VARIABLES, Term
+from ..terms import CORE_VARIABLES, Term, is_variable_name
 
 #: Channels that are never candidates of their own (time, motion, positions, heading, rudder).
 NOT_CHANNELS = frozenset({"t", "u", "v", "r", "x", "y", "psi", "delta", "delta_c"})
-
-#: A recorded column a term can name: lower-case letters, digits, single underscores.
-_TERM_NAME = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
-
 
 def unnamed_channels(records: Sequence) -> list[str]:
     """Columns every record has that no term can name (``"Heel"``, ``"wave height"``): the
@@ -71,7 +67,7 @@ def unnamed_channels(records: Sequence) -> list[str]:
     ['Heel']
     """
     shared = set.intersection(*(set(r.data.columns) for r in records)) if records else set()
-    return sorted(c for c in shared - NOT_CHANNELS if not _TERM_NAME.fullmatch(str(c)))
+    return sorted(c for c in shared - NOT_CHANNELS if not is_variable_name(c))
 
 
 @dataclass(frozen=True)

@@ -60,6 +60,7 @@ from ._files import (
     builtin_library_dir,
     load_effect,
     load_library,
+    names_a_file,
 )
 from ._objects import Effect, TermLibrary
 from ._pysindy import AbkowitzFeatureLibrary
@@ -88,6 +89,7 @@ __all__ = [
     "feature_matrix",
     "load_effect",
     "load_library",
+    "names_a_file",
     "nondimensional_variables",
     "record_variables",
     "SPEED_FACTOR",

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from sindyship.errors import SindyshipInputError
 from sindyship.targets import DOFS
-from sindyship.terms import Term, parse_term
+from sindyship.terms import Term, is_variable_name, parse_term
 
 if TYPE_CHECKING:
     pass
@@ -19,7 +19,6 @@ if TYPE_CHECKING:
 
 #: The degrees of freedom of the manoeuvring model: surge force, sway force, yaw moment.
 _NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}")
-_CHANNEL_RE = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
 _MAX_FILE_BYTES = 1_000_000
 _LIBRARY_KEYS = {"name": True, "system": True, "description": False, "terms": True,
                  "delays": False, "speed": False}
@@ -49,7 +48,7 @@ def _read_delays(raw: Any, source: str | Path | None) -> dict[str, float]:
         )
     out = {}
     for channel, value in raw.items():
-        if not isinstance(channel, str) or not _CHANNEL_RE.fullmatch(channel):
+        if not is_variable_name(channel):
             raise SindyshipInputError(
                 f"{_where(source)}{channel!r} is not a channel name: use lower-case letters, "
                 "digits and single underscores, as in the measurement CSV (e.g. delta)."

@@ -65,13 +65,24 @@ def available_effects() -> tuple[str, ...]:
     return _builtin_names(builtin_library_dir() / "effects")
 
 
+def names_a_file(name_or_path: str | Path) -> bool:
+    """Whether a library or effect is given by its file (a path, a name ending in ``.toml`` or
+    holding a slash) rather than by a built-in name.
+
+    Examples
+    --------
+    >>> names_a_file("asymmetry"), names_a_file("heel.toml"), names_a_file("found/lag")
+    (False, True, True)
+    """
+    text = str(name_or_path)
+    return (isinstance(name_or_path, Path) or text.endswith(".toml") or "/" in text
+            or "\\" in text)
+
+
 def _locate(name_or_path: str | Path, kind: str) -> Traversable:
     """The file of a built-in library/effect name, or the given path."""
     text = str(name_or_path)
-    is_path = (
-        isinstance(name_or_path, Path) or text.endswith(".toml") or "/" in text or "\\" in text
-    )
-    if is_path:
+    if names_a_file(name_or_path):
         path = Path(name_or_path)
         if not path.is_file():
             raise SindyshipInputError(f"{path}: there is no such {kind} file.")

@@ -9,10 +9,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from sindyship.errors import SindyshipInputError
-from sindyship.terms import CORE_VARIABLES, Term, sources_of
+from sindyship.terms import CORE_VARIABLES, Term, is_variable_name, sources_of
 
 from ._checks import (
-    _CHANNEL_RE,
     _LIBRARY_KEYS,
     DOFS,
     _check_keys,
@@ -316,7 +315,7 @@ class Effect:
         object.__setattr__(self, "delays", delays)
         channels = tuple(self.channels)
         for channel in channels:
-            if not isinstance(channel, str) or not _CHANNEL_RE.fullmatch(channel):
+            if not is_variable_name(channel):
                 raise SindyshipInputError(f"{_where(label)}{channel!r} is not a channel name.")
             if channel in CORE_VARIABLES:
                 raise SindyshipInputError(

@@ -48,6 +48,7 @@ from ._variables import (
     Variable,
     channel_scaling,
     describe_variable,
+    is_variable_name,
     sources_of,
 )
 
@@ -65,6 +66,7 @@ __all__ = [
     "channel_scaling",
     "describe_variable",
     "evaluate_factor",
+    "is_variable_name",
     "parse_term",
     "sources_of",
 ]

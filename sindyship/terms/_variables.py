@@ -32,6 +32,19 @@ _RESERVED = {
     **{name: "it is a function name" for name in FUNCTIONS},
 }
 
+
+def is_variable_name(name) -> bool:
+    """Whether ``name`` can be a variable of the term grammar: lower-case letters, digits and
+    single underscores, starting with a letter (the form of a measurement CSV's channels).
+
+    Examples
+    --------
+    >>> is_variable_name("wave_height"), is_variable_name("Heel"), is_variable_name("a__b")
+    (True, False, False)
+    """
+    return isinstance(name, str) and _NAME_RE.fullmatch(name) is not None
+
+
 _NUMPY_FUNCTIONS = {"abs": np.abs, "sign": np.sign, "sin": np.sin, "cos": np.cos}
 _SYMPY_FUNCTIONS = {"abs": sympy.Abs, "sign": sympy.sign, "sin": sympy.sin, "cos": sympy.cos}
 _LATEX_FUNCTIONS = {"sign": r"\operatorname{sgn}", "sin": r"\sin", "cos": r"\cos"}
