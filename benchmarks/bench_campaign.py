@@ -8,8 +8,9 @@ turns; held out: a 15/15 zig-zag and 25 deg turns to both sides.
 
 Every workflow runs as a user would run it, through the command line on the records' CSV
 files: ``sindyship diagnose`` on the training records (which effects it names), then
-``sindyship fit`` with its defaults, with each named effect alone and with both, each flown on
-the held-out records by ``sindyship evaluate --json``.  With ``--against CHECKOUT``, the same
+``sindyship fit`` with its defaults, with each named effect alone and with the named effects
+added one by one in the order named (the last: all of them), each flown on the held-out
+records by ``sindyship evaluate --json``.  With ``--against CHECKOUT``, the same
 ``fit`` (its defaults) and ``evaluate`` of another checkout of sindyship run on the same files
 in the same run (``default before``).  The score of a workflow is the geometric mean of the held-out
 mean distances in ship lengths; a diverged flight is listed as such and makes the workflow
@@ -114,9 +115,9 @@ def run(against: Path | None) -> dict:
         for effect in named:
             workflows[f"default + {effect}"] = workflow(ROOT, paths, folder, effect,
                                                         ["--effects", effect])
-        if len(named) > 1:
-            workflows[f"default + {' + '.join(named)}"] = workflow(
-                ROOT, paths, folder, "named", ["--effects", ",".join(named)])
+        for k in range(2, len(named) + 1):  # the named effects added in the order named
+            workflows[f"default + {' + '.join(named[:k])}"] = workflow(
+                ROOT, paths, folder, f"named{k}", ["--effects", ",".join(named[:k])])
         if against is not None:
             workflows["default before"] = workflow(against.resolve(), paths, folder, "before",
                                                    [])

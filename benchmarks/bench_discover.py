@@ -14,7 +14,8 @@ records:
     The rudder stalling at 15 deg of angle of attack, and a bank 8 ship lengths to the west
     (Prime II 0.005 at one length), with the library the diagnosis reaches on the clean
     symmetric KCS (``abkowitz+higher_order+crossflow``): what was discovered, the catalogued
-    effects that are meaningful there (a finding must explain more than each), and the fall of
+    effects that are meaningful there (the best finding competes with the first of them in
+    left-out flights, ``contests``), and the fall of
     the held-out error with the discovery (geometric mean over the held-out manoeuvres of the
     mean distance over the window both flights cover; a divergence counts as a failure).
 ``false_alarms``
@@ -92,6 +93,7 @@ def outside_case(name: str, spec: list[str], ship) -> dict:
     found = discover(train, ship, effects=CATALOGUED)
     result = {"effect": name, "spec": spec, "discovered": [f.family for f in found.accepted],
               "catalogue_meaningful": found.catalogue,
+              "contests": [c.to_json() for c in found.contests],
               "findings": [f.to_json() for f in found.accepted],
               "first_round": [{"family": f.family, "share": f.explained_signal,
                                "meaningful": f.meaningful} for f in found.findings]}
@@ -148,7 +150,10 @@ def main() -> dict:
               f"(x{[round(r, 2) for r in case.get('ratio_to_clean', [])]} of the lag-free fit)")
     for case in results["outside"]:
         print(f"{case['effect']}: discovered {case['discovered']}, held-out after/before "
-              f"{case.get('ratio')}; catalogued effects meaningful: {case['catalogue_meaningful']}")
+              f"{case.get('ratio')}; catalogued effects meaningful: {case['catalogue_meaningful']}"
+              + "".join(f"; flights: finding {c['finding']} {c['finding_L']:.3g} L, catalogued "
+                        f"{c['catalogued']} {c['catalogued_L']:.3g} L, {c['winner']} wins"
+                        for c in case["contests"]))
     fa = results["false_alarms"]
     print(f"false alarms: {fa['false_alarms']} of {fa['n_cases']} cases; discover on the protocol "
           f"took {results['seconds_protocol']:.1f} s")

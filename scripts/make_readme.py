@@ -96,20 +96,21 @@ def _marin() -> dict | None:
 
 
 def _marin_default(train, test, ship, settings: dict) -> dict:
-    """The default fit (``sindyship fit``: the prior on ``abkowitz-vr`` in the ship's speed
-    form, refined by the records' flights) on the MARIN zig-zags, alone and with
-    ``crossflow``: the turns' figures (advance, tactical diameter, speed loss) as flown, and
-    what the refinement did."""
+    """The default fit (``sindyship fit``: the prior on the recommended library of the ship's
+    speed form, refined by the records' flights) on the MARIN zig-zags, and the same fit on
+    ``abkowitz-vr`` (without the cross-flow drag the instantaneous form's library adds): the
+    turns' figures (advance, tactical diameter, speed loss) as flown, and what the refinement
+    did."""
     from sindyship.flights import fly_like_batch
-    from sindyship.identify import fit
+    from sindyship.identify import fit, recommended_library
     from sindyship.manoeuvres import turning_figures
     from sindyship.refine import refine
 
     out = {}
-    for effects in ((), ("crossflow",)):
-        model = refine(fit(train, ship, library="abkowitz-vr", optimizer="prior",
-                           effects=list(effects), speed=ship.speed_reference, **settings),
-                       train)
+    for key, library in (("default", recommended_library(ship.speed_reference)),
+                         ("abkowitz-vr", "abkowitz-vr")):
+        model = refine(fit(train, ship, library=library, optimizer="prior",
+                           speed=ship.speed_reference, **settings), train)
         turns = {}
         for record, flown in zip(test, fly_like_batch(model, test), strict=True):
             diverged = flown.meta.get("diverged_at")
@@ -118,8 +119,8 @@ def _marin_default(train, test, ship, settings: dict) -> dict:
                 key: figures.get(key) for key in ("advance_L", "tactical_diameter_L",
                                                   "speed_loss")}}
         done = model.info["refined"]
-        out["+".join(effects) or "plain"] = {
-            "speed": model.library.speed, "turns": turns,
+        out[key] = {
+            "library": model.library.name, "speed": model.library.speed, "turns": turns,
             "refined": done["largest_change"] is not None,
             "stopped": done["stopped"]}
     return out
@@ -367,14 +368,14 @@ def _marin_default_text(m: dict) -> str:
                           f"{miss['speed_loss']:.2f}")
         return " and ".join(parts)
 
-    plain, crossflow = default["plain"], default["crossflow"]
-    kept = ("" if plain["refined"] else
-            f" Its refinement by the zig-zags' flights is refused: {plain['stopped']}.")
+    chosen, polynomial = default["default"], default["abkowitz-vr"]
+    kept = ("" if chosen["refined"] else
+            f" Its refinement by the zig-zags' flights is refused: {chosen['stopped']}.")
     return (" The default fit (`sindyship fit --derivative savgol --window 21`: the prior on "
-            f"`abkowitz-vr` with forces scaled by the {plain['speed']} speed, the form the "
-            f"`kvlcc2` ship file names) flies, as advance / tactical diameter in ship lengths / "
-            f"speed loss, {turns(plain)}.{kept} With `--effects crossflow` it flies "
-            f"{turns(crossflow)}.")
+            f"`{chosen['library']}`, the recommended library in the {chosen['speed']} speed "
+            "form the `kvlcc2` ship file names, with cross-flow drag) flies, as advance / tactical "
+            f"diameter in ship lengths / speed loss, {turns(chosen)}.{kept} Without the "
+            f"cross-flow drag (`--library abkowitz-vr`) it flies {turns(polynomial)}.")
 
 
 def _kvlcc2_table(n: dict) -> str:
@@ -520,6 +521,11 @@ def _campaign(n: dict) -> str:
 
     alone = ", ".join(f"{flights('default + ' + e)} with `{e}` alone" for e in result["named"]
                       if f"default + {e}" in work)
+    named = result["named"]
+    steps = [f"default + {' + '.join(named[:k])}" for k in range(2, len(named))]
+    cumulative = "".join(
+        f"{flights(step)} with " + " and ".join(f"`{e}`" for e in named[:k]) + ", "
+        for k, step in enumerate(steps, start=2) if step in work)
     recommended = work[result["recommended"]]
     low, high = result["speed"]["range"]
     text = (f"`benchmarks/bench_campaign.py` flies a campaign like that in the simulator "
@@ -531,8 +537,12 @@ def _campaign(n: dict) -> str:
             f"recommends the {result['speed']['recommended']} speed form and adds "
             + ", ".join(f"`{e}`" for e in result["named"])
             + f". Held out ({' / '.join(names)}), the default fit flies {flights('default')} "
-            f"ship lengths without an effect, {alone}, and {flights(result['recommended'])} "
-            f"with all of them (geometric mean {recommended['geometric_mean_L']:.3f} L).")
+            f"ship lengths without an effect, {alone}; added in the order named, "
+            f"{cumulative}and {flights(result['recommended'])} with all of them (geometric "
+            f"mean {recommended['geometric_mean_L']:.3f} L). An effect added alone can lose "
+            "the turns: the library's other terms, the cross-flow drag of the default library "
+            "among them, absorb the effects still missing (the campaign's hull is the MMG's "
+            "cubic polynomial, with no cross-flow drag for those terms to model).")
     if "default before" in work:
         text += (f" On the same files the default `fit` and `evaluate` of commit "
                  f"{result['against_commit']} (least squares on the paper's library) fly "

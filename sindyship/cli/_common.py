@@ -209,7 +209,9 @@ def add_identification(p, *, optimizer: bool = True, recommended: bool = False) 
     if recommended:
         p.add_argument("--library", default=None, metavar="NAME|FILE",
                        help=f"term library name or TOML file (default: {PRIOR_LIBRARY} with "
-                       f"--optimizer prior, the paper's {DEFAULT_LIBRARY} with the others)")
+                       f"--optimizer prior, {PRIOR_LIBRARY}-crossflow (with cross-flow drag) "
+                       "in the instantaneous speed form; the paper's "
+                       f"{DEFAULT_LIBRARY} with the others)")
     else:
         p.add_argument("--library", default=DEFAULT_LIBRARY, metavar="NAME|FILE",
                        help=f"term library name or TOML file (default: {DEFAULT_LIBRARY})")
@@ -240,11 +242,16 @@ def add_identification(p, *, optimizer: bool = True, recommended: bool = False) 
                    "savgol; default 21)")
 
 
-def resolved_library(args) -> str:
-    """The library ``--library`` names, or its default for the optimizer."""
+def resolved_library(args, speed: str = "design") -> str:
+    """The library ``--library`` names, or its default for the optimizer and the speed form
+    (:func:`sindyship.identify.recommended_library` for ``prior``)."""
     if args.library is not None:
         return args.library
-    return PRIOR_LIBRARY if getattr(args, "optimizer", "ls") == "prior" else DEFAULT_LIBRARY
+    if getattr(args, "optimizer", "ls") == "prior":
+        from ..identify import recommended_library
+
+        return recommended_library(speed)
+    return DEFAULT_LIBRARY
 
 
 def speed_form(args, ship) -> str:

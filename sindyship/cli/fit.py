@@ -100,14 +100,14 @@ def optimizer_params(args) -> dict:
 
 def fit_inputs(args) -> list[str]:
     """Every file ``fit`` or ``diagnose`` reads: records, ship, library and effect files."""
-    return [*args.data, *getattr(args, "test", []), *ship_file(args.ship), args.library,
+    library = [] if args.library is None else [args.library]  # None: a built-in default
+    return [*args.data, *getattr(args, "test", []), *ship_file(args.ship), *library,
             *split_names(args.effects)]
 
 
 def _defaults(args) -> None:
-    """The options whose default depends on others: the library (``abkowitz-vr`` for the
-    prior fit) and the refinement (on for the prior fit)."""
-    args.library = resolved_library(args)
+    """The options whose default depends on others: the refinement (on for the prior fit);
+    the library's (:func:`resolved_library`) needs the ship's speed form."""
     if args.refine is None:
         from ..refine import MAX_EVALUATIONS
 
@@ -134,6 +134,7 @@ def run(args) -> int:
     check_inputs(fit_inputs(args))
     ship = load_cli_ship(args.ship)
     speed = speed_form(args, ship)
+    args.library = resolved_library(args, speed)
     if args.stream or args.scheduler:
         return _run_streamed(args, ship, params, speed)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,

@@ -128,7 +128,7 @@ def search_delay(records, ship, library, channel, e0, settings, problems, n_jobs
     taus = np.array(sorted(tried))
     sse = {dof: np.array([np.bincount(groups, tried[t][1][dof] ** 2) for t in taus])
            for dof in DOFS}
-    return best, tried[best][1], curve, delay_interval(taus, sse)
+    return best, tried[best][1], curve, delay_interval(taus, sse, estimate=best)
 
 
 def best_delay(taus: np.ndarray, costs: np.ndarray) -> float:
@@ -146,7 +146,8 @@ def best_delay(taus: np.ndarray, costs: np.ndarray) -> float:
 
 
 def delay_interval(taus: np.ndarray, sse: Mapping[str, np.ndarray], *,
-                   n_boot: int = BOOTSTRAP, level: float = 0.95) -> tuple[float, float]:
+                   n_boot: int = BOOTSTRAP, level: float = 0.95,
+                   estimate: float | None = None) -> tuple[float, float]:
     """The interval of a delay estimate when the manoeuvres are resampled.
 
     The records are drawn with replacement (``numpy.random.default_rng(0)``); each draw
@@ -154,6 +155,9 @@ def delay_interval(taus: np.ndarray, sse: Mapping[str, np.ndarray], *,
     and takes the least of the resampled cost (relative squared error averaged over X, Y
     and N, as the search) with a parabola through its neighbours.  The fits are not
     repeated: the interval says how far the records agree on the delay the grid resolves.
+    The search refits at its parabola's vertex, which the resampled rule cannot; given that
+    ``estimate``, the interval is moved by its difference from the same rule on every record
+    once, so that both rules' intervals are about the estimate the search reports.
 
     Parameters
     ----------
@@ -166,6 +170,8 @@ def delay_interval(taus: np.ndarray, sse: Mapping[str, np.ndarray], *,
         Resamples.
     level : float
         Coverage of the interval.
+    estimate : float, optional
+        The delay the search reports (default: the resampled rule on every record once).
 
     Returns
     -------
@@ -182,15 +188,18 @@ def delay_interval(taus: np.ndarray, sse: Mapping[str, np.ndarray], *,
     """
     zero = int(np.argmin(np.abs(taus)))
     n_records = next(iter(sse.values())).shape[1]
-    rng = np.random.default_rng(0)
-    best = np.empty(n_boot)
-    for b in range(n_boot):
-        weights = np.bincount(rng.integers(0, n_records, n_records), minlength=n_records)
+
+    def resampled_best(weights):
         costs = np.zeros(len(taus))
         for table in sse.values():
             total = table @ weights
             costs += total / (total[zero] or 1.0)
-        best[b] = best_delay(taus, costs / len(sse))
+        return best_delay(taus, costs / len(sse))
+
+    rng = np.random.default_rng(0)
+    best = np.array([resampled_best(np.bincount(rng.integers(0, n_records, n_records),
+                                                minlength=n_records)) for _ in range(n_boot)])
+    shift = 0.0 if estimate is None else estimate - resampled_best(np.ones(n_records))
     tail = 100 * (1 - level) / 2
-    low, high = np.percentile(best, [tail, 100 - tail])
+    low, high = np.percentile(best, [tail, 100 - tail]) + shift
     return float(low), float(high)

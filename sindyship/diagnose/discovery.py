@@ -27,6 +27,14 @@ equations where the gain holds when the manoeuvres are resampled; it is meaningf
 only when its gain is significant in at least two equations (:data:`MIN_EQUATIONS`). The best
 meaningful finding becomes an effect file in the catalogue's format
 (:meth:`Discovery.effect_toml`) that ``fit --effects`` and ``diagnose --effects`` take.
+
+A catalogued effect that is meaningful on the same records competes with it: a family can stand
+in for a missing catalogued effect (position terms for an asymmetry), and a catalogued effect
+for a family.  Shares of the residual do not say which flies better, so flights decide
+(:func:`sindyship.diagnose.contest.flight_contest`): both extensions are fitted leaving one
+manoeuvre out and fly the manoeuvre left out; the finding is accepted only when it flies
+better than the most explaining meaningful catalogued effect, and the report gives both
+numbers.
 """
 
 from __future__ import annotations
@@ -47,6 +55,7 @@ from ..smoothing import resolve_smoothing, smooth_records
 from ..trajectory import Trajectory
 from ._constants import MEANINGFUL_SHARE
 from .candidates import Family, families, family_columns, unnamed_channels
+from .contest import FlightContest, flight_contest
 from .delays import lomo_errors, search_delay
 from .noise import noise_sse
 from .ranking import rank_effects
@@ -143,12 +152,17 @@ class Discovery:
     seconds : float
     catalogue : dict of str to float
         Catalogued effects that are meaningful on these records, with the share they explain:
-        a finding is accepted only when it explains more than every one of them (else a
-        family could be standing in for a catalogued effect that is missing).
+        the most explaining one competes with each round's best finding in flights
+        (``contests``), else a family could be standing in for a catalogued effect that is
+        missing.
     smoothing : dict or None
         The smoothing applied to the records (:meth:`SmoothingSetting.as_dict`).
     unnamed_channels : list of str
         Recorded columns left out of the search because no term can name them.
+    contests : list of FlightContest
+        Each round's best meaningful finding against the catalogued effect, flown
+        (:func:`sindyship.diagnose.contest.flight_contest`); the round's finding is accepted
+        only when it won.
     """
 
     library: TermLibrary
@@ -161,6 +175,7 @@ class Discovery:
     catalogue: dict[str, float] = field(default_factory=dict)
     smoothing: dict | None = None
     unnamed_channels: list[str] = field(default_factory=list)
+    contests: list[FlightContest] = field(default_factory=list)
 
     @property
     def findings(self) -> list[Finding]:
@@ -235,7 +250,8 @@ class Discovery:
             "accepted": [f.to_json() for f in self.accepted],
             "rounds": [[f.to_json() for f in found] for found in self.rounds],
             "catalogue_meaningful": self.catalogue, "smoothing": self.smoothing,
-            "unnamed_channels": self.unnamed_channels, "seconds": self.seconds,
+            "unnamed_channels": self.unnamed_channels,
+            "contests": [c.to_json() for c in self.contests], "seconds": self.seconds,
         })
 
 
@@ -398,8 +414,10 @@ def discover(
         Search again with each meaningful finding added, up to this many rounds: an effect
         can need a delay and terms (every accepted finding goes into the effect file).
     check_catalogue : bool
-        Score the catalogue first: a finding is accepted only when it explains more than every
-        catalogued effect that is meaningful on the records (a family can stand in for a
+        Score the catalogue first: when a catalogued effect is meaningful on the records, the
+        best finding is accepted only when, fitted leaving one manoeuvre out, it flies the
+        manoeuvres left out better than the most explaining such effect does
+        (:func:`sindyship.diagnose.contest.flight_contest`; a family can stand in for a
         missing catalogued effect: position terms for an asymmetry, say).
         :func:`sindyship.diagnose.diagnose` searches only when none is meaningful.
     n_jobs : int or None
@@ -439,27 +457,35 @@ def discover(
     base = base.extended(*added) if added else base
     setting = resolve_smoothing(smoothing, records, ship, library=base,
                                 rudder_signal=rudder_signal)
+    measured = records
     if setting is not None:
         records = smooth_records(records, setting)
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
     catalogue = (_meaningful_catalogue(records, ship, base, threshold, settings)
                  if check_catalogue else {})
-    rounds, accepted, library_now = [], [], base
-    catalogued_best = max(catalogue.values(), default=0.0)
+    stand_in = max(catalogue, key=catalogue.get) if catalogue else None
+    rounds, accepted, contests, library_now = [], [], [], base
     for _ in range(max(int(max_rounds), 1)):
         findings, floor = _search(records, ship, library_now, settings, threshold, n_jobs)
         rounds.append(findings)
         if len(rounds) == 1:
             first_floor = floor
-        best = next((f for f in findings if f.meaningful
-                     and f.explained_signal > catalogued_best), None)
+        best = next((f for f in findings if f.meaningful), None)
         if best is None:
             break
+        effect = _as_effect(best, len(accepted) + 1)
+        if stand_in is not None:
+            contests.append(flight_contest(records, measured, ship, library_now,
+                                           (best.family, effect), load_effect(stand_in),
+                                           settings))
+            if contests[-1].winner != "finding":
+                break
         accepted.append(best)
-        library_now = library_now.extended(_as_effect(best, len(accepted)))
+        library_now = library_now.extended(effect)
     return Discovery(base, [r.name for r in records], rounds, accepted, first_floor, threshold,
                      time.perf_counter() - start, catalogue,
-                     None if setting is None else setting.as_dict(), unnamed_channels(records))
+                     None if setting is None else setting.as_dict(), unnamed_channels(records),
+                     contests)
 
 
 def _meaningful_catalogue(records, ship, library, threshold, settings) -> dict[str, float]:
