@@ -47,6 +47,12 @@ command's ``--effect NAME=VALUE`` option:
     A straight bank along north, ``bank_distance`` ship lengths east of the start (negative:
     west), that pulls the ship toward it with an earth-fixed force of ``bank`` (Prime II) times
     (L / distance)^2, acting a quarter length aft of midship.
+``shallow_patch``, ``patch_distance``, ``patch_dir``
+    Shallow water beyond a straight edge ``patch_distance`` ship lengths from the start toward
+    ``patch_dir`` [deg, clockwise from north]: the linear hull derivatives are
+    ``1 + shallow_patch`` times their deep-water values there (a smooth step half a ship
+    length wide; :class:`sindyship.mmg.MMGModel`), and no depth is recorded.  A negative
+    ``patch_distance`` puts the edge behind the start, which is then on the patch.
 ``noise``
     Gaussian measurement noise with a standard deviation of ``noise`` times each channel's RMS
     for u, v, r and delta (positions and heading get their own levels through
@@ -109,12 +115,16 @@ class Effects:
     rudder_stall: float = 0.0
     bank: float = 0.0
     bank_distance: float = 5.0
+    shallow_patch: float = 0.0
+    patch_distance: float = 5.0
+    patch_dir: float = 0.0
     seed: int = 0
 
     def active(self) -> list[str]:
         """Names of the effects switched on."""
         main = ("load", "current", "crossflow", "prop_side_force", "rudder_offset", "noise",
-                "quantise", "wind", "rps_step", "rps_vary", "rudder_lag", "rudder_stall", "bank")
+                "quantise", "wind", "rps_step", "rps_vary", "rudder_lag", "rudder_stall", "bank",
+                "shallow_patch")
         return [name for name in main if getattr(self, name)] + (
             ["rps"] if self.rps != 1.0 else [])
 
@@ -155,9 +165,11 @@ class Effects:
             current = (self.current * math.cos(to), self.current * math.sin(to))
         stall = math.radians(self.rudder_stall) if self.rudder_stall else None
         bank = (self.bank_distance * ship.L, self.bank) if self.bank else None
+        patch = ((self.patch_distance * ship.L, math.radians(self.patch_dir),
+                  self.shallow_patch) if self.shallow_patch else None)
         return MMGModel(ship, extra_forces=tuple(extra),
                         rudder_offset=math.radians(self.rudder_offset), current=current,
-                        conditions=conditions, stall=stall, bank=bank)
+                        conditions=conditions, stall=stall, bank=bank, patch=patch)
 
     def record(self, trajectory: Trajectory, ship: Ship,
                conditions: Mapping[str, np.ndarray] | None = None) -> Trajectory:
@@ -215,6 +227,10 @@ EFFECT_RANGES = {
     "rudder_stall": (0.0, 45.0, "deg of effective angle of attack, 0 for none"),
     "bank": (0.0, 0.05, "Prime II force at one ship length from the bank"),
     "bank_distance": (-100.0, 100.0, "ship lengths east of the start, not 0"),
+    "shallow_patch": (0.0, 2.0, "relative increase of the linear hull derivatives on the "
+                      "patch, 0.5-1 where the depth is a little more than the draught"),
+    "patch_distance": (-100.0, 100.0, "ship lengths from the start to the patch's edge"),
+    "patch_dir": (-360.0, 360.0, "deg, clockwise from north, from the start across the edge"),
     "seed": (0, 2**63 - 1, "a whole number"),
 }
 

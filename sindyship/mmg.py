@@ -193,6 +193,27 @@ def _bank_force(ship: Ship, bank: tuple[float, float], y_east, psi) -> tuple:
     return east * np.sin(psi), Y, -0.25 * Y
 
 
+def patch_share(ship: Ship, patch: tuple[float, float, float], x_north, y_east):
+    """How far the ship is over a shallow patch (see :class:`MMGModel`): 0 in deep water, 1
+    on the patch, a smooth step of half a ship length across its edge."""
+    distance, direction, _ = patch
+    across = x_north * np.cos(direction) + y_east * np.sin(direction) - distance
+    return 0.5 * (1.0 + np.tanh(across / (0.5 * ship.L)))
+
+
+def _patch_force(ship: Ship, increase, u, v, r) -> tuple:
+    """The linear hull forces (paper eq. 3, or the standard form) times ``increase``, Prime II
+    with U0 (u, v, r non-dimensional with U0)."""
+    hull = ship.hull
+    if ship.hull_form == "beta":
+        beta = np.arctan2(-v, u)
+        return (0.0 * u, increase * (hull["Y_b"] * beta + hull["Y_r_minus_mx"] * r),
+                increase * (hull["N_b"] * beta + hull["N_r"] * r))
+    U = np.sqrt(u * u + v * v)
+    return (0.0 * u, increase * U * (hull["Y_v"] * v + hull["Y_r"] * r),
+            increase * U * (hull["N_v"] * v + hull["N_r"] * r))
+
+
 def mass_matrix(ship: Ship) -> np.ndarray:
     """Prime II mass matrix of paper eq. 1 (rigid body plus added mass, about midship)."""
     m = ship.mass
@@ -226,6 +247,13 @@ class MMGModel:
         the ship toward it with an earth-fixed force ``strength (L / d)^2`` (Prime II, d the
         distance to the bank), acting a quarter length aft of midship (bank suction on the
         stern turns the bow away).  The integrator then passes the ship's position.
+    patch : tuple of float, optional
+        ``(distance, direction, increase)``: shallow water beyond a straight edge ``distance``
+        [m] from the origin along ``direction`` [rad, clockwise from north], where the linear
+        hull derivatives (Y'_v, Y'_r, N'_v, N'_r, or the beta form's Y'_b, Y'_r - m'_x, N'_b,
+        N'_r) are ``1 + increase`` times their deep-water values (a smooth step half a ship
+        length wide, :func:`patch_share`); no depth is recorded.  The integrator then passes
+        the ship's position.
     conditions : ChannelSeries, optional
         Conditions that vary in time, one row per flight of a batch, SI as the measurement CSV
         names them: ``n`` [rps] replaces the constant revolutions ``n_P``; ``wind_speed`` [m/s]
@@ -236,14 +264,15 @@ class MMGModel:
     -----
     With numba installed (``pip install "sindyship[fast]"``), :meth:`accelerations` and
     :meth:`switching` of the plain model -- no ``extra_forces``, no ``conditions``, no
-    ``bank`` -- run a compiled copy of eq. 1-11 (:mod:`sindyship._mmg_compiled`): both hull
-    forms, speed references, Coriolis forms and wake models, ``rudder_offset``, ``stall``,
-    ``current`` and a given or free ``branch``, on float64 (or integer) numbers and numpy
-    arrays.  It agrees with the numpy functions of this module to rounding
-    (``tests/test_mmg_compiled.py``).  Other models and inputs (pandas, sympy, float32), and every
-    model built while the environment variable ``SINDYSHIP_NO_COMPILE`` is ``1``, run the
-    numpy functions.  numba is imported at the first compiled call, which also loads the
-    machine code from numba's cache or, once per installation, compiles it.
+    ``bank`` or ``patch`` -- run a compiled copy of eq. 1-11
+    (:mod:`sindyship._mmg_compiled`): both hull forms, speed references, Coriolis forms and
+    wake models, ``rudder_offset``, ``stall``, ``current`` and a given or free ``branch``, on
+    float64 (or integer) numbers and numpy arrays.  It agrees with the numpy functions of
+    this module to rounding (``tests/test_mmg_compiled.py``).  Other models and inputs
+    (pandas, sympy, float32), and every model built while the environment variable
+    ``SINDYSHIP_NO_COMPILE`` is ``1``, run the numpy functions.  numba is imported at the
+    first compiled call, which also loads the machine code from numba's cache or, once per
+    installation, compiles it.
 
     Examples
     --------
@@ -261,6 +290,7 @@ class MMGModel:
     conditions: ChannelSeries | None = None
     stall: float | None = None
     bank: tuple[float, float] | None = None
+    patch: tuple[float, float, float] | None = None
 
     def __post_init__(self):
         ship = self.ship
@@ -274,7 +304,8 @@ class MMGModel:
         object.__setattr__(self, "_scaled_inverse_mass",
                            scale * np.linalg.inv(mass_matrix(ship)))
         # the compiled accelerations (see Notes): their parameter vector, made at the first call
-        plain = not self.extra_forces and self.conditions is None and self.bank is None
+        plain = (not self.extra_forces and self.conditions is None and self.bank is None
+                 and self.patch is None)
         refused = os.environ.get("SINDYSHIP_NO_COMPILE") == "1"
         object.__setattr__(self, "_compile", plain and not refused)
         object.__setattr__(self, "_compiled_parameters", None)
@@ -292,8 +323,8 @@ class MMGModel:
 
     @property
     def uses_position(self) -> bool:
-        """Whether the forces depend on the ship's position (a bank)."""
-        return self.bank is not None
+        """Whether the forces depend on the ship's position (a bank, a shallow patch)."""
+        return self.bank is not None or self.patch is not None
 
     @property
     def time_varying(self) -> bool:
@@ -305,7 +336,7 @@ class MMGModel:
         """Force breakdown (Prime II) at SI state values; ``"effects"`` holds extra forces.
 
         ``now`` holds the conditions at this time (:attr:`conditions`), SI arrays by name;
-        ``position`` the ship's (x, y) [m] for a bank."""
+        ``position`` the ship's (x, y) [m] for a bank or a shallow patch."""
         ship = self.ship
         U0 = ship.U0
         now = now or {}
@@ -316,6 +347,9 @@ class MMGModel:
         if self.bank is not None and position is not None:
             y_east = position[1]
             extra.append(lambda u_, v_, r_, d_, psi_: _bank_force(ship, self.bank, y_east, psi_))
+        if self.patch is not None and position is not None:
+            increase = self.patch[2] * patch_share(ship, self.patch, position[0], position[1])
+            extra.append(lambda u_, v_, r_, d_, psi_: _patch_force(ship, increase, u_, v_, r_))
         if "wind_speed" in now:
             speed, come_from = now["wind_speed"], now["wind_dir"]
             extra.append(lambda u_, v_, r_, d_, psi_: wind_force(ship, u_, v_, psi_, speed,

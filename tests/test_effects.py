@@ -117,3 +117,41 @@ def test_a_bank_to_the_west_turns_the_bow_away_from_it(kcs, calm):
     assert near["y"][-1] > calm["straight"]["y"][-1] + 10.0
     with pytest.raises(SindyshipInputError, match="within one ship length"):
         parse_effects(["bank=0.005", "bank_distance=0.5"])
+
+
+def test_a_shallow_patch_raises_the_linear_hull_forces_beyond_its_edge(kcs):
+    """Forces: beyond the edge the linear hull derivatives are (1 + increase) times their
+    deep-water values; far from it nothing changes, and on the edge half the increase."""
+    from sindyship.mmg import MMGModel, patch_share
+
+    patch = (2.0 * kcs.L, np.radians(90.0), 0.8)  # shallow east of y = 2 L
+    plain, shallow = MMGModel(kcs), MMGModel(kcs, patch=patch)
+    state = (0.95 * kcs.U0, -0.3, 0.004, np.radians(10.0), 0.3)
+    deep = shallow.forces(*state, position=(0.0, -10.0 * kcs.L))
+    assert deep["effects"] == pytest.approx((0.0, 0.0, 0.0), abs=1e-12)
+    beyond = shallow.forces(*state, position=(0.0, 10.0 * kcs.L))
+    u, v, r = state[0] / kcs.U0, state[1] / kcs.U0, state[2] * kcs.L / kcs.U0
+    beta, hull = np.arctan2(-v, u), kcs.hull
+    assert beyond["effects"] == pytest.approx(
+        (0.0, 0.8 * (hull["Y_b"] * beta + hull["Y_r_minus_mx"] * r),
+         0.8 * (hull["N_b"] * beta + hull["N_r"] * r)), rel=1e-9)
+    assert beyond["hull"] == pytest.approx(plain.forces(*state)["hull"], rel=1e-12)
+    assert patch_share(kcs, patch, 0.0, 2.0 * kcs.L) == pytest.approx(0.5)
+    assert shallow.uses_position and not plain.uses_position
+
+
+def test_a_shallow_patch_changes_a_turn_only_once_the_ship_reaches_it(kcs, calm):
+    """A 20 deg turn to starboard heads east: with shallow water beyond 1.5 L east of the
+    start the track agrees with the calm one until the ship nears the edge, then the stiffer
+    hull turns it wider; a patch 100 L away changes nothing."""
+    far = run(kcs, ["shallow_patch=0.8", "patch_distance=100"], TURN)
+    np.testing.assert_allclose(far["y"], calm["turn"]["y"], atol=1e-6)
+    near = run(kcs, ["shallow_patch=0.8", "patch_distance=1.5", "patch_dir=90"], TURN)
+    y_calm = calm["turn"]["y"]
+    before = y_calm < 0.5 * kcs.L  # more than a ship length short of the edge
+    first = int(np.argmin(before))
+    np.testing.assert_allclose(near["y"][:first], y_calm[:first], atol=0.05 * kcs.L)
+    assert np.ptp(near["x"]) > np.ptp(calm["turn"]["x"]) + 0.1 * kcs.L
+    assert parse_effects(["shallow_patch=0.8"]).active() == ["shallow_patch"]
+    with pytest.raises(SindyshipInputError, match="shallow_patch"):
+        parse_effects(["shallow_patch=3"])

@@ -70,7 +70,9 @@ def add_parser(sub) -> None:
                    "record], rps_vary [fraction of the design revolutions], rudder_lag [s the "
                    "recorded rudder is late], rudder_stall [deg of angle of attack], bank "
                    "[Prime II force at one length], bank_distance [ship lengths east, negative "
-                   "west]; ranges: " + ", ".join(
+                   "west], shallow_patch [relative increase of the linear hull derivatives "
+                   "beyond an edge], patch_distance [ship lengths from the start to the edge], "
+                   "patch_dir [deg, clockwise from north, across the edge]; ranges: " + ", ".join(
                        f"{name} {low:g} to {high:g}" for name, (low, high, _)
                        in EFFECT_RANGES.items() if name != "seed"))
     p.add_argument("--out", required=True, metavar="FILE|DIR",
