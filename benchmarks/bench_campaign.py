@@ -10,7 +10,10 @@ Every workflow runs as a user would run it, through the command line on the reco
 files: ``sindyship diagnose`` on the training records (which effects it names), then
 ``sindyship fit`` with its defaults, with each named effect alone and with the named effects
 added one by one in the order named (the last: all of them), each flown on the held-out
-records by ``sindyship evaluate --json``.  With ``--against CHECKOUT``, the same
+records by ``sindyship evaluate --json``; and on the library ``abkowitz-vr`` (``--library
+abkowitz-vr``: without the cross-flow drag the default library of the instantaneous form
+adds) without an effect, with the first named effect and with all of them.  With
+``--against CHECKOUT``, the same
 ``fit`` (its defaults) and ``evaluate`` of another checkout of sindyship run on the same files
 in the same run (``default before``).  The score of a workflow is the geometric mean of the held-out
 mean distances in ship lengths; a diverged flight is listed as such and makes the workflow
@@ -118,6 +121,12 @@ def run(against: Path | None) -> dict:
         for k in range(2, len(named) + 1):  # the named effects added in the order named
             workflows[f"default + {' + '.join(named[:k])}"] = workflow(
                 ROOT, paths, folder, f"named{k}", ["--effects", ",".join(named[:k])])
+        # the same without the cross-flow drag of the instantaneous form's default library
+        polynomial = ["--library", "abkowitz-vr"]
+        workflows["abkowitz-vr"] = workflow(ROOT, paths, folder, "vr", polynomial)
+        for k in sorted({1, len(named)}) if named else ():
+            workflows[f"abkowitz-vr + {' + '.join(named[:k])}"] = workflow(
+                ROOT, paths, folder, f"vr{k}", [*polynomial, "--effects", ",".join(named[:k])])
         if against is not None:
             workflows["default before"] = workflow(against.resolve(), paths, folder, "before",
                                                    [])

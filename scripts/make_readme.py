@@ -362,10 +362,10 @@ def _marin_default_text(m: dict) -> str:
                          f"(measured {truth['advance_L']:.2f} / "
                          f"{truth['tactical_diameter_L']:.2f} / {truth['speed_loss']:.2f})")
         miss = marin_misses(variant, measured)
-        if miss["figures"] is not None:
+        if miss["figures"] is not None:  # bounds rounded up, so that they hold
             parts[-1] += (f": advance and tactical diameter within "
-                          f"{100 * miss['figures']:.0f} %, speed loss within "
-                          f"{miss['speed_loss']:.2f}")
+                          f"{math.ceil(100 * miss['figures']):.0f} %, speed loss within "
+                          f"{math.ceil(100 * miss['speed_loss']) / 100:.2f}")
         return " and ".join(parts)
 
     chosen, polynomial = default["default"], default["abkowitz-vr"]
@@ -515,18 +515,14 @@ def _campaign(n: dict) -> str:
         return "(run benchmarks/bench_campaign.py)"
     work = result["workflows"]
     names = list(work["default"]["errors"])
+    named = result["named"]
 
     def flights(key):
         return " / ".join(_cell(e) for e in work[key]["errors"].values())
 
-    alone = ", ".join(f"{flights('default + ' + e)} with `{e}` alone" for e in result["named"]
-                      if f"default + {e}" in work)
-    named = result["named"]
-    steps = [f"default + {' + '.join(named[:k])}" for k in range(2, len(named))]
-    cumulative = "".join(
-        f"{flights(step)} with " + " and ".join(f"`{e}`" for e in named[:k]) + ", "
-        for k, step in enumerate(steps, start=2) if step in work)
-    recommended = work[result["recommended"]]
+    def listed(effects):
+        return " and ".join(f"`{e}`" for e in effects)
+
     low, high = result["speed"]["range"]
     text = (f"`benchmarks/bench_campaign.py` flies a campaign like that in the simulator "
             "(`sindyship.campaign`): the KVLCC2 model from rest, 120-180 s of course keeping by "
@@ -535,14 +531,33 @@ def _campaign(n: dict) -> str:
             "zig-zags and 35 deg turns to both sides, held out a 15/15 zig-zag and 25 deg "
             f"turns. Its speed runs from {low:.2f} to {high:.2f} U0, and `diagnose --rounds 3` "
             f"recommends the {result['speed']['recommended']} speed form and adds "
-            + ", ".join(f"`{e}`" for e in result["named"])
+            + (", ".join(f"`{e}`" for e in named) or "nothing")
             + f". Held out ({' / '.join(names)}), the default fit flies {flights('default')} "
-            f"ship lengths without an effect, {alone}; added in the order named, "
-            f"{cumulative}and {flights(result['recommended'])} with all of them (geometric "
-            f"mean {recommended['geometric_mean_L']:.3f} L). An effect added alone can lose "
-            "the turns: the library's other terms, the cross-flow drag of the default library "
-            "among them, absorb the effects still missing (the campaign's hull is the MMG's "
-            "cubic polynomial, with no cross-flow drag for those terms to model).")
+            "ship lengths without an effect")
+    if named:
+        alone = [f"{flights('default + ' + e)} with `{e}` alone" for e in named
+                 if f"default + {e}" in work]
+        steps = []
+        for k in range(2, len(named)):  # the named effects added one by one
+            key = "default + " + " + ".join(named[:k])
+            if key in work:
+                steps.append(f"{flights(key)} with {listed(named[:k])}")
+        recommended = work[result["recommended"]]
+        text += (", " + ", ".join(alone) + ("; added in the order named, " + ", ".join(steps)
+                                           if steps else "")
+                 + f", and {flights(result['recommended'])} with all of them (geometric mean "
+                 f"{recommended['geometric_mean_L']:.3f} L).")
+        first, everything = f"abkowitz-vr + {named[0]}", f"abkowitz-vr + {' + '.join(named)}"
+        if {"abkowitz-vr", first, everything} <= set(work):
+            text += (" An effect added alone can lose the turns to the cross-flow drag of the "
+                     "default library, whose terms then absorb the effects still missing (the "
+                     "campaign's hull is the MMG's cubic polynomial, with no cross-flow drag for "
+                     "them to model): without it (`--library abkowitz-vr`) the default fit "
+                     f"flies {flights('abkowitz-vr')} without an effect, {flights(first)} with "
+                     f"`{named[0]}` alone and {flights(everything)} with all of them "
+                     f"(geometric mean {work[everything]['geometric_mean_L']:.3f} L).")
+    else:
+        text += "."
     if "default before" in work:
         text += (f" On the same files the default `fit` and `evaluate` of commit "
                  f"{result['against_commit']} (least squares on the paper's library) fly "

@@ -24,6 +24,7 @@ from .library import (
     record_variables,
 )
 from .model import AbkowitzModel
+from .priors import COMPLETE_LIBRARY
 from .ships import Ship
 from .targets import DOFS, regression_targets
 from .trajectory import Trajectory
@@ -242,17 +243,34 @@ def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
 #: ``--library``) in each speed form: the paper's terms with the surge term ``v r``, and in the
 #: instantaneous form also quadratic cross-flow drag, which a ship that slows in a turn
 #: reaches far beyond the drift angles and yaw rates its records span.
-RECOMMENDED_LIBRARIES = {"design": "abkowitz-vr", "instantaneous": "abkowitz-vr-crossflow"}
+RECOMMENDED_LIBRARIES = {"design": COMPLETE_LIBRARY, "instantaneous": "abkowitz-vr-crossflow"}
 
 
 def recommended_library(speed: str = "design") -> str:
     """The name of the recommended fit's library in a speed form.
 
     In the design form (paper eq. 16, Prime I) the paper's terms and the surge term ``v r``
-    of the MMG hull model (``abkowitz-vr``); in the ``instantaneous`` form, where forces scale
-    with (U/U0)^2 and a turn that loses half its speed doubles its r' = r L/U, the same with
-    the cross-flow drag terms ``|v| v``, ``|r| r``, ``|v| r`` and ``v |r|`` in sway and yaw
-    (``abkowitz-vr-crossflow``), which extrapolate to large drift as the separated flow does.
+    of the MMG hull model (``abkowitz-vr``, every term the prior has an estimate for); in the
+    ``instantaneous`` form, where forces scale with (U/U0)^2 and a turn that loses half its
+    speed doubles its r' = r L/U, the same with the cross-flow drag terms ``|v| v``,
+    ``|r| r``, ``|v| r`` and ``v |r|`` in sway and yaw (``abkowitz-vr-crossflow``), which
+    extrapolate to large drift as the separated flow does (they have no semi-empirical
+    estimate and take the prior's weak pull toward zero).
+
+    Parameters
+    ----------
+    speed : {"design", "instantaneous"}
+        The library's speed form (:attr:`sindyship.library.TermLibrary.speed`).
+
+    Returns
+    -------
+    str
+        A built-in library name.
+
+    Raises
+    ------
+    SindyshipInputError
+        For another speed form.
 
     Examples
     --------

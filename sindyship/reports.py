@@ -486,12 +486,15 @@ def discovery_report(discovery, effect_file: str | None = None) -> str:
     lines = [f"Not in the catalogue: searched the residual of {discovery.library.name} on "
              f"{len(discovery.records)} records ({discovery.seconds:.1f} s{smoothing})."]
     named = ", ".join(f"{name} ({share:.0%})" for name, share in discovery.catalogue.items())
-    if discovery.catalogue:
+    if discovery.contests:
         lines.append(_fill(
             f"Catalogued effects meaningful here: {named}. A family below can stand in for "
-            "them and they for it, so the best finding competes with the first of them in "
-            "flights: each fitted leaving one manoeuvre out, flying the manoeuvre left out.",
+            "them and they for it, so the best finding competes with each in flights: each "
+            "fitted leaving one manoeuvre out, flying the manoeuvre left out.",
             indent="", subsequent=""))
+    elif discovery.catalogue:
+        lines.append(_fill(f"Catalogued effects meaningful here: {named}.", indent="",
+                           subsequent=""))
     for contest in discovery.contests:
         lines.append(_fill(contest.sentence(), indent="", subsequent=""))
     if discovery.unnamed_channels:
@@ -516,8 +519,12 @@ def discovery_report(discovery, effect_file: str | None = None) -> str:
                      + ("discovery:" if best.meaningful else "best candidate:"))
         lines += _finding_lines(1, best)
     if discovery.contests and not discovery.accepted:
-        lines.append(f"Nothing was discovered: {discovery.contests[0].catalogued} flies better "
-                     "than the best finding; add it (--effects) and search again.")
+        last = discovery.contests[-1]
+        why = ("flies better than" if last.winner == "catalogued" else
+               "flies as well as")
+        lines.append(_fill(f"Nothing was discovered: the catalogued {last.catalogued} {why} "
+                           "the best finding; add it (--effects) and search again.",
+                           indent="", subsequent=""))
     elif discovery.catalogue and not discovery.accepted:
         lines.append("Nothing was discovered: add the catalogued effects above and search "
                      "again.")

@@ -19,7 +19,7 @@ import pandas as pd
 from ._io import save_figure, write_text_atomic
 from .evaluation import distance_errors
 from .flights import fly_like_batch
-from .identify import design, fit, resolve_library
+from .identify import RECOMMENDED_LIBRARIES, design, fit, resolve_library
 from .manoeuvres import fly, protocol_manoeuvres
 from .mmg import MMGModel
 from .model import paper_model
@@ -30,7 +30,7 @@ from .ships import load_ship
 METHODS = ("ls", "stlsq", "lasso", "svr", "prior")
 #: The library of every method: the paper's, but the physics-consistent fit takes the surge
 #: term ``v r`` that its prior has an estimate of (:mod:`sindyship.priors`).
-METHOD_LIBRARIES = {"prior": "abkowitz-vr"}
+METHOD_LIBRARIES = {"prior": RECOMMENDED_LIBRARIES["design"]}
 #: The captive tests the models' forces are compared with (:func:`captive_agreement`).
 CAPTIVE_TESTS = ("static-drift", "rudder", "pure-yaw", "drift-yaw")
 TEST_NAMES = ("tc15_port", "tc15_stbd", "zz10_10")

@@ -182,3 +182,23 @@ def test_a_refinement_on_a_two_worker_cluster_equals_the_one_process_refinement(
     assert result["costs_apart"] <= 1e-8
     assert result["cost_after"]["one_process"] < 0.1 * result["cost_before"]  # it refined
     assert result["one_process_s"] > 0 and result["cluster_s"] > 0
+
+
+def test_discovery_finds_the_lags_never_invents_and_lets_flights_decide_the_bank():
+    """benchmarks/bench_discover.py: lags of 2, 4 and 6 s named within a second, no finding
+    in the 20 clean cases, discover on the protocol under 10 s; at the bank the heading
+    family and the catalogued environment both explain the residual, and the environment
+    flies every left-out manoeuvre better, so nothing is accepted."""
+    result = _load("discover.json")
+    for case in result["lag"]:
+        assert case["discovered"] == ["delay:delta"]
+        assert case["delay_s"] == pytest.approx(case["lag_s"], abs=1.0)
+    cases = result["false_alarms"]["cases"]
+    assert len(cases) == 20 and all(case["discovered"] == [] for case in cases)
+    assert result["seconds_protocol"] < 10.0
+    bank = next(case for case in result["outside"] if case["effect"] == "bank")
+    (contest,) = bank["contests"]
+    assert contest["catalogued"] == "environment" and contest["winner"] == "catalogued"
+    assert contest["catalogued_L"] < contest["finding_L"]
+    assert len(contest["catalogued_better"]) > len(contest["finding_better"])
+    assert bank["discovered"] == []

@@ -208,8 +208,11 @@ def test_fit_default_library_follows_the_speed_form(records, tmp_path, capsys):
                          "design": ("abkowitz-vr", "design"),
                          "given": ("abkowitz-vr", "instantaneous")}
     saved = json.loads((tmp_path / "instantaneous.json").read_text())
-    active = {t for t, c in saved["coefficients"]["N"].items() if c != 0.0}
-    assert {"abs(v) v", "abs(r) r", "abs(v) r", "v abs(r)"} <= active
+    crossflow = {"abs(v) v", "abs(r) r", "abs(v) r", "v abs(r)"}
+    assert crossflow <= set(saved["coefficients"]["N"]) and crossflow <= set(
+        saved["coefficients"]["Y"])
+    design = json.loads((tmp_path / "design.json").read_text())
+    assert not crossflow & set(design["coefficients"]["N"])
 
 
 def test_fit_refine_flies_the_records_and_says_what_it_did(records, tmp_path, capsys):

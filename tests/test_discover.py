@@ -278,8 +278,34 @@ def test_the_catalogue_comes_first(kcs):
     report = " ".join(found.report().split())
     assert f"the catalogued asymmetry {contest.catalogued_L:.3g} L" in report
     assert f"{contest.finding_L:.3g} L" in report
-    assert "Nothing was discovered: asymmetry flies better than the best finding" in report
-    assert found.to_json()["contests"][0]["winner"] == "catalogued"
+    assert ("Nothing was discovered: the catalogued asymmetry flies better than the best "
+            "finding") in report
+    saved = found.to_json()["contests"][0]
+    assert saved["winner"] == "catalogued"
+    assert len(saved["catalogued_better"]) > len(saved["finding_better"])
+
+
+def test_a_contest_of_equal_flights_is_undecided_and_keeps_the_catalogue(kcs):
+    """The same extension on both sides flies the same: neither is better on any manoeuvre,
+    the contest is undecided, and a finding is not accepted on it."""
+    from sindyship.diagnose.contest import flight_contest
+    from sindyship.library import load_effect, load_library
+
+    records = simulate_with_effects(kcs, PLAN[:3])
+    settings = {"rudder_signal": "actual", "derivative": "five-point", "window": 21.0}
+    asymmetry = load_effect("asymmetry")
+    contest = flight_contest(records, records, kcs, load_library("abkowitz"),
+                             ("asymmetry", asymmetry), asymmetry, settings)
+    assert contest.winner == "undecided"
+    assert contest.finding_better == contest.catalogued_better == []
+    assert contest.finding_L == pytest.approx(contest.catalogued_L)
+    assert "neither flies better" in contest.sentence()
+
+
+def test_discover_refuses_records_that_share_a_name(kcs):
+    records = simulate_with_effects(kcs, PLAN[:2])
+    with pytest.raises(SindyshipInputError, match="share a name"):
+        discover([records[0], records[0]], kcs)
 
 
 def test_a_finding_that_flies_better_than_a_catalogued_stand_in_is_accepted(kcs):

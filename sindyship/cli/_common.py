@@ -19,8 +19,6 @@ from ..errors import SindyshipInputError
 
 #: Default term library of every verb that fits.
 DEFAULT_LIBRARY = "abkowitz"
-#: Default term library of the ``prior`` fit: every term its prior has an estimate for.
-PRIOR_LIBRARY = "abkowitz-vr"
 
 #: Longest record [s] a verb simulates (11.6 days), and the most samples it holds.
 MAX_DURATION = 1e6
@@ -203,15 +201,20 @@ def add_identification(p, *, optimizer: bool = True, recommended: bool = False) 
     """The options that say how a library is fitted: library, effects, optimizer, speed form,
     rudder, derivative (shared by ``fit``, ``diagnose`` and, without the optimizer,
     ``discover``).  With ``recommended`` (``fit``) the optimizer is the physics-consistent
-    ``prior`` by default, on the library with every term its prior has an estimate for."""
+    ``prior`` by default, on the recommended library of the speed form
+    (:func:`sindyship.identify.recommended_library`)."""
+    from ..identify import RECOMMENDED_LIBRARIES
     from ..optimizers import OPTIMIZERS
 
     if recommended:
+        design, instantaneous = (RECOMMENDED_LIBRARIES[form]
+                                 for form in ("design", "instantaneous"))
         p.add_argument("--library", default=None, metavar="NAME|FILE",
-                       help=f"term library name or TOML file (default: {PRIOR_LIBRARY} with "
-                       f"--optimizer prior, {PRIOR_LIBRARY}-crossflow (with cross-flow drag) "
-                       "in the instantaneous speed form; the paper's "
-                       f"{DEFAULT_LIBRARY} with the others)")
+                       help=f"term library name or TOML file (default with --optimizer "
+                       f"prior: {design}, or {instantaneous}, which adds "
+                       "cross-flow drag, when the speed form (--speed, else the ship's "
+                       f"speed_reference) is instantaneous; the paper's {DEFAULT_LIBRARY} "
+                       "with the other optimizers)")
     else:
         p.add_argument("--library", default=DEFAULT_LIBRARY, metavar="NAME|FILE",
                        help=f"term library name or TOML file (default: {DEFAULT_LIBRARY})")

@@ -30,8 +30,10 @@ def add_parser(sub) -> None:
         "residual still holds: a channel that lags the force it causes (the rudder angle), and "
         "terms of pysindy feature libraries over the heading, the position, the rudder, the "
         "motion and every recorded channel. The findings are judged leaving one manoeuvre out, "
-        "against the noise and chance; the discovered effect can be written as an effect file "
-        "for fit --effects and diagnose --effects.",
+        "against the noise and chance; when catalogued effects are also meaningful, the best "
+        "finding and each of them are fitted leaving one manoeuvre out and fly it, and the "
+        "finding is kept only when it flies better. The discovered effect can be written as an "
+        "effect file for fit --effects and diagnose --effects.",
     )
     add_training_options(p, optimizer=False)
     p.add_argument("--threshold", type=bounded_float(0, 1, "", high_open=True),

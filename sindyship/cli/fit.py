@@ -62,17 +62,19 @@ def add_parser(sub) -> None:
                    "tests that would separate them (default: report it on stderr and in JSON)")
 
 
-def _smoothing(args, records, ship, effects, params):
-    """The smoothing setting the options ask for (None for ``none``)."""
+def _smoothing(args, records, ship, effects, params, speed):
+    """The smoothing setting the options ask for (None for ``none``); ``auto`` chooses it with
+    the fit's library in its speed form."""
     if args.smoothing == "none":
         return None
+    from ..identify import resolve_library
     from ..smoothing import SmoothingSetting, choose_smoothing
 
     if args.smoothing != "auto":
         return SmoothingSetting.parse(args.smoothing)
     setting, table = choose_smoothing(records, ship, optimizer=args.optimizer,
-                                      library=args.library, effects=effects, params=params,
-                                      n_jobs=args.n_jobs)
+                                      library=resolve_library(args.library, (), speed),
+                                      effects=effects, params=params, n_jobs=args.n_jobs)
     progress(table.to_string())
     return setting
 
@@ -106,8 +108,9 @@ def fit_inputs(args) -> list[str]:
 
 
 def _defaults(args) -> None:
-    """The options whose default depends on others: the refinement (on for the prior fit);
-    the library's (:func:`resolved_library`) needs the ship's speed form."""
+    """The refinement's default, which depends on the optimizer (on for the prior fit).  The
+    library's default depends on the ship's speed form: :func:`resolved_library` once the
+    ship is loaded."""
     if args.refine is None:
         from ..refine import MAX_EVALUATIONS
 
@@ -140,7 +143,7 @@ def run(args) -> int:
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
     effects = split_names(args.effects)
-    smoothing = _smoothing(args, records, ship, effects, params)
+    smoothing = _smoothing(args, records, ship, effects, params, speed)
     if smoothing is not None:
         from ..smoothing import smooth_records
 

@@ -4,9 +4,10 @@ Shares of the force residual say how much of the equation error an extension rem
 it does to a flight: a catalogued effect can take a share of the residual that a spatial or
 delayed effect leaves behind, and fly worse.  :func:`flight_contest` fits the library with each
 extension leaving one manoeuvre out, flies the manoeuvre left out with both fits (as
-:func:`sindyship.evaluation.evaluate` flies it) and compares them over the samples both flights
-cover (:func:`sindyship.evaluation.compare_flights`): fewer divergences win, then the smaller
-geometric mean of the mean distances.
+:func:`sindyship.evaluation.evaluate` flies it) and compares them manoeuvre by manoeuvre
+(:func:`sindyship.evaluation.compare_flights`: a flight that diverges where the other does
+not, or earlier, is the worse; else the one farther off over the samples both cover).  The
+one that flies better on more manoeuvres wins; as many each is undecided.
 """
 
 from __future__ import annotations
@@ -38,12 +39,14 @@ class FlightContest:
         The finding's family and the catalogued effect's name.
     finding_L, catalogued_L : float
         Geometric means over the left-out manoeuvres of the mean distance [L] of each fit's
-        flight, over the samples both flights of a manoeuvre cover.
+        flight, over the samples both flights of a manoeuvre cover (manoeuvres where that
+        window is empty left out).
     finding_diverged, catalogued_diverged : list of str
         Manoeuvres whose flight diverged where the other's did not (or earlier).
-    winner : {"finding", "catalogued"}
-        The one with fewer such divergences, then the smaller geometric mean (a tie keeps the
-        catalogued effect).
+    finding_better, catalogued_better : list of str
+        Manoeuvres each flies better (:func:`sindyship.evaluation.compare_flights`).
+    winner : {"finding", "catalogued", "undecided"}
+        The one that flies better on more manoeuvres; "undecided" when each does on as many.
     per_record : dict
         Manoeuvre -> ``{"finding_L", "catalogued_L", "window_s", "worse"}``.
     """
@@ -54,29 +57,38 @@ class FlightContest:
     catalogued_L: float
     finding_diverged: list[str]
     catalogued_diverged: list[str]
+    finding_better: list[str]
+    catalogued_better: list[str]
     winner: str
     per_record: dict
 
     def sentence(self) -> str:
-        """One sentence: which flew better, with both numbers."""
-        def side(label, value, diverged):
-            text = f"{label} {value:.3g} L"
+        """One sentence: how each flew, and which won."""
+        def side(label, value, better, diverged):
+            text = f"{label} {value:.3g} L, better on {len(better)}"
             return text + (f" ({', '.join(diverged)} diverged)" if diverged else "")
 
-        ours = side(f"the finding {self.finding}", self.finding_L, self.finding_diverged)
+        ours = side(f"the finding {self.finding}", self.finding_L, self.finding_better,
+                    self.finding_diverged)
         theirs = side(f"the catalogued {self.catalogued}", self.catalogued_L,
-                      self.catalogued_diverged)
-        won = self.finding if self.winner == "finding" else self.catalogued
-        return (f"Left-out flights (geometric mean distance): {ours}, {theirs}; "
-                f"{won} flies better and wins.")
+                      self.catalogued_better, self.catalogued_diverged)
+        if self.winner == "undecided":
+            verdict = "neither flies better, and the catalogued effect comes first"
+        else:
+            won = self.finding if self.winner == "finding" else self.catalogued
+            verdict = f"{won} flies better and wins"
+        return (f"Left-out flights (geometric mean distance; manoeuvres flown better): {ours}; "
+                f"{theirs}; {verdict}.")
 
     def to_json(self) -> dict:
+        """The contest as a JSON-ready dict (``contests`` of ``discover --json``)."""
         return clean_json({
             "finding": self.finding, "catalogued": self.catalogued,
             "finding_L": self.finding_L, "catalogued_L": self.catalogued_L,
             "finding_diverged": self.finding_diverged,
-            "catalogued_diverged": self.catalogued_diverged, "winner": self.winner,
-            "per_record": self.per_record,
+            "catalogued_diverged": self.catalogued_diverged,
+            "finding_better": self.finding_better, "catalogued_better": self.catalogued_better,
+            "winner": self.winner, "per_record": self.per_record,
         })
 
 
@@ -90,6 +102,7 @@ def _subset(problems: Mapping[str, Design], keep: np.ndarray) -> dict[str, Desig
 
 
 def _geometric_mean(values: Sequence[float]) -> float:
+    """Geometric mean of the positive finite values (NaN when there is none)."""
     finite = [v for v in values if math.isfinite(v) and v > 0]
     return float(np.exp(np.mean(np.log(finite)))) if finite else math.nan
 
@@ -144,8 +157,8 @@ def flight_contest(fitted: Sequence[Trajectory], measured: Sequence[Trajectory],
     family, effect = finding
     libraries = {"finding": library.extended(effect),
                  "catalogued": library.extended(catalogued)}
-    jobs, names = [], []
-    for key, extended in libraries.items():
+    jobs = []
+    for extended in libraries.values():
         problems = design(fitted, ship, extended, **settings)
         for k, record in enumerate(measured):
             keep = problems["X"].groups != k
@@ -153,28 +166,28 @@ def flight_contest(fitted: Sequence[Trajectory], measured: Sequence[Trajectory],
             model = fit(others, ship, library=extended, problems=_subset(problems, keep),
                         **settings)
             jobs.append((model, [record]))
-            names.append((key, record))
-    flown = dict(zip([(key, record.name) for key, record in names],
-                     (out[0] for out in fly_jobs_like(jobs)), strict=True))
-    per_record, diverged = {}, {"finding": [], "catalogued": []}
-    means = {"finding": [], "catalogued": []}
-    for record in measured:
-        common = compare_flights(flown[("catalogued", record.name)],
-                                 flown[("finding", record.name)], record, ship.L)
+    flights = [out[0] for out in fly_jobs_like(jobs)]
+    flown = {"finding": flights[:len(measured)], "catalogued": flights[len(measured):]}
+    per_record, means = {}, {"finding": [], "catalogued": []}
+    diverged = {"finding": [], "catalogued": []}
+    better = {"finding": [], "catalogued": []}
+    for k, record in enumerate(measured):
+        common = compare_flights(flown["catalogued"][k], flown["finding"][k], record, ship.L)
         worse = {"before": "catalogued", "after": "finding"}.get(common["worse"])
-        ends = {key: flown[(key, record.name)].meta.get("diverged_at") for key in means}
-        if worse is not None and ends["finding"] != ends["catalogued"]:
-            diverged[worse].append(record.name)
+        ends = {key: flown[key][k].meta.get("diverged_at") for key in flown}
+        if worse is not None:
+            better["catalogued" if worse == "finding" else "finding"].append(record.name)
+            if ends["finding"] != ends["catalogued"]:
+                diverged[worse].append(record.name)
         means["finding"].append(common["after_mean_L"])
         means["catalogued"].append(common["before_mean_L"])
         per_record[record.name] = {"finding_L": common["after_mean_L"],
                                    "catalogued_L": common["before_mean_L"],
                                    "window_s": common["window_s"], "worse": worse}
-    scores = {key: _geometric_mean(values) for key, values in means.items()}
-    if len(diverged["finding"]) != len(diverged["catalogued"]):
-        winner = ("finding" if len(diverged["finding"]) < len(diverged["catalogued"])
-                  else "catalogued")
-    else:
-        winner = ("finding" if scores["finding"] < scores["catalogued"] else "catalogued")
-    return FlightContest(family, catalogued.name, scores["finding"], scores["catalogued"],
-                         diverged["finding"], diverged["catalogued"], winner, per_record)
+    wins = {key: len(names) for key, names in better.items()}
+    winner = ("undecided" if wins["finding"] == wins["catalogued"] else
+              max(wins, key=wins.get))
+    return FlightContest(family, catalogued.name, _geometric_mean(means["finding"]),
+                         _geometric_mean(means["catalogued"]), diverged["finding"],
+                         diverged["catalogued"], better["finding"], better["catalogued"],
+                         winner, per_record)

@@ -33,8 +33,7 @@ in for a missing catalogued effect (position terms for an asymmetry), and a cata
 for a family.  Shares of the residual do not say which flies better, so flights decide
 (:func:`sindyship.diagnose.contest.flight_contest`): both extensions are fitted leaving one
 manoeuvre out and fly the manoeuvre left out; the finding is accepted only when it flies
-better than the most explaining meaningful catalogued effect, and the report gives both
-numbers.
+better than each meaningful catalogued effect, and the report gives the numbers.
 """
 
 from __future__ import annotations
@@ -152,17 +151,16 @@ class Discovery:
     seconds : float
     catalogue : dict of str to float
         Catalogued effects that are meaningful on these records, with the share they explain:
-        the most explaining one competes with each round's best finding in flights
-        (``contests``), else a family could be standing in for a catalogued effect that is
-        missing.
+        each round's best finding competes with each of them in flights (``contests``), else
+        a family could be standing in for a catalogued effect that is missing.
     smoothing : dict or None
         The smoothing applied to the records (:meth:`SmoothingSetting.as_dict`).
     unnamed_channels : list of str
         Recorded columns left out of the search because no term can name them.
     contests : list of FlightContest
-        Each round's best meaningful finding against the catalogued effect, flown
-        (:func:`sindyship.diagnose.contest.flight_contest`); the round's finding is accepted
-        only when it won.
+        Each round's best meaningful finding against the meaningful catalogued effects, most
+        explaining first, flown (:func:`sindyship.diagnose.contest.flight_contest`) until one
+        does not lose; the round's finding is accepted only when it won every contest.
     """
 
     library: TermLibrary
@@ -414,9 +412,9 @@ def discover(
         Search again with each meaningful finding added, up to this many rounds: an effect
         can need a delay and terms (every accepted finding goes into the effect file).
     check_catalogue : bool
-        Score the catalogue first: when a catalogued effect is meaningful on the records, the
+        Score the catalogue first: when catalogued effects are meaningful on the records, the
         best finding is accepted only when, fitted leaving one manoeuvre out, it flies the
-        manoeuvres left out better than the most explaining such effect does
+        manoeuvres left out better than each of them does
         (:func:`sindyship.diagnose.contest.flight_contest`; a family can stand in for a
         missing catalogued effect: position terms for an asymmetry, say).
         :func:`sindyship.diagnose.diagnose` searches only when none is meaningful.
@@ -452,6 +450,9 @@ def discover(
             "discover needs at least two training records: findings are judged leaving one "
             "manoeuvre out."
         )
+    names = [r.name for r in records]
+    if len(set(names)) != len(names):
+        raise SindyshipInputError("two records share a name; give each file a distinct name.")
     base = resolve_library(library)
     added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
     base = base.extended(*added) if added else base
@@ -463,7 +464,7 @@ def discover(
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
     catalogue = (_meaningful_catalogue(records, ship, base, threshold, settings)
                  if check_catalogue else {})
-    stand_in = max(catalogue, key=catalogue.get) if catalogue else None
+    stand_ins = sorted(catalogue, key=lambda name: -catalogue[name])
     rounds, accepted, contests, library_now = [], [], [], base
     for _ in range(max(int(max_rounds), 1)):
         findings, floor = _search(records, ship, library_now, settings, threshold, n_jobs)
@@ -474,12 +475,16 @@ def discover(
         if best is None:
             break
         effect = _as_effect(best, len(accepted) + 1)
-        if stand_in is not None:
+        won = True
+        for stand_in in stand_ins:  # the finding must fly better than each, most explaining first
             contests.append(flight_contest(records, measured, ship, library_now,
                                            (best.family, effect), load_effect(stand_in),
                                            settings))
             if contests[-1].winner != "finding":
+                won = False
                 break
+        if not won:
+            break
         accepted.append(best)
         library_now = library_now.extended(effect)
     return Discovery(base, [r.name for r in records], rounds, accepted, first_floor, threshold,
