@@ -18,7 +18,8 @@ from .errors import SindyshipInputError
 from .ships import Ship, load_ship
 from .trajectory import Trajectory
 
-__all__ = ["as_records", "as_ship", "check_motion", "check_scale", "positive_number"]
+__all__ = ["as_records", "as_ship", "check_distinct_names", "check_motion", "check_scale",
+           "positive_number"]
 
 #: Channels a record needs finite in every sample to be fitted or flown against.
 MOTION_CHANNELS = ("t", "u", "v", "r", "x", "y", "psi")
@@ -80,6 +81,23 @@ def as_records(records, name: str = "records", *, allow_empty: bool = False
     if not out and not allow_empty:
         raise SindyshipInputError(f"{name} is empty; pass at least one record.")
     return out
+
+
+def check_distinct_names(records) -> None:
+    """No two records share a name (results are reported, and flights matched, by name).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> run = Trajectory(pd.DataFrame({"t": [0.0, 1.0]}), name="zz20")
+    >>> check_distinct_names([run, run])
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: two records share a name; give each file a distinct name.
+    """
+    names = [r.name for r in records]
+    if len(set(names)) != len(names):
+        raise SindyshipInputError("two records share a name; give each file a distinct name.")
 
 
 def check_motion(records, name: str = "records") -> None:

@@ -450,9 +450,9 @@ def _check_arguments(records: Sequence[Trajectory], test: Sequence[Trajectory],
         )
     if not 0.0 < threshold < 1.0:
         raise SindyshipInputError(f"the threshold must lie between 0 and 1, not {threshold}.")
-    names = [r.name for r in [*records, *test]]
-    if len(set(names)) != len(names):
-        raise SindyshipInputError("two records share a name; give each file a distinct name.")
+    from ..arguments import check_distinct_names
+
+    check_distinct_names([*records, *test])
 
 
 def _search_beyond(result: Diagnosis, fitted: Sequence[Trajectory], settings: Mapping,

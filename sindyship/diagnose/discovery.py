@@ -440,6 +440,7 @@ def discover(
     >>> found.best.family, round(found.best.delays["delta"])
     ('delay:delta', 4)
     """
+    from ..arguments import check_distinct_names
     from ..errors import SindyshipInputError
     from ..library import load_effect
 
@@ -450,9 +451,7 @@ def discover(
             "discover needs at least two training records: findings are judged leaving one "
             "manoeuvre out."
         )
-    names = [r.name for r in records]
-    if len(set(names)) != len(names):
-        raise SindyshipInputError("two records share a name; give each file a distinct name.")
+    check_distinct_names(records)
     base = resolve_library(library)
     added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
     base = base.extended(*added) if added else base
