@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from ._forces_compiled import COMPILED
+from .terms import BANK_NEAREST
 
 try:  # optional: pip install "sindyship[fast]"
     import numba
@@ -26,14 +27,15 @@ except ImportError:
     numba_prange = range
 
 #: How an extra variable (beyond du, v, r, delta, psi) is made from a segment's inputs.
-CHANNEL, CHANNEL_OVER_SPEED, POSITION_X, POSITION_Y, RUDDER_RATE, WIND_SPEED, WIND_ANGLE = \
-    range(7)
+(CHANNEL, CHANNEL_OVER_SPEED, POSITION_X, POSITION_Y, RUDDER_RATE, WIND_SPEED, WIND_ANGLE,
+ SHAPE_EDGE, SHAPE_BANK) = range(9)
 
 
-def _variables(z, rudder, rate, extras, kinds, sources, wind_rows, instantaneous, floor, U0,
-               L, out):
+def _variables(z, rudder, rate, extras, kinds, sources, shapes, wind_rows, instantaneous,
+               floor, U0, L, out):
     """The library's variables of one state into ``out``; returns the speed factor
-    (U/U0)^2 (1 in the design form)."""
+    (U/U0)^2 (1 in the design form).  ``shapes`` holds each shape variable's (cos and sin of
+    its bearing, distance, width) (:func:`sindyship.terms.shape_values`)."""
     u, v, r, x, y, psi = z[0], z[1], z[2], z[3], z[4], z[5]
     ratio = 1.0
     if instantaneous:
@@ -55,6 +57,13 @@ def _variables(z, rudder, rate, extras, kinds, sources, wind_rows, instantaneous
             value = y
         elif kind == RUDDER_RATE:
             value = rate * L / U0 / ratio
+        elif kind == SHAPE_EDGE or kind == SHAPE_BANK:
+            across = (x * shapes[k, 0] + y * shapes[k, 1]) / L - shapes[k, 2]
+            if kind == SHAPE_EDGE:
+                value = 0.5 * (1.0 + math.tanh(across / shapes[k, 3]))
+            else:
+                value = 1.0 / max(abs(across), BANK_NEAREST) ** 2
+                value = -value if across > 0.0 else (value if across < 0.0 else 0.0)
         else:  # the apparent wind, from the true wind and the motion
             speed = extras[wind_rows[0]] * U0
             relative = extras[wind_rows[1]] - psi
@@ -101,10 +110,10 @@ def _accelerations(z, rudder, rate, extras, tables, weights, inertia, minv, U0, 
                    base, factor, columns, a):
     """Accelerations (3,) in SI of one state into ``a``, its term columns (times the speed
     factor) into ``columns``."""
-    (kinds, sources, wind_rows, instantaneous, floor, base_variable, base_function,
+    (kinds, sources, shapes, wind_rows, instantaneous, floor, base_variable, base_function,
      factor_base, factor_power, slots) = tables
-    speed2 = _variables(z, rudder, rate, extras, kinds, sources, wind_rows, instantaneous,
-                        floor, U0, L, variables)
+    speed2 = _variables(z, rudder, rate, extras, kinds, sources, shapes, wind_rows,
+                        instantaneous, floor, U0, L, variables)
     _columns(variables, base_variable, base_function, factor_base, factor_power, slots, base,
              factor, columns)
     X = 0.0
@@ -213,12 +222,13 @@ def _fly(state0, data, physics, sensitivity, closed, h, n_steps, every, states, 
     ``closed`` flies it closed loop (:func:`_fly_closed_one`)."""
     rudder, rate, extras = data
     tables, weights, inertia, minv, U0, L = physics
-    (kinds, sources, wind_rows, instantaneous, floor, base_variable, base_function,
+    (kinds, sources, shapes, wind_rows, instantaneous, floor, base_variable, base_function,
      factor_base, factor_power, slots) = tables
     perturbed, steps, rows, cols, with_sens = sensitivity
     sign, check, psi0, levels, count, delta0, servo, commanded = closed
     for m in numba_prange(state0.shape[0]):  # the tuples are rebuilt: a parallel loop takes
-        physics_m = ((kinds, sources, wind_rows, instantaneous, floor, base_variable,  # arrays
+        physics_m = ((kinds, sources, shapes, wind_rows, instantaneous, floor,  # arrays
+                      base_variable,
                       base_function, factor_base, factor_power, slots), weights, inertia,
                      minv, U0, L)  # and numbers only
         sensitivity_m = (perturbed, steps, rows, cols, with_sens)
@@ -235,9 +245,9 @@ def _fly_one(m, state0, data, physics, sensitivity, h, n_steps, every, states, j
     """Segment ``m`` flown from its first state (:func:`_fly`)."""
     tables, _, _, _, U0, L = physics
     n_par = sensitivity[2].shape[0]
-    n_terms = tables[9].shape[1]
-    work = (np.empty(5 + tables[0].shape[0]), np.empty(max(tables[5].shape[0], 1)),
-            np.ones(tables[7].shape[0] + 1), np.empty(n_terms), np.empty(n_terms), np.empty(3),
+    n_terms = tables[10].shape[1]
+    work = (np.empty(5 + tables[0].shape[0]), np.empty(max(tables[6].shape[0], 1)),
+            np.ones(tables[8].shape[0] + 1), np.empty(n_terms), np.empty(n_terms), np.empty(3),
             np.empty(3), np.empty(6), np.zeros((6, 6)))
     z, zs = state0[m].copy(), np.empty(6)
     sens, ss = np.zeros((6, n_par)), np.zeros((6, n_par))
@@ -373,9 +383,9 @@ def _fly_closed_one(m, state0, extras, physics, sensitivity, loop, h, n_steps, e
     sign, check, psi0, levels, delta0, servo, commanded = loop
     tables, _, _, _, U0, L = physics
     n_par = sensitivity[2].shape[0]
-    n_terms = tables[9].shape[1]
-    work = (np.empty(5 + tables[0].shape[0]), np.empty(max(tables[5].shape[0], 1)),
-            np.ones(tables[7].shape[0] + 1), np.empty(n_terms), np.empty(n_terms), np.empty(3),
+    n_terms = tables[10].shape[1]
+    work = (np.empty(5 + tables[0].shape[0]), np.empty(max(tables[6].shape[0], 1)),
+            np.ones(tables[8].shape[0] + 1), np.empty(n_terms), np.empty(n_terms), np.empty(3),
             np.empty(3), np.empty(7), np.zeros((7, 7)))
     z = np.empty(7)
     z[:6] = state0[m]
@@ -491,12 +501,17 @@ def _tables(model, names, integer_tables, channel_names):
     """How the compiled loop makes each of the model's variables beyond the state's, and the
     model's factor tables (None when a variable has no compiled form)."""
     from .library import SPEED_FLOOR
-    from .terms import describe_variable
+    from .terms import describe_variable, parse_shape
 
-    kinds, sources = [], []
-    for name in names[5:]:
+    kinds, sources, shapes = [], [], np.zeros((max(len(names) - 5, 1), 4))
+    for k, name in enumerate(names[5:]):
+        shape = parse_shape(name)
         if name in ("x", "y"):
             kinds.append(POSITION_X if name == "x" else POSITION_Y)
+        elif shape is not None:
+            kinds.append(SHAPE_EDGE if shape.kind == "edge" else SHAPE_BANK)
+            bearing = math.radians(shape.bearing)
+            shapes[k] = (math.cos(bearing), math.sin(bearing), shape.distance, shape.width)
         elif name == "delta_rate":
             kinds.append(RUDDER_RATE)
         elif name in ("wind_app_speed", "wind_app_angle"):
@@ -510,5 +525,6 @@ def _tables(model, names, integer_tables, channel_names):
         sources.append(channel_names.index(name) if name in channel_names else 0)
     wind_rows = np.array([channel_names.index(n) if n in channel_names else 0
                           for n in ("wind_speed", "wind_dir")], dtype=np.int64)
-    return (np.array(kinds, dtype=np.int64), np.array(sources, dtype=np.int64), wind_rows,
+    return (np.array(kinds, dtype=np.int64), np.array(sources, dtype=np.int64), shapes,
+            wind_rows,
             model.library.speed == "instantaneous", float(SPEED_FLOOR), *integer_tables)

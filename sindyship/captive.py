@@ -84,6 +84,9 @@ __all__ = [
 TESTS = ("static-drift", "rudder", "pure-yaw", "drift-yaw")
 CAPTIVE_COLUMNS = ("u", "v", "r", "delta")
 FORCE_COLUMNS = ("X", "Y", "N")
+#: Columns a captive-test CSV may add: the revolutions, and where the ship is held and how it
+#: heads (for a model whose terms depend on the position or the heading).
+OPTIONAL_CAPTIVE_COLUMNS = ("n", "x", "y", "psi")
 _FORCE_QUANTITY = {"X": "force", "Y": "force", "N": "moment"}
 #: A non-dimensional v', r' or a rudder angle [rad] below this counts as zero when a captive
 #: row is assigned to a test type.
@@ -306,12 +309,14 @@ def read_captive_csv(path: str | os.PathLike[str]) -> pd.DataFrame:
 
     Headers and units are parsed as for the measurement CSV
     (:mod:`sindyship.measurements`): ``r [deg/s]``, ``delta [deg]``, ``u [kn]``,
-    ``n [rpm]``, ``X [kN]``, ``N [kNm]``.  Other columns are ignored.
+    ``n [rpm]``, ``X [kN]``, ``N [kNm]``.  The optional columns ``n``, and ``x``, ``y``
+    [m], ``psi`` (where each condition is held, for a model whose terms depend on the
+    position or the heading) are kept; other columns are ignored.
 
     Returns
     -------
     pandas.DataFrame
-        Columns ``u, v, r, delta`` (``n`` when given) and ``X, Y, N``, SI.
+        Columns ``u, v, r, delta`` (the optional ones when given) and ``X, Y, N``, SI.
 
     Raises
     ------
@@ -338,7 +343,8 @@ def read_captive_csv(path: str | os.PathLike[str]) -> pd.DataFrame:
             f"{source}: has no data rows; give one row per captive condition after the header."
         )
     out = {}
-    for name in [*CAPTIVE_COLUMNS, *(["n"] if "n" in by_name else []), *FORCE_COLUMNS]:
+    optional = [name for name in OPTIONAL_CAPTIVE_COLUMNS if name in by_name]
+    for name in [*CAPTIVE_COLUMNS, *optional, *FORCE_COLUMNS]:
         position, column = by_name[name]
         if name in _FORCE_QUANTITY and column.unit is not None:
             _check_force_unit(column, _FORCE_QUANTITY[name], source)

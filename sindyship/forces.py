@@ -49,6 +49,7 @@ from .identify import ENVELOPE_VARIABLES, training_envelope
 from .model import AbkowitzModel, coriolis_of_values
 from .ships import Ship
 from .trajectory import Trajectory
+from .terms import sources_of
 
 __all__ = [
     "ENVELOPE_VARIABLES",
@@ -109,6 +110,14 @@ def model_captive_forces(model: AbkowitzModel, captive: pd.DataFrame) -> pd.Data
     if missing:
         raise SindyshipInputError(
             f"the captive table lacks the column '{missing[0]}'; give u, v, r and delta."
+        )
+    placed = {"x", "y"} & {source for name in model.library.variables
+                           for source in sources_of(name)}
+    if placed - set(captive.columns):
+        raise SindyshipInputError(
+            "the model's terms depend on where the ship is (its position x, y, or a shape of "
+            "it such as a bank's pull), which the captive table does not give; add columns x "
+            "and y [m] to say where each condition is held."
         )
     # a steady condition: the commanded rudder is the actual one, a delayed channel reads
     # what the table gives (it has held that value) and the rudder does not move; the

@@ -100,7 +100,7 @@ class AbkowitzDynamics:
     def uses_position(self) -> bool:
         """Whether terms depend on where the ship is (x, y): the integrator then passes the
         flight's own position, never the recorded one."""
-        return bool({"x", "y"} & set(self.model.library.variables))
+        return self.model._uses_position
 
     @property
     def ship(self) -> Ship:
@@ -251,6 +251,8 @@ class AbkowitzModel:
         # the compiled flights make the design form's variables from the state themselves
         self._compiled_flights = self._compiled is not None and self.library.speed == "design" \
             and not (set(DERIVED_SOURCES) & set(self.library.variables))
+        self._uses_position = any(source in ("x", "y") for name in self.library.variables
+                                  for source in sources_of(name))
         if self._compiled is not None:
             from ._forces_compiled import run_accelerations
 
@@ -338,10 +340,10 @@ class AbkowitzModel:
         ship, library = self.ship, self.library
         values = motion_variables(u, v, r, delta, psi, ship.L, ship.U0, library.speed)
         values.update(channels)
-        derived_variables(values, library.variables, u, v, psi, ship.U0)
         zero = 0.0 * values["du"]
-        if {"x", "y"} & library.variables:
+        if self._uses_position:
             values["x"], values["y"] = (zero, zero) if position is None else position
+        derived_variables(values, library.variables, u, v, psi, ship.U0, ship.L)
         if "delta_rate" in library.variables:
             values["delta_rate"] = (zero if rudder_rate is None else rudder_rate) \
                 * ship.L / ship.U0

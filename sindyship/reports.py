@@ -469,12 +469,43 @@ def _finding_lines(k: int, finding) -> list[str]:
                       for c, d in finding.delays.items())
             if finding.delays else
             "; ".join(f"{dof}: {', '.join(ts)}" for dof, ts in finding.terms.items() if ts))
+    line = shape_words(finding.variables, getattr(finding, "intervals", {}))
+    if line:
+        what = f"{line}. {what}"
     shares = ", ".join(f"{dof} {finding.signal_by_dof[dof]:.0%}"
                        + ("" if finding.significant[dof] else " (not significant)")
                        for dof in DOF_NAMES)
     return [f"  {k}. {finding.family}: explains {finding.explained_signal:.1%} of the error "
             f"above the noise floor ({mark}; {shares})",
             _fill(f"{what}. Usually: {finding.hint}.", indent="     ", subsequent="     ")]
+
+
+def shape_words(variables, intervals) -> str:
+    """The shape of the position among ``variables`` in words, with the 95 % intervals of its
+    line's bearing and distance when given (empty when there is none).
+
+    Examples
+    --------
+    >>> shape_words(["v", "edge_b000_p020_w05"], {"distance_L": [1.9, 2.1]})
+    'Shape: a smooth step from 0 to 1 across a line 2.0 L ahead of the origin along the \
+bearing 000 deg, 0.5 L wide (95 % intervals when the manoeuvres are resampled: distance 1.9 \
+to 2.1 L)'
+    """
+    from .terms import describe_shape, parse_shape
+
+    shape = next((parse_shape(v) for v in sorted(variables) if parse_shape(v)), None)
+    if shape is None:
+        return ""
+    ranges = []
+    if "bearing_deg" in intervals:
+        low, high = intervals["bearing_deg"]
+        ranges.append(f"bearing {low:.1f} to {high:.1f} deg")
+    if "distance_L" in intervals:
+        low, high = intervals["distance_L"]
+        ranges.append(f"distance {low:.1f} to {high:.1f} L")
+    return (f"Shape: {describe_shape(shape)}"
+            + (f" (95 % intervals when the manoeuvres are resampled: {', '.join(ranges)})"
+               if ranges else ""))
 
 
 def discovery_report(discovery, effect_file: str | None = None) -> str:
@@ -486,7 +517,7 @@ def discovery_report(discovery, effect_file: str | None = None) -> str:
     lines = [f"Not in the catalogue: searched the residual of {discovery.library.name} on "
              f"{len(discovery.records)} records ({discovery.seconds:.1f} s{smoothing})."]
     named = ", ".join(f"{name} ({share:.0%})" for name, share in discovery.catalogue.items())
-    if discovery.contests:
+    if discovery.catalogue and discovery.contests:
         lines.append(_fill(
             f"Catalogued effects meaningful here: {named}. A family below can stand in for "
             "them and they for it, so the best finding competes with each in flights: each "
@@ -495,6 +526,11 @@ def discovery_report(discovery, effect_file: str | None = None) -> str:
     elif discovery.catalogue:
         lines.append(_fill(f"Catalogued effects meaningful here: {named}.", indent="",
                            subsequent=""))
+    if any(c.catalogued == "none" for c in discovery.contests):
+        lines.append(_fill(
+            "A line of a shape is chosen among hundreds, so a shape's finding must also fly "
+            "the manoeuvres left out better than the library alone.", indent="",
+            subsequent=""))
     for contest in discovery.contests:
         lines.append(_fill(contest.sentence(), indent="", subsequent=""))
     if discovery.unnamed_channels:
@@ -518,26 +554,31 @@ def discovery_report(discovery, effect_file: str | None = None) -> str:
         lines.append(f"Round {r}, with {added} added, the "
                      + ("discovery:" if best.meaningful else "best candidate:"))
         lines += _finding_lines(1, best)
+    lines.append(_discovery_verdict(discovery, effect_file))
+    return "\n".join(lines)
+
+
+def _discovery_verdict(discovery, effect_file: str | None) -> str:
+    """The last line of :func:`discovery_report`: what was discovered, or why nothing was."""
     if discovery.contests and not discovery.accepted:
         last = discovery.contests[-1]
         why = ("flies better than" if last.winner == "catalogued" else
                "flies as well as")
-        lines.append(_fill(f"Nothing was discovered: the catalogued {last.catalogued} {why} "
-                           "the best finding; add it (--effects) and search again.",
-                           indent="", subsequent=""))
-    elif discovery.catalogue and not discovery.accepted:
-        lines.append("Nothing was discovered: add the catalogued effects above and search "
-                     "again.")
-    elif not discovery.accepted:
-        lines.append(_fill(
+        if last.catalogued == "none":
+            return _fill(f"Nothing was discovered: the library alone {why} the best finding "
+                         f"({last.finding}), which is then a chance fit of the residual.",
+                         indent="", subsequent="")
+        return _fill(f"Nothing was discovered: the catalogued {last.catalogued} {why} the "
+                     "best finding; add it (--effects) and search again.", indent="",
+                     subsequent="")
+    if discovery.catalogue and not discovery.accepted:
+        return "Nothing was discovered: add the catalogued effects above and search again."
+    if not discovery.accepted:
+        return _fill(
             f"No finding is meaningful (explaining {discovery.threshold:.0%} of the error above "
             "the noise floor, with a gain significant in at least two of X, Y and N): no "
-            "missing effect was discovered.", indent="", subsequent=""))
-    else:
-        found = " and ".join(f.family for f in discovery.accepted)
-        target = effect_file or "effect.toml"
-        written = (f"Written to {effect_file}" if effect_file
-                   else "Write it with --out effect.toml")
-        lines.append(f"Discovered: {found}. {written}; refit with --effects {target} to see "
-                     "the error fall.")
-    return "\n".join(lines)
+            "missing effect was discovered.", indent="", subsequent="")
+    found = " and ".join(f.family for f in discovery.accepted)
+    target = effect_file or "effect.toml"
+    written = f"Written to {effect_file}" if effect_file else "Write it with --out effect.toml"
+    return f"Discovered: {found}. {written}; refit with --effects {target} to see the error fall."

@@ -26,7 +26,10 @@ from ..library import DOFS, Effect, TermLibrary
 from ..ships import Ship
 from ..trajectory import Trajectory
 
-__all__ = ["FlightContest", "flight_contest"]
+__all__ = ["LIBRARY_ALONE", "FlightContest", "flight_contest"]
+
+#: The name of the contest's other side when it is the library without any effect.
+LIBRARY_ALONE = "none"
 
 
 @dataclass
@@ -70,12 +73,15 @@ class FlightContest:
 
         ours = side(f"the finding {self.finding}", self.finding_L, self.finding_better,
                     self.finding_diverged)
-        theirs = side(f"the catalogued {self.catalogued}", self.catalogued_L,
-                      self.catalogued_better, self.catalogued_diverged)
+        alone = self.catalogued == LIBRARY_ALONE
+        theirs = side("the library alone" if alone else f"the catalogued {self.catalogued}",
+                      self.catalogued_L, self.catalogued_better, self.catalogued_diverged)
         if self.winner == "undecided":
-            verdict = "neither flies better, and the catalogued effect comes first"
+            verdict = ("neither flies better, and the library stays as it is" if alone else
+                       "neither flies better, and the catalogued effect comes first")
         else:
-            won = self.finding if self.winner == "finding" else self.catalogued
+            won = (self.finding if self.winner == "finding" else
+                   "the library alone" if alone else self.catalogued)
             verdict = f"{won} flies better and wins"
         return (f"Left-out flights (geometric mean distance; manoeuvres flown better): {ours}; "
                 f"{theirs}; {verdict}.")
@@ -109,7 +115,7 @@ def _geometric_mean(values: Sequence[float]) -> float:
 
 def flight_contest(fitted: Sequence[Trajectory], measured: Sequence[Trajectory], ship: Ship,
                    library: TermLibrary, finding: tuple[str, Effect],
-                   catalogued: Effect, settings: Mapping) -> FlightContest:
+                   catalogued: Effect | None, settings: Mapping) -> FlightContest:
     """Fit ``library`` with the finding's and with the catalogued effect's terms leaving one
     manoeuvre out (least squares), fly each left-out manoeuvre with both, and say which flies
     better.
@@ -125,8 +131,9 @@ def flight_contest(fitted: Sequence[Trajectory], measured: Sequence[Trajectory],
         The library both extend.
     finding : (str, Effect)
         The finding's family and the finding as an effect.
-    catalogued : Effect
-        The catalogued effect that stands in for it.
+    catalogued : Effect or None
+        The catalogued effect that stands in for it; None: the library alone (named
+        :data:`LIBRARY_ALONE` in the result).
     settings : mapping
         ``rudder_signal``, ``derivative`` and ``window`` of :func:`sindyship.identify.fit`.
 
@@ -156,7 +163,7 @@ def flight_contest(fitted: Sequence[Trajectory], measured: Sequence[Trajectory],
     """
     family, effect = finding
     libraries = {"finding": library.extended(effect),
-                 "catalogued": library.extended(catalogued)}
+                 "catalogued": library if catalogued is None else library.extended(catalogued)}
     jobs = []
     for extended in libraries.values():
         problems = design(fitted, ship, extended, **settings)
@@ -187,7 +194,8 @@ def flight_contest(fitted: Sequence[Trajectory], measured: Sequence[Trajectory],
     wins = {key: len(names) for key, names in better.items()}
     winner = ("undecided" if wins["finding"] == wins["catalogued"] else
               max(wins, key=wins.get))
-    return FlightContest(family, catalogued.name, _geometric_mean(means["finding"]),
+    return FlightContest(family, LIBRARY_ALONE if catalogued is None else catalogued.name,
+                         _geometric_mean(means["finding"]),
                          _geometric_mean(means["catalogued"]), diverged["finding"],
                          diverged["catalogued"], better["finding"], better["catalogued"],
                          winner, per_record)

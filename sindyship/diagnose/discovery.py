@@ -49,8 +49,10 @@ from .._io import clean_json
 from ..identify import design, resolve_library
 from ..library import DOFS, Effect, TermLibrary
 from ..optimizers import ForwardSelection, GroupedProblem, one_blas_thread
+from ..reports import shape_words
 from ..ships import Ship
 from ..smoothing import resolve_smoothing, smooth_records
+from ..terms import SHAPE_KINDS, parse_shape
 from ..trajectory import Trajectory
 from ._constants import MEANINGFUL_SHARE
 from .candidates import Family, families, family_columns, unnamed_channels
@@ -59,6 +61,7 @@ from .delays import lomo_errors, search_delay
 from .noise import noise_sse
 from .ranking import rank_effects
 from .scoring import _dof_shares
+from .shapes import search_shape
 
 #: Most terms a family may add to one equation.
 MAX_TERMS = 4
@@ -198,11 +201,10 @@ class Discovery:
         name = name or "discovered_" + "_".join(families)
         delays = {c: d for f in self.accepted for c, d in f.delays.items()}
         terms = {dof: [t for f in self.accepted for t in f.terms.get(dof, [])] for dof in DOFS}
-        variables = {v for f in self.accepted for v in f.variables}
-        channels = sorted(variables - {"du", "v", "r", "delta"} - set(delays))
+        channels = _channels({v for f in self.accepted for v in f.variables}, delays)
         title = "; ".join(_title(f) for f in self.accepted)
         physics = " ".join(_physics(f, self.records) for f in self.accepted)
-        return Effect(name, title, physics, tuple(channels), terms, delays=delays)
+        return Effect(name, title, physics, channels, terms, delays=delays)
 
     def effect_toml(self, name: str | None = None) -> str:
         """The best finding as an effect file in the catalogue's format (docs/effects.md)."""
@@ -218,7 +220,10 @@ class Discovery:
                                           f"{intervals[c][1]:.2f} s" if c in intervals else "")
                       for c, d in effect.delays.items()]
         if any(effect.terms.values()):
-            lines += ["", "[terms]"]
+            lines += [""]
+            lines += [f"# {shape_words(f.variables, f.intervals)}" for f in self.accepted
+                      if shape_words(f.variables, f.intervals)]
+            lines += ["[terms]"]
             lines += [f"{dof} = {json.dumps([t.text for t in effect.terms[dof]])}"
                       for dof in DOFS if effect.terms[dof]]
         return "\n".join(lines) + "\n"
@@ -287,6 +292,11 @@ _HINTS = {
               "(cross-flow drag, vortex shedding)",
     "rate": "a rudder force that follows the rudder's rate of change: the recorded angle leads "
             "or lags the force it causes (the delay search says by how much)",
+    "edge": "hull or rudder forces that change across a line: shallow water or a channel "
+            "beyond an edge (log the depth and refit with it as a channel), a change of "
+            "current",
+    "bank": "an earth-fixed pull toward a line the ship does not cross that grows as the ship "
+            "comes close: the suction of a bank or a quay wall",
 }
 
 
@@ -315,6 +325,11 @@ def _title(finding: Finding) -> str:
     if finding.delays:
         channel, tau = next(iter(finding.delays.items()))
         return f"{channel} late by {tau:.1f} s (discovered)"
+    if finding.family in SHAPE_KINDS:
+        what = "Forces that change across" if finding.family == "edge" else "The pull of a bank on"
+        shape = next(parse_shape(v) for v in finding.variables if parse_shape(v))
+        return (f"{what} a line {shape.distance:+.1f} L along the bearing "
+                f"{shape.bearing:03.0f} deg (discovered)")
     return f"Missing {finding.family} terms (discovered)"
 
 
@@ -324,6 +339,9 @@ def _physics(finding: Finding, records: Sequence[str]) -> str:
     what = (", ".join(f"{c} read {d:+.2f} s later" for c, d in finding.delays.items())
             if finding.delays else
             "; ".join(f"{dof}: {', '.join(ts)}" for dof, ts in finding.terms.items() if ts))
+    line = shape_words(finding.variables, finding.intervals)
+    if line:
+        what = f"{line}. {what}"
     return (f"Discovered by sindyship discover from {len(records)} records "
             f"({', '.join(records)}); not in the catalogue. {what}. It explains "
             f"{finding.explained_signal:.0%} of the cross-validated force error above the noise "
@@ -475,10 +493,12 @@ def discover(
             break
         effect = _as_effect(best, len(accepted) + 1)
         won = True
-        for stand_in in stand_ins:  # the finding must fly better than each, most explaining first
+        rivals = [load_effect(name) for name in stand_ins]  # most explaining first
+        if best.family in SHAPE_KINDS:  # chosen among hundreds of lines: flights must agree
+            rivals.append(None)
+        for rival in rivals:  # the finding must fly better than each
             contests.append(flight_contest(records, measured, ship, library_now,
-                                           (best.family, effect), load_effect(stand_in),
-                                           settings))
+                                           (best.family, effect), rival, settings))
             if contests[-1].winner != "finding":
                 won = False
                 break
@@ -501,8 +521,8 @@ def _meaningful_catalogue(records, ship, library, threshold, settings) -> dict[s
 
 def _as_effect(finding: Finding, k: int) -> Effect:
     """A finding as an in-memory effect (to search again with it in the library)."""
-    channels = sorted(set(finding.variables) - {"du", "v", "r", "delta"} - set(finding.delays))
-    return Effect(f"found{k}", finding.family, "", tuple(channels), finding.terms,
+    return Effect(f"found{k}", finding.family, "", _channels(finding.variables, finding.delays),
+                  finding.terms,
                   delays=finding.delays)
 
 
@@ -537,9 +557,29 @@ def _search(records, ship, library, settings, threshold, n_jobs=1
         logged_wind = all(r.has("wind_speed") and r.has("wind_dir") for r in records)
         findings.append(_finding(family.name, chosen, {}, e0, errors, noise, groups,
                                  threshold, used, logged_wind=logged_wind))
+    for kind in SHAPE_KINDS:  # a shape of the position times the library's own terms
+        line = search_shape(kind, records, ship, library, problems, settings["rudder_signal"])
+        if line is None:
+            continue
+        chosen, errors = _search_family(line.family(library), records, ship, library,
+                                        problems, settings["rudder_signal"])
+        if not chosen:
+            continue
+        used = {v for ts in chosen.values() for t in ts for v in _variables_of(t)}
+        findings.append(_finding(kind, chosen, {}, e0, errors, noise, groups, threshold, used,
+                                 intervals=line.intervals))
     findings.sort(key=lambda f: (-f.explained_signal, -f.explained, f.family))
     floor = {dof: min(noise[dof] / max(float(e0[dof] @ e0[dof]), 1e-300), 1.0) for dof in DOFS}
     return findings, floor
+
+
+def _channels(variables, delays) -> tuple[str, ...]:
+    """The recorded channels an effect's variables are made from, beyond du, v, r, delta and
+    the delayed channels (a shape of the position is made from x and y)."""
+    from ..terms import sources_of
+
+    sources = {source for name in variables for source in sources_of(name)}
+    return tuple(sorted(sources - {"du", "v", "r", "delta"} - set(delays)))
 
 
 def _variables_of(text: str) -> frozenset[str]:

@@ -322,11 +322,15 @@ class Effect:
                     f'{_where(label)}"{channel}" is always available; list only the channels '
                     "beyond du, v, r and delta."
                 )
-        used = {source for name in _variables(frozen) for source in sources_of(name)}
+        made_from = {name: sources_of(name) for name in sorted(_variables(frozen))}
+        used = {source for sources in made_from.values() for source in sources}
         undeclared = sorted(used - set(CORE_VARIABLES) - set(channels))
         if undeclared:
+            derived = next((name for name, sources in made_from.items()
+                            if undeclared[0] in sources and sources != (name,)), None)
+            what = "the terms use" if derived is None else f'the terms\' "{derived}" is made from'
             raise SindyshipInputError(
-                f'{_where(label)}the terms use the channel "{undeclared[0]}"; add it to channels.'
+                f'{_where(label)}{what} the channel "{undeclared[0]}"; add it to channels.'
             )
         object.__setattr__(self, "terms", frozen)
         object.__setattr__(self, "channels", channels)

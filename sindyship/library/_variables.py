@@ -8,7 +8,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sindyship.errors import SindyshipInputError
-from sindyship.terms import CORE_VARIABLES, DERIVED_SOURCES, Term, describe_variable
+from sindyship.terms import (
+    CORE_VARIABLES,
+    DERIVED_SOURCES,
+    Term,
+    describe_variable,
+    is_shape_name,
+    parse_shape,
+    shape_values,
+    sources_of,
+)
 
 from ._objects import Effect, TermLibrary
 
@@ -88,9 +97,17 @@ def rescaled_to_speed(values: dict, names, ratio) -> None:
             values[name] = values[name] / ratio
 
 
-def derived_variables(values: dict, names, u, v, psi, U0: float) -> None:
-    """The derived variables among ``names`` (:data:`sindyship.terms.DERIVED_SOURCES`) from
-    the SI motion and the recorded channels in ``values`` (library scaling), in place."""
+def derived_variables(values: dict, names, u, v, psi, U0: float, L: float | None = None
+                      ) -> None:
+    """The derived variables among ``names`` from the SI motion and the recorded channels in
+    ``values`` (library scaling), in place: the apparent wind
+    (:data:`sindyship.terms.DERIVED_SOURCES`), and the shapes of the position
+    (:func:`sindyship.terms.shape_values`, from ``values["x"]``, ``values["y"]`` [m] and the
+    ship length ``L``)."""
+    for name in names:
+        shape = parse_shape(name)
+        if shape is not None:
+            values[name] = shape_values(shape, values["x"], values["y"], L)
     if not ({"wind_app_speed", "wind_app_angle"} & set(names)):
         return
     speed, angle = apparent_wind(u, v, psi, np.asarray(values["wind_speed"]) * U0,
@@ -168,10 +185,10 @@ def nondimensional_variables(
         kind = "library" if isinstance(needed, TermLibrary) else "effect"
         names, requester = set(needed.variables), f'{kind} "{needed.name}"'
     else:
-        names, requester = set(needed), "the terms"
+        names, requester = set(needed), "a term"
     record = f'record "{trajectory.name}"' if trajectory.name else "the record"
-    derived = names & set(DERIVED_SOURCES)
-    sources = {source for name in derived for source in DERIVED_SOURCES[name]}
+    derived = {name for name in names if name in DERIVED_SOURCES or is_shape_name(name)}
+    sources = {source for name in derived for source in sources_of(name)}
     order = sorted(names - derived | sources, key=lambda n: (n not in CORE_VARIABLES,
                                                              _core_rank(n), n))
     out: dict[str, np.ndarray] = {}
@@ -179,8 +196,9 @@ def nondimensional_variables(
         column = _column(trajectory, describe_variable(name), rudder, requester, record)
         out[name] = _SCALINGS[describe_variable(name).scaling](column, float(L), float(U0))
     if derived:
-        derived_variables(out, derived, trajectory["u"], trajectory["v"], trajectory["psi"],
-                          U0)
+        motion = ((trajectory["u"], trajectory["v"], trajectory["psi"])
+                  if derived & set(DERIVED_SOURCES) else (None, None, None))  # the wind's
+        derived_variables(out, derived, *motion, U0, float(L))
     if speed == "instantaneous":
         ratio = speed_ratio(trajectory["u"], trajectory["v"], U0)
         rescaled_to_speed(out, [n for n in out if n not in ("du",)], ratio)

@@ -36,6 +36,16 @@ array([ 0.01, -0.04])
 from __future__ import annotations
 
 from ._parser import Factor
+from ._shapes import (
+    BANK_NEAREST,
+    SHAPE_KINDS,
+    Shape,
+    describe_shape,
+    is_shape_name,
+    parse_shape,
+    shape_name,
+    shape_values,
+)
 from ._term import Term, evaluate_factor, parse_term
 from ._variables import (
     CORE_VARIABLES,
@@ -53,6 +63,7 @@ from ._variables import (
 )
 
 __all__ = [
+    "BANK_NEAREST",
     "CORE_VARIABLES",
     "DERIVED_SOURCES",
     "FUNCTIONS",
@@ -60,13 +71,20 @@ __all__ = [
     "MAX_DEGREE",
     "MAX_FACTORS",
     "MAX_TERM_LENGTH",
+    "SHAPE_KINDS",
+    "Shape",
     "Term",
     "VARIABLES",
     "Variable",
     "channel_scaling",
+    "describe_shape",
     "describe_variable",
     "evaluate_factor",
+    "is_shape_name",
     "is_variable_name",
+    "parse_shape",
     "parse_term",
+    "shape_name",
+    "shape_values",
     "sources_of",
 ]

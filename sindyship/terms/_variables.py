@@ -10,6 +10,8 @@ from types import MappingProxyType
 import numpy as np
 import sympy
 
+from ._shapes import describe_shape, is_shape_name, parse_shape
+
 #: Functions a factor may apply to a variable.
 FUNCTIONS = ("abs", "sign", "sin", "cos")
 #: The motion variables of the Abkowitz expansion (paper eq. 15), in the paper's order.
@@ -142,6 +144,8 @@ def sources_of(name: str) -> tuple[str, ...]:
     >>> sources_of("wind_app_angle"), sources_of("n")
     (('wind_speed', 'wind_dir'), ('n',))
     """
+    if is_shape_name(name):
+        return ("x", "y")
     return DERIVED_SOURCES.get(name, (name,))
 
 
@@ -158,6 +162,10 @@ def describe_variable(name: str) -> Variable:
     known = VARIABLES.get(name)
     if known is not None:
         return known
+    shape = parse_shape(name)
+    if shape is not None:
+        latex = r"\mathrm{" + name.replace("_", r"\_") + "}"
+        return Variable(name, "position", "none", latex, name, latex, describe_shape(shape))
     latex = r"\mathrm{" + name.replace("_", r"\_") + "}"
     return Variable(name, name, "none", latex, name, latex, f"channel {name} as recorded")
 
