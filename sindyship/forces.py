@@ -48,8 +48,8 @@ from .errors import SindyshipInputError
 from .identify import ENVELOPE_VARIABLES, training_envelope
 from .model import AbkowitzModel, coriolis_of_values
 from .ships import Ship
-from .trajectory import Trajectory
 from .terms import sources_of
+from .trajectory import Trajectory
 
 __all__ = [
     "ENVELOPE_VARIABLES",
