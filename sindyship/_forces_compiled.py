@@ -192,9 +192,9 @@ def _extra_variables(dynamics, names, n_states, t, members, position, rudder_rat
         elif name in ("x", "y"):
             if position is not None:
                 extra[k] = position[0 if name == "x" else 1]
-        elif is_shape_name(name):
-            x, y = position if position is not None else (0.0, 0.0)
-            extra[k] = shape_values(parse_shape(name), x, y, L)
+        elif is_shape_name(name):  # without a position, away from every line (0)
+            if position is not None:
+                extra[k] = shape_values(parse_shape(name), position[0], position[1], L)
         elif name == "delta_rate":
             if rudder_rate is not None:
                 extra[k] = rudder_rate * L / U0

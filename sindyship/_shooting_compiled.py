@@ -16,7 +16,6 @@ import math
 import numpy as np
 
 from ._forces_compiled import COMPILED
-from .terms import BANK_NEAREST
 
 try:  # optional: pip install "sindyship[fast]"
     import numba
@@ -35,7 +34,8 @@ def _variables(z, rudder, rate, extras, kinds, sources, shapes, wind_rows, insta
                floor, U0, L, out):
     """The library's variables of one state into ``out``; returns the speed factor
     (U/U0)^2 (1 in the design form).  ``shapes`` holds each shape variable's (cos and sin of
-    its bearing, distance, width) (:func:`sindyship.terms.shape_values`)."""
+    its bearing, distance, and an edge's width or a bank's nearest distance)
+    (:func:`sindyship.terms.shape_values`)."""
     u, v, r, x, y, psi = z[0], z[1], z[2], z[3], z[4], z[5]
     ratio = 1.0
     if instantaneous:
@@ -62,7 +62,7 @@ def _variables(z, rudder, rate, extras, kinds, sources, shapes, wind_rows, insta
             if kind == SHAPE_EDGE:
                 value = 0.5 * (1.0 + math.tanh(across / shapes[k, 3]))
             else:
-                value = 1.0 / max(abs(across), BANK_NEAREST) ** 2
+                value = 1.0 / max(abs(across), shapes[k, 3]) ** 2
                 value = -value if across > 0.0 else (value if across < 0.0 else 0.0)
         else:  # the apparent wind, from the true wind and the motion
             speed = extras[wind_rows[0]] * U0
@@ -501,7 +501,7 @@ def _tables(model, names, integer_tables, channel_names):
     """How the compiled loop makes each of the model's variables beyond the state's, and the
     model's factor tables (None when a variable has no compiled form)."""
     from .library import SPEED_FLOOR
-    from .terms import describe_variable, parse_shape
+    from .terms import BANK_NEAREST, describe_variable, parse_shape
 
     kinds, sources, shapes = [], [], np.zeros((max(len(names) - 5, 1), 4))
     for k, name in enumerate(names[5:]):
@@ -511,7 +511,8 @@ def _tables(model, names, integer_tables, channel_names):
         elif shape is not None:
             kinds.append(SHAPE_EDGE if shape.kind == "edge" else SHAPE_BANK)
             bearing = math.radians(shape.bearing)
-            shapes[k] = (math.cos(bearing), math.sin(bearing), shape.distance, shape.width)
+            shapes[k] = (math.cos(bearing), math.sin(bearing), shape.distance,
+                         shape.width if shape.kind == "edge" else BANK_NEAREST)
         elif name == "delta_rate":
             kinds.append(RUDDER_RATE)
         elif name in ("wind_app_speed", "wind_app_angle"):

@@ -46,7 +46,7 @@ from .library import (
 from .ships import Ship, ship_digest, ship_to_dict
 from .simulation.kernels import ChannelSeries
 from .targets import DOFS, abkowitz_mass_matrix, coriolis, coriolis_factors
-from .terms import DERIVED_SOURCES, Factor, evaluate_factor, sources_of
+from .terms import DERIVED_SOURCES, Factor, evaluate_factor, is_shape_name, sources_of
 from .trajectory import Trajectory
 
 #: The variables :func:`motion_variables` makes (not rescaled again to the speed).
@@ -335,8 +335,9 @@ class AbkowitzModel:
         """The library's variables in a flight: the motion's (:func:`motion_variables`, in the
         library's speed form), the recorded ``channels`` (library scaling, over U0), the
         variables made from the flown motion (the apparent wind), the flown position (x, y)
-        [m] and the servo's ``rudder_rate`` [rad/s] (the origin and a still rudder when not
-        given)."""
+        [m] and the shapes of it, and the servo's ``rudder_rate`` [rad/s] (without a
+        position: the origin, and every shape 0, away from its line; a still rudder when no
+        rate is given)."""
         ship, library = self.ship, self.library
         values = motion_variables(u, v, r, delta, psi, ship.L, ship.U0, library.speed)
         values.update(channels)
@@ -344,6 +345,8 @@ class AbkowitzModel:
         if self._uses_position:
             values["x"], values["y"] = (zero, zero) if position is None else position
         derived_variables(values, library.variables, u, v, psi, ship.U0, ship.L)
+        if position is None:  # no place (a stability analysis): away from every shape's line
+            values.update({name: zero for name in library.variables if is_shape_name(name)})
         if "delta_rate" in library.variables:
             values["delta_rate"] = (zero if rudder_rate is None else rudder_rate) \
                 * ship.L / ship.U0

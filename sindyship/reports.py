@@ -539,6 +539,7 @@ def discovery_report(discovery, effect_file: str | None = None) -> str:
             f"Not searched: the columns {listed}, whose names no term can use; rename them "
             "with lower-case letters, digits and single underscores (heel, wave_height) to "
             "search them.", indent="", subsequent=""))
+    lines += [_fill(note, indent="", subsequent="") for note in getattr(discovery, "notes", [])]
     floor = ", ".join(f"{dof} {share:.0%}" for dof, share in discovery.noise_floor.items())
     lines.append(f"Noise floor (share of the leave-one-manoeuvre-out error): {floor}.")
     if not discovery.findings:

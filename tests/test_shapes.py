@@ -48,9 +48,18 @@ def test_a_shape_name_carries_its_line(name, kind, bearing, distance, width):
 
 
 @pytest.mark.parametrize("name", ["edge_b000_p020", "edge_b360_p020_w05", "edge_b000_p020_w00",
-                                  "bank_b000_p020_w05", "edge_b00_p020_w05", "depth"])
-def test_other_names_are_not_shapes(name):
+                                  "bank_b000_p020_w05", "edge_b00_p020_w05", "edge_b000_p20_w5",
+                                  "bank_b090_m0080"])
+def test_a_name_like_a_shape_that_is_not_one_is_refused_in_a_term(name):
     assert not is_shape_name(name) and sources_of(name) == (name,)
+    with pytest.raises(SindyshipInputError, match="is named like a shape but is not one"):
+        Term(f"{name} v")
+
+
+def test_far_lines_keep_their_names_and_other_names_stay_channels():
+    far = shape_name("bank", 90.0, -1300.0)
+    assert far == "bank_b090_m13000" and parse_shape(far).distance == -1300.0
+    assert not is_shape_name("depth") and Term("depth v").variables == {"depth", "v"}
 
 
 def test_an_edge_steps_across_its_line_and_a_bank_pulls_toward_its_own():
@@ -130,6 +139,16 @@ def test_multiple_shooting_flies_shapes_as_the_model_does(kcs, protocol_runs, co
     assert np.all(np.isfinite(jacobian[0, : len(rows)]))
 
 
+def test_without_a_position_every_shape_is_away_from_its_line(kcs):
+    model = _shaped_model(kcs)
+    state = [np.array([7.0]), np.array([0.1]), np.array([0.001]), np.array([0.0]),
+             np.array([0.3])]
+    values = model.flight_variables(*state, {})
+    assert values[EDGE][0] == 0.0 and values[BANK][0] == 0.0
+    placed = model.flight_variables(*state, {}, position=(np.array([900.0]), np.array([0.0])))
+    assert placed[EDGE][0] > 0.99 and placed[BANK][0] < 0.0
+
+
 def test_the_generated_simulator_refuses_shapes_in_one_sentence(kcs):
     from sindyship.export import generate_python
 
@@ -139,8 +158,8 @@ def test_the_generated_simulator_refuses_shapes_in_one_sentence(kcs):
 
 
 def test_an_effect_with_a_shape_declares_the_position_it_is_made_from():
-    with pytest.raises(SindyshipInputError,
-                       match='"edge_b000_p020_w05" is made from the channel "x"; add it'):
+    with pytest.raises(SindyshipInputError, match='"edge_b000_p020_w05" is made from the '
+                                                  'channels "x" and "y"; add them'):
         Effect("patch", "Patch", "Text.", (), {"Y": [f"{EDGE} v"]})
     assert Effect("patch", "Patch", "Text.", ("x", "y"), {"Y": [f"{EDGE} v"]}).variables == \
         {EDGE, "v"}
@@ -162,6 +181,19 @@ def _symmetric():
     from sindyship.ships import load_ship
 
     return load_ship("kcs").with_rudder(gamma_R_stbd=0.415, gamma_R_port=0.415)
+
+
+def test_tracks_far_from_the_origin_are_not_searched_for_shapes_and_the_report_says_so(
+        patch_runs):
+    from sindyship.trajectory import Trajectory
+
+    ship, runs = patch_runs
+    shifted = [Trajectory(r.data.assign(x=r["x"] + 3e5, y=r["y"] - 4e6), name=r.name)
+               for r in runs[:3]]
+    found = discover(shifted, ship, check_catalogue=False)
+    assert not any(f.family in ("edge", "bank") for f in found.findings)
+    assert "Shapes of the position were not searched" in found.report()
+    assert found.to_json()["notes"] == found.notes and len(found.notes) == 1
 
 
 def test_discover_finds_the_edge_of_a_shallow_patch_and_flights_confirm_it(patch_runs,

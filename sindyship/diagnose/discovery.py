@@ -61,7 +61,7 @@ from .delays import lomo_errors, search_delay
 from .noise import noise_sse
 from .ranking import rank_effects
 from .scoring import _dof_shares
-from .shapes import search_shape
+from .shapes import far_from_origin, search_shape
 
 #: Most terms a family may add to one equation.
 MAX_TERMS = 4
@@ -161,9 +161,14 @@ class Discovery:
     unnamed_channels : list of str
         Recorded columns left out of the search because no term can name them.
     contests : list of FlightContest
-        Each round's best meaningful finding against the meaningful catalogued effects, most
-        explaining first, flown (:func:`sindyship.diagnose.contest.flight_contest`) until one
-        does not lose; the round's finding is accepted only when it won every contest.
+        Each round's meaningful findings against the meaningful catalogued effects, most
+        explaining first (and a shape also against the library alone), flown
+        (:func:`sindyship.diagnose.contest.flight_contest`) until one does not lose; a finding
+        is accepted only when it won every contest.  A shape that loses to the library alone
+        was a chance fit, and the round's next meaningful finding is tried.
+    notes : list of str
+        What the search left out and why (shapes of the position on tracks far from the
+        origin).
     """
 
     library: TermLibrary
@@ -177,6 +182,7 @@ class Discovery:
     smoothing: dict | None = None
     unnamed_channels: list[str] = field(default_factory=list)
     contests: list[FlightContest] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def findings(self) -> list[Finding]:
@@ -254,6 +260,7 @@ class Discovery:
             "rounds": [[f.to_json() for f in found] for found in self.rounds],
             "catalogue_meaningful": self.catalogue, "smoothing": self.smoothing,
             "unnamed_channels": self.unnamed_channels,
+            "notes": self.notes,
             "contests": [c.to_json() for c in self.contests], "seconds": self.seconds,
         })
 
@@ -488,28 +495,38 @@ def discover(
         rounds.append(findings)
         if len(rounds) == 1:
             first_floor = floor
-        best = next((f for f in findings if f.meaningful), None)
+        best = None
+        for candidate in (f for f in findings if f.meaningful):
+            effect = _as_effect(candidate, len(accepted) + 1)
+            rivals = [load_effect(name) for name in stand_ins]  # most explaining first
+            if candidate.family in SHAPE_KINDS:  # a line chosen among hundreds: flights decide
+                rivals.append(None)
+            lost = None  # the position in rivals of the first that flies as well or better
+            for k, rival in enumerate(rivals):  # the finding must fly better than each
+                contests.append(flight_contest(records, measured, ship, library_now,
+                                               (candidate.family, effect), rival, settings))
+                if contests[-1].winner != "finding":
+                    lost = k
+                    break
+            if lost is None:
+                best = candidate
+                break
+            if lost < len(stand_ins):
+                break  # a catalogued effect flies as well or better: the user adds it first
+            # a shape that flies no better than the library alone was a chance fit: go on
         if best is None:
             break
-        effect = _as_effect(best, len(accepted) + 1)
-        won = True
-        rivals = [load_effect(name) for name in stand_ins]  # most explaining first
-        if best.family in SHAPE_KINDS:  # chosen among hundreds of lines: flights must agree
-            rivals.append(None)
-        for rival in rivals:  # the finding must fly better than each
-            contests.append(flight_contest(records, measured, ship, library_now,
-                                           (best.family, effect), rival, settings))
-            if contests[-1].winner != "finding":
-                won = False
-                break
-        if not won:
-            break
         accepted.append(best)
-        library_now = library_now.extended(effect)
+        library_now = library_now.extended(_as_effect(best, len(accepted)))
+    far = far_from_origin(records, ship.L)
+    notes = [] if far is None else [
+        f"Shapes of the position were not searched: the tracks lie {far:.0f} ship lengths "
+        "from the origin (projected coordinates?); subtract a point near the trials from x "
+        "and y, the same for every record, to search them."]
     return Discovery(base, [r.name for r in records], rounds, accepted, first_floor, threshold,
                      time.perf_counter() - start, catalogue,
                      None if setting is None else setting.as_dict(), unnamed_channels(records),
-                     contests)
+                     contests, notes)
 
 
 def _meaningful_catalogue(records, ship, library, threshold, settings) -> dict[str, float]:

@@ -9,18 +9,24 @@ A shallow patch or a bank changes the forces where the ship is.  A modulated fam
     yaw): hull and rudder derivatives that change across the line, as over a shallow patch
     or in a channel.  The step is half a ship length wide.
 ``bank``
-    The pull of a line (``sign(d) (L/d)^2``) times ``sin(psi)`` and ``cos(psi)`` in every
-    equation: an earth-fixed force toward a bank that grows as the ship comes close.  Only
-    lines the ship never crosses are tried.
+    The pull of a line (``sign(d) (L/max(|d|, L/2))^2``) times ``sin(psi)`` and ``cos(psi)``
+    in every equation: an earth-fixed force toward a bank that grows as the ship comes close.
+    Only lines the ship never crosses are tried.
 
 The line's place (its bearing and its distance from the origin) is searched as a delay is:
-every line of a coarse grid (bearings every 15 deg, distances every quarter ship length over
-the tracks) is scored by the leave-one-manoeuvre-out error of the library refitted with the
-family's terms (all of them, from per-manoeuvre Gram matrices, so that thousands of lines cost
-seconds), the best line is refined on a finer grid about it (2.5 deg, 0.1 L), and
-:class:`~sindyship.optimizers.ForwardSelection` then picks the family's terms at that line as
-for any other family.  The interval of each parameter comes from resampling the manoeuvres
-over the fine grid, as for a delay (:func:`sindyship.diagnose.delays.delay_interval`).
+every line of a coarse grid (bearings every 15 deg; edges at 48 quantiles of the tracks along
+the bearing, banks every ship length out to 20 L beyond the tracks) is scored by the
+leave-one-manoeuvre-out error of the library refitted with all of the family's terms (from
+per-manoeuvre Gram matrices, so that hundreds of lines cost a second), the best line is refined
+on a finer grid about it (3 deg, 0.1 L), and :class:`~sindyship.optimizers.ForwardSelection`
+then picks the family's terms at that line as for any other family.  The intervals of the
+bearing and the distance come from resampling the manoeuvres over the fine grid, as for a
+delay (:func:`sindyship.diagnose.delays.delay_interval`): they say how far the records agree
+about the line near the best coarse one, each parameter's interval pooled over the other's.
+
+Every record must share one earth frame (the lines are fixed in it); tracks farther than
+:data:`FAR_ORIGIN` ship lengths from the origin are not searched (:func:`far_from_origin`):
+a whole-degree bearing would place a line there too coarsely.
 """
 
 from __future__ import annotations
@@ -45,10 +51,15 @@ EDGE_WIDTH = 0.5
 #: Coarse grid: bearing step [deg]; edges at as many quantiles of the tracks' samples along
 #: the bearing, banks every ship length beyond the tracks; one sample in COARSE_STRIDE (in
 #: FINE_STRIDE on the fine grid).
-#: Fine grid about the best coarse line: half-widths and steps.
 COARSE_BEARING, COARSE_EDGES, COARSE_STRIDE, FINE_STRIDE = 15.0, 48, 8, 2
-FINE_BEARING, FINE_BEARING_STEP = 15.0, 2.5
+#: Fine grid about the best coarse line: half-widths and steps [deg, ship lengths], on the
+#: whole degrees and tenths the shape names carry.
+FINE_BEARING, FINE_BEARING_STEP = 15.0, 3.0
 FINE_DISTANCE, FINE_DISTANCE_STEP = 0.5, 0.1
+#: Farthest median distance of the tracks from the origin that is searched [ship lengths].
+FAR_ORIGIN = 100.0
+#: Lines scored at once (memory: a few Gram matrices per line and manoeuvre).
+CHUNK = 256
 #: How far beyond the tracks a bank's line is tried [ship lengths].
 BANK_REACH = 20.0
 
@@ -127,14 +138,15 @@ def _coarse_lines(kind: str, positions, L: float) -> list[tuple[float, float]]:
                 along, np.linspace(0.0, 1.0, COARSE_EDGES)) / 0.1) * 0.1)
         else:
             beyond = np.arange(1.0, BANK_REACH + 1.0, 1.0)
-            distances = np.concatenate([low - beyond[::-1], high + beyond])
+            distances = np.round(np.concatenate([low - beyond[::-1], high + beyond]), 1)
         lines += [(float(bearing), float(d)) for d in distances]
     return lines
 
 
 def _fine_lines(kind: str, best: tuple[float, float], positions, L: float):
     bearings = best[0] + np.arange(-FINE_BEARING, FINE_BEARING + 1e-9, FINE_BEARING_STEP)
-    distances = best[1] + np.arange(-FINE_DISTANCE, FINE_DISTANCE + 1e-9, FINE_DISTANCE_STEP)
+    distances = np.round(best[1] + np.arange(-FINE_DISTANCE, FINE_DISTANCE + 1e-9,
+                                             FINE_DISTANCE_STEP), 1)
     lines = [(float(b), float(d)) for b in bearings for d in distances]
     if kind == "bank":  # a bank's line stays off the tracks
         lines = [line for line in lines if not _crosses(line, positions, L)]
@@ -221,8 +233,13 @@ def _scores(kind, lines, positions, lomo, L, rows):
     shapes = [shape_name(kind, b, d, EDGE_WIDTH) for b, d in lines]
     x = np.concatenate([p[0] for p in positions])[rows]
     y = np.concatenate([p[1] for p in positions])[rows]
-    values = np.column_stack([shape_values(parse_shape(s), x, y, L) for s in shapes])
-    return shapes, {dof: lomo[dof].sse(values) for dof in DOFS}
+    out = {dof: [] for dof in DOFS}
+    for start in range(0, len(shapes), CHUNK):
+        values = np.column_stack([shape_values(parse_shape(s), x, y, L)
+                                  for s in shapes[start:start + CHUNK]])
+        for dof in DOFS:
+            out[dof].append(lomo[dof].sse(values))
+    return shapes, {dof: np.vstack(out[dof]) for dof in DOFS}
 
 
 def _cost(sse, lomo, weights=None):
@@ -237,7 +254,10 @@ def _cost(sse, lomo, weights=None):
 def search_shape(kind: str, records: Sequence, ship, library, problems, rudder_signal: str,
                  *, n_boot: int = BOOTSTRAP) -> ShapeSearch | None:
     """The line of a ``kind`` shape whose family lowers the leave-one-manoeuvre-out error of
-    ``library``'s refit the most (None when the records have no position to search)."""
+    ``library``'s refit the most (None when the records have no position to search, or lie
+    too far from the origin: :func:`far_from_origin`)."""
+    if far_from_origin(records, ship.L) is not None:
+        return None
     motion = _motion(records, ship, library, rudder_signal, kind)
     groups = problems["X"].groups
     members = [np.flatnonzero(groups == g) for g in np.unique(groups)]
@@ -259,14 +279,15 @@ def search_shape(kind: str, records: Sequence, ship, library, problems, rudder_s
     names, sse = _scores(kind, fine, positions, lomo, ship.L, some)
     cost = _cost(sse, lomo)
     k = int(np.argmin(cost))
+    named = np.array([(shape.bearing, shape.distance) for shape in map(parse_shape, names)])
     rng = np.random.default_rng(0)
     n_groups = len(members)
     draws = []
     for _ in range(n_boot):
         weights = np.bincount(rng.integers(0, n_groups, n_groups), minlength=n_groups)
-        draws.append(fine[int(np.argmin(_cost(sse, lomo, weights.astype(float))))])
+        draws.append(named[int(np.argmin(_cost(sse, lomo, weights.astype(float))))])
     draws = np.array(draws)
-    bearing_low, bearing_high = _circular_interval(draws[:, 0], fine[k][0])
+    bearing_low, bearing_high = _circular_interval(draws[:, 0], named[k, 0])
     distance_low, distance_high = np.percentile(draws[:, 1], [2.5, 97.5])
     return ShapeSearch(kind, names[k], float(cost[k]),
                        {"bearing_deg": [bearing_low, bearing_high],
@@ -274,8 +295,19 @@ def search_shape(kind: str, records: Sequence, ship, library, problems, rudder_s
                        len(coarse) + len(fine))
 
 
+def far_from_origin(records: Sequence, L: float) -> float | None:
+    """The median distance of the tracks from the origin [ship lengths] when it exceeds
+    :data:`FAR_ORIGIN` (projected coordinates such as UTM), else None."""
+    x = np.concatenate([np.asarray(r["x"], dtype=float) for r in records])
+    y = np.concatenate([np.asarray(r["y"], dtype=float) for r in records])
+    distance = float(np.nanmedian(np.hypot(x, y))) / L if x.size else 0.0
+    return distance if distance > FAR_ORIGIN else None
+
+
 def _circular_interval(bearings: np.ndarray, centre: float) -> tuple[float, float]:
     """The 95 % interval of bearings [deg] about ``centre`` (differences wrapped to +-180)."""
     offsets = (bearings - centre + 180.0) % 360.0 - 180.0
-    low, high = np.percentile(offsets, [2.5, 97.5])
-    return float(centre + low), float(centre + high)
+    low, high = centre + np.percentile(offsets, [2.5, 97.5])
+    if low >= 180.0:  # read from just below north: [-3, 15], not [357, 375]
+        low, high = low - 360.0, high - 360.0
+    return float(low), float(high)

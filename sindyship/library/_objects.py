@@ -328,9 +328,15 @@ class Effect:
         if undeclared:
             derived = next((name for name, sources in made_from.items()
                             if undeclared[0] in sources and sources != (name,)), None)
-            what = "the terms use" if derived is None else f'the terms\' "{derived}" is made from'
+            if derived is None:
+                raise SindyshipInputError(f'{_where(label)}the terms use the channel '
+                                          f'"{undeclared[0]}"; add it to channels.')
+            missing = [s for s in made_from[derived] if s in undeclared]
+            listed = " and ".join(f'"{s}"' for s in missing)
             raise SindyshipInputError(
-                f'{_where(label)}{what} the channel "{undeclared[0]}"; add it to channels.'
+                f'{_where(label)}the term variable "{derived}" is made from the '
+                f'channel{"s" if len(missing) > 1 else ""} {listed}; add '
+                f'{"them" if len(missing) > 1 else "it"} to channels.'
             )
         object.__setattr__(self, "terms", frozen)
         object.__setattr__(self, "channels", channels)

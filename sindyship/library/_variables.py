@@ -107,6 +107,11 @@ def derived_variables(values: dict, names, u, v, psi, U0: float, L: float | None
     for name in names:
         shape = parse_shape(name)
         if shape is not None:
+            if L is None or "x" not in values or "y" not in values:
+                raise SindyshipInputError(
+                    f'the shape "{name}" is made from the position: pass values["x"], '
+                    'values["y"] [m] and the ship length L.'
+                )
             values[name] = shape_values(shape, values["x"], values["y"], L)
     if not ({"wind_app_speed", "wind_app_angle"} & set(names)):
         return

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from ..errors import SindyshipInputError
+from ._shapes import shape_name_error
 from ._variables import (
     _DIGITS,
     _LOWER,
@@ -147,6 +148,9 @@ class _Scanner:
                 f'"{name}" (character {start + 1}) is not a variable name: lower-case letters, '
                 "digits and single underscores between them, starting with a letter"
             )
+        malformed = shape_name_error(name)
+        if malformed:
+            raise self.fail(f'"{name}" is named like a shape but is not one: {malformed}')
         return name
 
     def number(self) -> float:

@@ -41,7 +41,9 @@ import numpy as np
 
 #: The kinds of shape, with the parameters their names carry.
 SHAPE_KINDS = ("edge", "bank")
-_SHAPE_RE = re.compile(r"(edge|bank)_b(\d{3})_([pm])(\d{1,4})(?:_w(\d{1,3}))?")
+_SHAPE_RE = re.compile(r"(edge|bank)_b(\d{3})_([pm])(\d{3,})(?:_w(\d{2,}))?")
+#: The start of every shape name: a variable that starts so and is not a shape is refused.
+SHAPE_PREFIX = re.compile(r"(edge|bank)_b\d")
 #: The least distance to a bank's line [ship lengths]: nearer, the pull is held.
 BANK_NEAREST = 0.5
 
@@ -89,13 +91,34 @@ def parse_shape(name: str) -> Shape | None:
         return None
     if kind == "edge" and int(width) == 0:
         return None
-    return Shape(kind, float(bearing), (1 if sign == "p" else -1) * int(distance) / 10.0,
-                 int(width) / 10.0 if width is not None else 0.0)
+    shape = Shape(kind, float(bearing), (1 if sign == "p" else -1) * int(distance) / 10.0,
+                  int(width) / 10.0 if width is not None else 0.0)
+    return shape if shape.name == name else None  # one name for one shape
 
 
 def is_shape_name(name) -> bool:
     """Whether ``name`` is a shape variable (:func:`parse_shape`)."""
     return parse_shape(name) is not None
+
+
+def shape_name_error(name: str) -> str | None:
+    """Why a variable named like a shape (``edge_b...``, ``bank_b...``) is not one, or None.
+
+    Examples
+    --------
+    >>> shape_name_error("edge_b000_p20_w5")
+    'a shape name is edge_bBBB_pDDD_wWW or bank_bBBB_pDDD (bearing in whole degrees 000-359, \
+distance in tenths of a ship length with at least three digits, p ahead or m behind, width in \
+tenths with at least two digits, not 00), e.g. edge_b000_p020_w05'
+    >>> shape_name_error("depth") is None
+    True
+    """
+    if not isinstance(name, str) or not SHAPE_PREFIX.match(name) or is_shape_name(name):
+        return None
+    return ("a shape name is edge_bBBB_pDDD_wWW or bank_bBBB_pDDD (bearing in whole degrees "
+            "000-359, distance in tenths of a ship length with at least three digits, p ahead "
+            "or m behind, width in tenths with at least two digits, not 00), e.g. "
+            "edge_b000_p020_w05")
 
 
 def shape_name(kind: str, bearing: float, distance: float, width: float = 0.0) -> str:
@@ -109,6 +132,8 @@ def shape_name(kind: str, bearing: float, distance: float, width: float = 0.0) -
     """
     if kind not in SHAPE_KINDS:
         raise ValueError(f"a shape is one of {', '.join(SHAPE_KINDS)}, not {kind!r}")
+    if not (math.isfinite(bearing) and math.isfinite(distance) and math.isfinite(width)):
+        raise ValueError("a shape's bearing, distance and width must be finite numbers")
     tenths = int(round(distance * 10.0))
     name = f"{kind}_b{int(round(bearing)) % 360:03d}_{'p' if tenths >= 0 else 'm'}{abs(tenths):03d}"
     if kind == "edge":
@@ -129,8 +154,7 @@ def shape_values(shape: Shape, x, y, L: float) -> np.ndarray:
 
 def describe_shape(shape: Shape) -> str:
     """One line for people: what the shape is."""
-    side = "ahead of" if shape.distance >= 0 else "behind"
-    where = (f"a line {abs(shape.distance):.1f} L {side} the origin along the bearing "
+    where = (f"a line at {shape.distance:+.1f} L from the origin along the bearing "
              f"{shape.bearing:03.0f} deg")
     if shape.kind == "edge":
         return f"a smooth step from 0 to 1 across {where}, {shape.width:.1f} L wide"
