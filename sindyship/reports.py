@@ -487,7 +487,7 @@ def shape_words(variables, intervals) -> str:
     Examples
     --------
     >>> shape_words(["v", "edge_b000_p020_w05"], {"distance_L": [1.9, 2.1]})
-    'Shape: a smooth step from 0 to 1 across a line 2.0 L ahead of the origin along the \
+    'Shape: a smooth step from 0 to 1 across a line at +2.0 L from the origin along the \
 bearing 000 deg, 0.5 L wide (95 % intervals when the manoeuvres are resampled: distance 1.9 \
 to 2.1 L)'
     """
