@@ -48,7 +48,6 @@ from .errors import SindyshipInputError
 from .identify import ENVELOPE_VARIABLES, training_envelope
 from .model import AbkowitzModel, coriolis_of_values
 from .ships import Ship
-from .terms import sources_of
 from .trajectory import Trajectory
 
 __all__ = [
@@ -111,9 +110,7 @@ def model_captive_forces(model: AbkowitzModel, captive: pd.DataFrame) -> pd.Data
         raise SindyshipInputError(
             f"the captive table lacks the column '{missing[0]}'; give u, v, r and delta."
         )
-    placed = {"x", "y"} & {source for name in model.library.variables
-                           for source in sources_of(name)}
-    if placed - set(captive.columns):
+    if {"x", "y"} & model.library.sources - set(captive.columns):
         raise SindyshipInputError(
             "the model's terms depend on where the ship is (its position x, y, or a shape of "
             "it such as a bank's pull), which the captive table does not give; add columns x "

@@ -46,7 +46,7 @@ from .library import (
 from .ships import Ship, ship_digest, ship_to_dict
 from .simulation.kernels import ChannelSeries
 from .targets import DOFS, abkowitz_mass_matrix, coriolis, coriolis_factors
-from .terms import DERIVED_SOURCES, Factor, evaluate_factor, is_shape_name, sources_of
+from .terms import CORE_VARIABLES, DERIVED_SOURCES, Factor, evaluate_factor, is_shape_name
 from .trajectory import Trajectory
 
 #: The variables :func:`motion_variables` makes (not rescaled again to the speed).
@@ -251,8 +251,7 @@ class AbkowitzModel:
         # the compiled flights make the design form's variables from the state themselves
         self._compiled_flights = self._compiled is not None and self.library.speed == "design" \
             and not (set(DERIVED_SOURCES) & set(self.library.variables))
-        self._uses_position = any(source in ("x", "y") for name in self.library.variables
-                                  for source in sources_of(name))
+        self._uses_position = bool({"x", "y"} & self.library.sources)
         if self._compiled is not None:
             from ._forces_compiled import run_accelerations
 
@@ -327,7 +326,7 @@ class AbkowitzModel:
         """The channels the library uses that a flight takes from the record (all but the
         heading, the position and the rudder rate, which the flight makes itself; the sources
         of a variable made from the motion, such as the true wind of the apparent wind)."""
-        return sorted({source for name in self.library.channels for source in sources_of(name)}
+        return sorted(self.library.sources - set(CORE_VARIABLES)
                       - {"psi", "x", "y", "delta_rate"})
 
     def flight_variables(self, u, v, r, delta, psi, channels: Mapping, position=None,

@@ -37,7 +37,6 @@ from .errors import SindyshipInputError
 from .library import SPEED_FACTOR
 from .simulation import default_step, servo_of
 from .targets import DOFS, coriolis_factors
-from .terms import sources_of
 from .trajectory import Trajectory
 from .trials import flight_start
 
@@ -370,7 +369,7 @@ class _RightHandSide:
         self.perturbed = [0, 1, 2]  # u, v, r always; psi and the position when used
         if "psi" in variables or {"wind_app_speed", "wind_app_angle"} & set(variables):
             self.perturbed.append(5)
-        if {"x", "y"} & {source for name in variables for source in sources_of(name)}:
+        if {"x", "y"} & model.library.sources:
             self.perturbed += [3, 4]
         steps = np.array([self.U0, self.U0, self.U0 / self.L, self.L, self.L, 1.0])
         self.steps = STATE_STEP * steps

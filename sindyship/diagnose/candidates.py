@@ -88,6 +88,13 @@ class Family:
     terms: Mapping[str, tuple[str, ...]]
     variables: tuple[str, ...]
 
+    @classmethod
+    def of(cls, name: str, terms: Mapping[str, Sequence[str]]) -> Family:
+        """The family of ``terms``, with the variables they use."""
+        variables = {v for texts in terms.values() for t in texts for v in Term(t).variables}
+        return cls(name, {dof: tuple(terms.get(dof, ())) for dof in DOFS},
+                   tuple(sorted(variables)))
+
 
 def _grammar(name: str) -> str:
     """A pysindy feature name as a term: ``sin(1 psi)`` -> ``sin(psi)``, ``1 cos(1 psi)`` ->
@@ -191,7 +198,8 @@ def family_columns(family: Family, records: Sequence, library, ship, rudder_sign
             values.update(nondimensional_variables(aligned, ship.L, ship.U0, needed=extra))
         factor = values.get(SPEED_FACTOR, 1.0)  # (U/U0)^2 of the instantaneous form
         for dof in DOFS:
-            blocks[dof].append(np.column_stack(
-                [Term(t).evaluate(values) * factor for t in family.terms[dof]])
+            blocks[dof].append(np.column_stack(  # a constant term broadcast to the samples
+                [np.broadcast_to(Term(t).evaluate(values) * factor, (record.n_samples,))
+                 for t in family.terms[dof]])
                 if family.terms[dof] else np.empty((record.n_samples, 0)))
     return {dof: np.vstack(blocks[dof]) for dof in DOFS}

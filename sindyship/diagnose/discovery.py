@@ -228,8 +228,8 @@ class Discovery:
                       for c, d in effect.delays.items()]
         if any(effect.terms.values()):
             lines += [""]
-            lines += [f"# {shape_words(f.variables, f.intervals)}" for f in self.accepted
-                      if shape_words(f.variables, f.intervals)]
+            words = (shape_words(f.variables, f.intervals) for f in self.accepted)
+            lines += [f"# {line}" for line in words if line]
             lines += ["[terms]"]
             lines += [f"{dof} = {json.dumps([t.text for t in effect.terms[dof]])}"
                       for dof in DOFS if effect.terms[dof]]
@@ -475,26 +475,20 @@ def _search(records, ship, library, settings, threshold, n_jobs=1
         findings.append(_finding(f"delay:{channel}", {}, {channel: tau}, e0, errors, noise,
                                  groups, threshold, [channel], curve,
                                  intervals={channel: interval}))
-    for family in families(records, library, ship):
+    searched = [(family, {}) for family in families(records, library, ship)]
+    for kind in SHAPE_KINDS:  # a shape of the position, its line searched, times library terms
+        line = search_shape(kind, records, ship, library, problems, settings["rudder_signal"])
+        if line is not None:
+            searched.append((line.family(library), line.intervals))
+    logged_wind = all(r.has("wind_speed") and r.has("wind_dir") for r in records)
+    for family, intervals in searched:
         chosen, errors = _search_family(family, records, ship, library, problems,
                                         settings["rudder_signal"])
         if not chosen:
             continue
         used = {v for ts in chosen.values() for t in ts for v in _variables_of(t)}
-        logged_wind = all(r.has("wind_speed") and r.has("wind_dir") for r in records)
         findings.append(_finding(family.name, chosen, {}, e0, errors, noise, groups,
-                                 threshold, used, logged_wind=logged_wind))
-    for kind in SHAPE_KINDS:  # a shape of the position times the library's own terms
-        line = search_shape(kind, records, ship, library, problems, settings["rudder_signal"])
-        if line is None:
-            continue
-        chosen, errors = _search_family(line.family(library), records, ship, library,
-                                        problems, settings["rudder_signal"])
-        if not chosen:
-            continue
-        used = {v for ts in chosen.values() for t in ts for v in _variables_of(t)}
-        findings.append(_finding(kind, chosen, {}, e0, errors, noise, groups, threshold, used,
-                                 intervals=line.intervals))
+                                 threshold, used, logged_wind=logged_wind, intervals=intervals))
     findings.sort(key=lambda f: (-f.explained_signal, -f.explained, f.family))
     floor = {dof: min(noise[dof] / max(float(e0[dof] @ e0[dof]), 1e-300), 1.0) for dof in DOFS}
     return findings, floor

@@ -36,10 +36,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..library import DOFS, SPEED_FACTOR, nondimensional_variables, record_variables
+from ..library import DOFS
 from ..terms import Term, parse_shape, shape_name, shape_values
 from ._constants import BOOTSTRAP
-from .candidates import Family
+from .candidates import Family, family_columns
 
 #: The library terms each kind of shape multiplies, per equation ("1": the shape alone).
 SHAPE_TERMS = {
@@ -101,25 +101,7 @@ def shape_family(name: str, library) -> Family:
     for dof in DOFS:
         texts = [name if base == "1" else f"{name} {base}" for base in SHAPE_TERMS[shape.kind][dof]]
         terms[dof] = tuple(t for t in texts if Term(t).canonical(scale=False) not in present[dof])
-    variables = sorted({v for texts in terms.values() for t in texts for v in Term(t).variables})
-    return Family(shape.kind, terms, tuple(variables))
-
-
-def _motion(records, ship, library, rudder_signal, kind):
-    """Per record: the position (x, y) [m] and the columns of the terms the shape multiplies
-    (with the speed factor of the instantaneous form), per equation."""
-    out = []
-    for record in records:
-        aligned = library.aligned(record)
-        values = record_variables(aligned, library, ship.L, ship.U0, rudder_signal)
-        values.update(nondimensional_variables(aligned, ship.L, ship.U0, needed={"psi"}))
-        factor = values.get(SPEED_FACTOR, 1.0)
-        columns = {dof: np.column_stack([np.broadcast_to(Term(t).evaluate(values) * factor,
-                                                         (record.n_samples,))
-                                         for t in SHAPE_TERMS[kind][dof]]) for dof in DOFS}
-        out.append((np.asarray(aligned["x"], dtype=float), np.asarray(aligned["y"],
-                                                                        dtype=float), columns))
-    return out
+    return Family.of(shape.kind, terms)
 
 
 def _coarse_lines(kind: str, positions, L: float) -> list[tuple[float, float]]:
@@ -258,16 +240,18 @@ def search_shape(kind: str, records: Sequence, ship, library, problems, rudder_s
     too far from the origin: :func:`far_from_origin`)."""
     if far_from_origin(records, ship.L) is not None:
         return None
-    motion = _motion(records, ship, library, rudder_signal, kind)
     groups = problems["X"].groups
     members = [np.flatnonzero(groups == g) for g in np.unique(groups)]
-    positions = [(x, y) for x, y, _ in motion]
+    positions = [(np.asarray(r["x"], dtype=float), np.asarray(r["y"], dtype=float))
+                 for r in records]
     if not all(np.all(np.isfinite(x)) and np.all(np.isfinite(y)) for x, y in positions):
         return None
     coarse = _coarse_lines(kind, positions, ship.L)
     if not coarse:
         return None
-    columns = {dof: np.vstack([c[dof] for _, _, c in motion]) for dof in DOFS}
+    # the terms the shape multiplies, evaluated as any family's (the speed factor included)
+    columns = family_columns(Family.of(kind, SHAPE_TERMS[kind]), records, library, ship,
+                             rudder_signal)
     every = np.arange(len(groups))
     some = every[::COARSE_STRIDE]
     lomo = {dof: _GramLOMO(problems[dof], members, columns[dof], some) for dof in DOFS}

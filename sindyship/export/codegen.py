@@ -14,7 +14,7 @@ from sympy.printing.numpy import NumPyPrinter
 
 from .. import __version__
 from ..targets import DOFS, abkowitz_mass_matrix
-from ..terms import channel_scaling, sources_of
+from ..terms import channel_scaling
 from . import _compiled
 from .symbolic import _active_terms, _coriolis_polynomials, coefficient_symbol, force_expressions
 
@@ -398,8 +398,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     from ..errors import SindyshipInputError
     from ..simulation import default_step, integrator_for
 
-    if {"x", "y", "delta_rate"} & {source for name in model.library.variables
-                                   for source in sources_of(name)}:
+    if {"x", "y", "delta_rate"} & model.library.sources:
         raise SindyshipInputError(
             "the model's terms use the position (x, y, or a shape of it such as a bank's pull) "
             "or the rudder rate, which the generated "

@@ -148,6 +148,13 @@ class TermLibrary:
         """The variables beyond du, v, r and delta: data channels the library needs."""
         return self.variables - set(CORE_VARIABLES)
 
+    @cached_property
+    def sources(self) -> frozenset[str]:
+        """What the variables are made from: each variable itself, or a derived variable's
+        sources (``x`` and ``y`` for a shape of the position, the true wind for the apparent
+        wind; :func:`sindyship.terms.sources_of`)."""
+        return frozenset(source for name in self.variables for source in sources_of(name))
+
     @property
     def input_names(self) -> tuple[str, ...]:
         """The input columns for :class:`AbkowitzFeatureLibrary`: du, v, r, delta, channels.
