@@ -283,14 +283,18 @@ def _remedy_vifs(problems: dict[str, Design], shell: AbkowitzModel, ship: Ship
     from .manoeuvres import fly
     from .mmg import MMGModel
 
+    candidates = _candidates(ship)
+    # every candidate manoeuvre flown in one batch (one integration, whatever their number)
+    flown = iter(fly(MMGModel(ship), [m for _, captive, what in candidates if not captive
+                                      for m in what]))
     out = []
-    for label, captive, what in _candidates(ship):
+    for label, captive, what in candidates:
         if captive:
             frame = what.assign(t=np.arange(len(what), dtype=float), x=0.0, y=0.0, psi=0.0,
                                 delta_c=what["delta"])
             extra = _features(shell, [Trajectory(frame, name="captive")])
         else:
-            extra = _features(shell, fly(MMGModel(ship), what))
+            extra = _features(shell, [next(flown) for _ in what])
         combined = {}
         for dof in DOFS:
             rows = np.vstack([problems[dof].features, extra[dof]])

@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import sys
 from collections.abc import Sequence
 
 import numpy as np
@@ -200,7 +201,8 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
         With :data:`VALIDATION_RECORDS` records or more, check that refining carries over to
         flights it was not refined on (:func:`sindyship.refine_checks.carries_over`: fitted and
         refined on every other record, the model must fly the rest closer than its fit alone
-        does), else keep the fitted coefficients.  Trajectories
+        does), else keep the fitted coefficients; checked before the refinement on all
+        records, which a refused check spares.  Trajectories
         with disturbances the library lacks (gusts, noise, roll) can be matched by terms they
         do not pin down, which then fly other manoeuvres worse.
 
@@ -227,21 +229,27 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
     settings = {"max_evaluations": int(max_evaluations), "segment_s": segment_s,
                 "prior_weight": PRIOR_WEIGHT if prior_weight is None else float(prior_weight),
                 "progress": progress, "n_jobs": n_jobs}
-    refined = _refined(model, records, **settings)
-    report = refined.info["refined"]
-    if validate and len(records) >= VALIDATION_RECORDS and report["largest_change"] is not None:
+    check = None
+    if validate and len(records) >= VALIDATION_RECORDS and active_keys(model):
+        # checked first: a refinement that would be refused is never made on all records
+        if progress:
+            print("checking that refining carries over: fitted and refined on every other "
+                  "record, the model flies the rest", file=sys.stderr, flush=True)
         check = carries_over(model, records, lambda fitted, half: _refined(
             fitted, half, **{**settings, "progress": False}))
-        report["validation"] = check
-        if not check["accepted"]:
-            refined = _with_changes(model, {}, {**refined.info, "refined": {
-                **report, "stopped": ("refined on half of the records, the model flew the other "
-                                      f"half {check['ratio']:.3g} times as far off as fitted "
-                                      f"({check['why']}); the fitted coefficients are kept"),
-                "largest_change": None, "flight_rms_after": report["flight_rms_before"],
-                "cost_after": report["cost_before"], "refused_validation": True}})
-            if "straight_run" in model.info:
-                refined.info["straight_run"] = dict(model.info["straight_run"])
+    if check is not None and not check["accepted"]:
+        last = _stages(model.ship, records, segment_s)[-1]
+        kept = _refined(model, records, **{**settings, "max_evaluations": 0, "progress": False,
+                                           "segment_s": "whole" if last is None else last})
+        kept.info["refined"].update(
+            stopped=("refined on half of the records, the model flew the other half "
+                     f"{check['ratio']:.3g} times as far off as fitted ({check['why']}); the "
+                     "fitted coefficients are kept"),
+            refused_validation=True, validation=check)
+        return kept
+    refined = _refined(model, records, **settings)
+    if check is not None:
+        refined.info["refined"]["validation"] = check
     return refined
 
 

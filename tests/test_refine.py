@@ -234,6 +234,9 @@ def test_a_refinement_that_does_not_carry_over_keeps_the_fit(four, kcs, monkeypa
     assert kept.coefficients == prior.coefficients and report["largest_change"] is None
     assert "the fitted coefficients are kept" in report["stopped"]
     assert report["flight_rms_after"] == report["flight_rms_before"]
+    # the check comes first: a refused refinement is never made on all four records
+    assert report["evaluations"] == 0 and report["jacobians"] == 0
+    assert report["flight_rms_before"] > 0 and report["segments"] >= 4
     # without the check, the refinement is kept as it is
     unchecked = refine(prior, four, max_evaluations=4, validate=False)
     assert "validation" not in unchecked.info["refined"]
