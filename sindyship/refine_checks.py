@@ -15,7 +15,7 @@ import warnings
 import numpy as np
 
 from .evaluation import compare_flights
-from .flights import fly_like_batch
+from .flights import fly_jobs_like
 from .identify import fit
 from .library import nondimensional_variables
 from .manoeuvres import Manoeuvre, fly, turning_figures
@@ -88,8 +88,7 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
     fitted_on, flown = list(records[0::2]), list(records[1::2])
     half_fit = fitted_again(model, fitted_on)
     half = refined_on(half_fit, fitted_on)
-    before = fly_like_batch(half_fit, flown)
-    after = fly_like_batch(half, flown)
+    before, after = fly_jobs_like([(half_fit, flown), (half, flown)])  # side by side
     ratios, worse = [], []
     for b, a, record in zip(before, after, flown, strict=True):
         common = compare_flights(b, a, record, model.ship.L)
