@@ -547,6 +547,12 @@ def _campaign(n: dict) -> str:
                                            if steps else "")
                  + f", and {flights(result['recommended'])} with all of them (geometric mean "
                  f"{recommended['geometric_mean_L']:.3f} L).")
+        order = [("default", "without an effect")] + [
+            ("default + " + " + ".join(named[:k]), f"with {listed(named[:k])}")
+            for k in range(1, len(named) + 1) if "default + " + " + ".join(named[:k]) in work]
+        text += (" In the order named the geometric mean goes "
+                 + ", ".join(f"{work[key]['geometric_mean_L']:.3f} L {words}"
+                             for key, words in order) + ".")
         first, everything = f"abkowitz-vr + {named[0]}", f"abkowitz-vr + {' + '.join(named)}"
         if {"abkowitz-vr", first, everything} <= set(work):
             text += (" An effect added alone can lose the turns to the cross-flow drag of the "

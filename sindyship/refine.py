@@ -89,6 +89,9 @@ VALIDATION_RECORDS = 4
 RELATIVE_BOUND = None
 #: Most evaluations of a stage before the last.
 EARLY_EVALUATIONS = 5
+#: How much faster than its unstable prior fit's a refined model's straight-run disturbance
+#: may double before the refinement is refused (a margin, so that rounding never decides).
+INSTABILITY_MARGIN = 1.25
 #: Default weight of a ``prior`` fit's objective against the mean squared flight error.
 PRIOR_WEIGHT = 0.01
 #: Default most evaluations of the flight error.
@@ -215,7 +218,9 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
         evaluations and Jacobians used, why the search stopped and whether it converged, the
         coefficient that moved most, whether the refined model is stable in straight running
         (:func:`sindyship.stability.straight_run_stability`) and whether a refinement was
-        refused for making a stable ``prior`` fit unstable (``refused_unstable``).  A
+        refused for making a stable ``prior`` fit unstable, or an unstable one more unstable
+        (a disturbance doubling more than :data:`INSTABILITY_MARGIN` times as fast;
+        ``refused_unstable``).  A
         refinement that does not lower the cost returns the fitted coefficients, and so does
         one that would lose the hard-over turns the fit flies (``refused_turning`` says why:
         a turning circle at the rudder limit that diverges, or whose tactical diameter moves
@@ -269,14 +274,21 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
     start = np.zeros_like(p)
     info = dict(model.info)
     candidate = _with_changes(model, problem.coefficients(p), info)
-    stable = straight_run_stability(candidate).stable
+    after = straight_run_stability(candidate)
+    stable = after.stable
     promised = bool(info.get("straight_run", {}).get("stable"))
-    refused_unstable = promised and not stable
+    faster = None if promised or "straight_run" not in info or not np.any(p) \
+        else _more_unstable(model, after)
+    refused_unstable = (promised and not stable) or faster is not None
     turns = None if refused_unstable or not np.any(p) else turns_kept(model, candidate, records)
-    if refused_unstable:  # a prior fit is straight-run stable; so is its refinement
-        p, cost_after, stable, flight_after = start, cost_before, True, flight_before
+    if refused_unstable:  # a prior fit's straight running is never made less stable
+        p, cost_after, stable, flight_after = start, cost_before, promised, flight_before
         stopped = ("the refined model was unstable in straight running, which the fit it "
-                   "started from is not; the fitted coefficients are kept")
+                   "started from is not; the fitted coefficients are kept") if promised else (
+            f"in straight running a disturbance of the refined model doubles in "
+            f"{faster[1]:.3g} L/U0, of the fit it started from in {faster[0]:.3g} L/U0 (an "
+            "unstable prior fit is not refined to a more unstable model); the fitted "
+            "coefficients are kept")
         candidate = _with_changes(model, problem.coefficients(p), info)
     elif turns is not None:  # it flew hard-over turns it can no longer fly
         p, cost_after, flight_after = start, cost_before, flight_before
@@ -305,6 +317,19 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
     }
     candidate.info = info
     return candidate
+
+
+def _more_unstable(fitted: AbkowitzModel, after) -> tuple[float, float] | None:
+    """The doubling times [L/U0] of a straight-run disturbance of an unstable fit and its
+    refinement when the refinement doubles more than :data:`INSTABILITY_MARGIN` times as
+    fast, else None.  The records rarely hold the long straight runs that would pin the
+    growth down, and a refinement that speeds it up trades the flights it was not refined on
+    (a turn at another rudder angle, in other gusts) for the ones it was."""
+    before = straight_run_stability(fitted)
+    if before.stable or after.stable:
+        return None
+    slower, faster = before.doubling_time_L_over_U, after.doubling_time_L_over_U
+    return (slower, faster) if faster * INSTABILITY_MARGIN < slower else None
 
 
 def _search_stages(model, records, stages, penalty, max_evaluations, prior_weight, progress,

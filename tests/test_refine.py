@@ -265,6 +265,39 @@ def test_a_prior_fit_stays_stable_in_straight_running(runs, kcs, fitted, monkeyp
     assert refined_ls.info["refined"]["refused_unstable"] is False
 
 
+def test_an_unstable_prior_fit_is_not_refined_to_a_more_unstable_model(runs, kcs,
+                                                                       monkeypatch):
+    """A prior fit unstable in straight running may be refined while its disturbances grow
+    about as fast; a refinement whose disturbances double more than INSTABILITY_MARGIN times
+    as fast keeps the fit, and says both doubling times."""
+    import sindyship.refine as refining
+    from sindyship.stability import Stability
+
+    prior = fit(runs, kcs, library="abkowitz-vr", optimizer="prior")
+    prior.info["straight_run"] = {**prior.info["straight_run"], "stable": False}
+
+    def doubling(fitted_in, refined_in):
+        def stability(model):
+            time = fitted_in if model is prior else refined_in
+            return Stability(eigenvalues=(math.log(2) / time, -1.0), jacobian=np.eye(2),
+                             stable=False, doubling_time_L_over_U=time)
+        return stability
+
+    monkeypatch.setattr(refining, "straight_run_stability", doubling(8.0, 3.0))
+    kept = refine(prior, runs, max_evaluations=4, validate=False)
+    report = kept.info["refined"]
+    assert kept.coefficients == prior.coefficients and report["refused_unstable"]
+    assert report["stopped"].startswith("in straight running a disturbance of the refined "
+                                        "model doubles in 3 L/U0, of the fit it started from "
+                                        "in 8 L/U0")
+    assert report["straight_run_stable"] is False and report["largest_change"] is None
+    assert 8.0 / 3.0 > refining.INSTABILITY_MARGIN > 8.0 / 7.0
+    monkeypatch.setattr(refining, "straight_run_stability", doubling(8.0, 7.0))
+    refined = refine(prior, runs, max_evaluations=4, validate=False)
+    assert refined.coefficients != prior.coefficients
+    assert refined.info["refined"]["refused_unstable"] is False
+
+
 def test_a_model_with_a_coefficient_no_saved_model_may_hold_is_not_saved(fitted, tmp_path):
     """A fit on records that do not belong to the ship can give coefficients near 1e295;
     saving refuses them in one sentence (loading would) and writes nothing."""
