@@ -47,6 +47,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 import sys
@@ -233,7 +234,7 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
     check_motion(records)
     settings = {"max_evaluations": int(max_evaluations), "segment_s": segment_s,
                 "prior_weight": PRIOR_WEIGHT if prior_weight is None else float(prior_weight),
-                "progress": progress, "n_jobs": n_jobs}
+                "progress": "refining by flights" if progress else None, "n_jobs": n_jobs}
     check = None
     if validate and len(records) >= VALIDATION_RECORDS and active_keys(model):
         # checked first: a refinement that would be refused is never made on all records
@@ -241,10 +242,11 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
             print("checking that refining carries over: fitted and refined on every other "
                   "record, the model flies the rest", file=sys.stderr, flush=True)
         check = carries_over(model, records, lambda fitted, half: _refined(
-            fitted, half, **{**settings, "progress": False}))
+            fitted, half, **{**settings, "progress": "checking on every other record"
+                             if progress else None}))
     if check is not None and not check["accepted"]:
         last = _stages(model.ship, records, segment_s)[-1]
-        kept = _refined(model, records, **{**settings, "max_evaluations": 0, "progress": False,
+        kept = _refined(model, records, **{**settings, "max_evaluations": 0, "progress": None,
                                            "segment_s": "whole" if last is None else last})
         kept.info["refined"].update(
             stopped=("refined on half of the records, the model flew the other half "
@@ -259,8 +261,9 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
 
 
 def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
-             prior_weight: float, progress: bool, n_jobs) -> AbkowitzModel:
-    """The refinement itself (:func:`refine` without its validation)."""
+             prior_weight: float, progress: str | None, n_jobs) -> AbkowitzModel:
+    """The refinement itself (:func:`refine` without its validation); ``progress`` begins
+    the line each accepted step writes on stderr (None: silent)."""
     stages = _stages(model.ship, records, segment_s)
     penalty = _penalty_rows(model, records) if prior_weight > 0 else None
     p, done, evaluations, jacobians, problem = _search_stages(
@@ -353,7 +356,8 @@ def _search_stages(model, records, stages, penalty, max_evaluations, prior_weigh
                                      max_evaluations=max(allowed, 1),
                                      tolerance=TOLERANCE if final else STAGE_TOLERANCE,
                                      bound=RELATIVE_BOUND,
-                                     on_step=problem.report if progress else None) \
+                                     on_step=functools.partial(problem.report, label=progress)
+                                     if progress else None) \
             if len(p) and allowed > 0 else None
         if search is not None and search.cost < entry_cost:
             p = search.x
@@ -476,11 +480,9 @@ class _Problem:
         penalty, jac = self._penalty_part(p, True)
         return gram + jac.T @ jac, gradient + jac.T @ penalty
 
-    def report(self, step: int, cost: float) -> None:
-        """One line on stderr per accepted step of the search."""
-        import sys
-
-        print(f"refining by flights: step {step}, cost {cost:.6g}, flight error (rms) "
+    def report(self, step: int, cost: float, label: str) -> None:
+        """One line on stderr per accepted step of the search, beginning with ``label``."""
+        print(f"{label}: step {step}, cost {cost:.6g}, flight error (rms) "
               f"{self.flight_rms:.4g}", file=sys.stderr, flush=True)
 
 

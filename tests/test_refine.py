@@ -215,7 +215,7 @@ def four(kcs):
                                Manoeuvre("turning-circle", rudder=25, duration=300)])
 
 
-def test_a_refinement_that_does_not_carry_over_keeps_the_fit(four, kcs, monkeypatch):
+def test_a_refinement_that_does_not_carry_over_keeps_the_fit(four, kcs, monkeypatch, capsys):
     """Fitted and refined on every other record, the model flies the others; a refinement
     that does not fly them closer than the fit alone is refused (here: by a ratio of 0)."""
     import sindyship.refine_checks as checks
@@ -228,7 +228,11 @@ def test_a_refinement_that_does_not_carry_over_keeps_the_fit(four, kcs, monkeypa
     assert 0 < check["ratio"] < checks.VALIDATION_RATIO and check["accepted"]
     assert refined.coefficients != prior.coefficients
     monkeypatch.setattr(checks, "VALIDATION_RATIO", 0.0)
-    kept = refine(prior, four, max_evaluations=4)
+    capsys.readouterr()
+    kept = refine(prior, four, max_evaluations=4, progress=True)
+    steps = capsys.readouterr().err
+    assert "checking on every other record: step 1," in steps
+    assert "refining by flights" not in steps
     report = kept.info["refined"]
     assert report["refused_validation"] and not report["validation"]["accepted"]
     assert kept.coefficients == prior.coefficients and report["largest_change"] is None
