@@ -224,7 +224,7 @@ class _Stacked:
         integrator passes them)."""
         out = (np.empty_like(u), np.empty_like(u), np.empty_like(u))
         for dynamics, start, stop in self.parts:
-            lo, hi = np.searchsorted(members, (start, stop))
+            lo, hi = members.searchsorted((start, stop))  # the method: called every stage
             if lo == hi:
                 continue
             part = slice(lo, hi)

@@ -137,12 +137,19 @@ class PrescribedRudder(RudderCommand):
         self._rate = np.diff(self.angles) / np.diff(self.times)
 
     def value(self, t, state):
-        return float(np.interp(t, self.times, self.angles))
+        """The angle at ``t``: ``np.interp``'s arithmetic (held outside the record), with the
+        interval's slope computed once."""
+        times, angles = self.times, self.angles
+        k = int(times.searchsorted(t, side="right")) - 1
+        if k < 0:
+            return float(angles[0])
+        if k >= len(self._rate) or times[k] == t:
+            return float(angles[min(k, len(angles) - 1)])
+        return float(self._rate[k] * (t - times[k]) + angles[k])
 
     def rate(self, t: float) -> float:
-        k = int(np.clip(self.times.searchsorted(t + 1e-9, side="right") - 1, 0,
-                        len(self._rate) - 1))
-        return float(self._rate[k])
+        k = int(self.times.searchsorted(t + 1e-9, side="right")) - 1
+        return float(self._rate[min(max(k, 0), len(self._rate) - 1)])  # ints: no np.clip
 
     def next_change(self, t):
         k = int(self.times.searchsorted(t + 1e-9, side="right"))
@@ -175,7 +182,7 @@ class ChannelSeries:
         times = self.times
         if len(times) < 2:
             return {name: v[members, 0] for name, v in self.values.items()}
-        k = int(np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2))
+        k = min(max(int(times.searchsorted(t, side="right")) - 1, 0), len(times) - 2)
         w = min(max((t - times[k]) / (times[k + 1] - times[k]), 0.0), 1.0)
         return {name: (1.0 - w) * v[members, k] + w * v[members, k + 1]
                 for name, v in self.values.items()}
