@@ -252,7 +252,10 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
             stopped=("refined on half of the records, the model flew the other half "
                      f"{check['ratio']:.3g} times as far off as fitted ({check['why']}); the "
                      "fitted coefficients are kept"),
-            refused_validation=True, validation=check)
+            refused_validation=True, refused_unstable=False, refused_turning=None,
+            validation=check)
+        if "straight_run" in model.info:  # the fit's own record, as it was
+            kept.info["straight_run"] = dict(model.info["straight_run"])
         return kept
     refined = _refined(model, records, **settings)
     if check is not None:
@@ -280,16 +283,16 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
     after = straight_run_stability(candidate)
     stable = after.stable
     promised = bool(info.get("straight_run", {}).get("stable"))
-    faster = None if promised or "straight_run" not in info or not np.any(p) \
+    doublings = None if promised or "straight_run" not in info or not np.any(p) \
         else _more_unstable(model, after)
-    refused_unstable = (promised and not stable) or faster is not None
+    refused_unstable = (promised and not stable) or doublings is not None
     turns = None if refused_unstable or not np.any(p) else turns_kept(model, candidate, records)
     if refused_unstable:  # a prior fit's straight running is never made less stable
         p, cost_after, stable, flight_after = start, cost_before, promised, flight_before
         stopped = ("the refined model was unstable in straight running, which the fit it "
                    "started from is not; the fitted coefficients are kept") if promised else (
             f"in straight running a disturbance of the refined model doubles in "
-            f"{faster[1]:.3g} L/U0, of the fit it started from in {faster[0]:.3g} L/U0 (an "
+            f"{doublings[1]:.3g} L/U0, of the fit it started from in {doublings[0]:.3g} L/U0 (an "
             "unstable prior fit is not refined to a more unstable model); the fitted "
             "coefficients are kept")
         candidate = _with_changes(model, problem.coefficients(p), info)
@@ -325,13 +328,16 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
 def _more_unstable(fitted: AbkowitzModel, after) -> tuple[float, float] | None:
     """The doubling times [L/U0] of a straight-run disturbance of an unstable fit and its
     refinement when the refinement doubles more than :data:`INSTABILITY_MARGIN` times as
-    fast, else None.  The records rarely hold the long straight runs that would pin the
-    growth down, and a refinement that speeds it up trades the flights it was not refined on
-    (a turn at another rudder angle, in other gusts) for the ones it was."""
+    fast, else None (also where either has no doubling time: a zero or undefined growth
+    rate).  The records rarely hold the long straight runs that would pin the growth down,
+    and a refinement that speeds it up trades the flights it was not refined on (a turn at
+    another rudder angle, in other gusts) for the ones it was."""
     before = straight_run_stability(fitted)
     if before.stable or after.stable:
         return None
     slower, faster = before.doubling_time_L_over_U, after.doubling_time_L_over_U
+    if slower is None or faster is None:
+        return None
     return (slower, faster) if faster * INSTABILITY_MARGIN < slower else None
 
 

@@ -3,6 +3,7 @@ sensitivities (sindyship.shooting, sindyship.refine)."""
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import json
 import math
@@ -240,6 +241,8 @@ def test_a_refinement_that_does_not_carry_over_keeps_the_fit(four, kcs, monkeypa
     assert report["flight_rms_after"] == report["flight_rms_before"]
     # the check comes first: a refused refinement is never made on all four records
     assert report["evaluations"] == 0 and report["jacobians"] == 0
+    assert report["refused_unstable"] is False and report["refused_turning"] is None
+    assert kept.info["straight_run"] == prior.info["straight_run"]
     assert report["flight_rms_before"] > 0 and report["segments"] >= 4
     # without the check, the refinement is kept as it is
     unchecked = refine(prior, four, max_evaluations=4, validate=False)
@@ -250,7 +253,7 @@ def test_a_refinement_that_does_not_carry_over_keeps_the_fit(four, kcs, monkeypa
 def test_a_prior_fit_stays_stable_in_straight_running(runs, kcs, fitted, monkeypatch):
     """A refinement that would make a straight-run-stable prior fit unstable keeps the fit;
     a least-squares fit, which promises nothing, is refined and reported unstable."""
-    import sindyship.refine as refining
+    refining = importlib.import_module("sindyship.refine")  # the module, not the function
     from sindyship.stability import Stability
 
     prior = fit(runs, kcs, library="abkowitz-vr", optimizer="prior")
@@ -274,7 +277,7 @@ def test_an_unstable_prior_fit_is_not_refined_to_a_more_unstable_model(runs, kcs
     """A prior fit unstable in straight running may be refined while its disturbances grow
     about as fast; a refinement whose disturbances double more than INSTABILITY_MARGIN times
     as fast keeps the fit, and says both doubling times."""
-    import sindyship.refine as refining
+    refining = importlib.import_module("sindyship.refine")  # the module, not the function
     from sindyship.stability import Stability
 
     prior = fit(runs, kcs, library="abkowitz-vr", optimizer="prior")
@@ -295,6 +298,7 @@ def test_an_unstable_prior_fit_is_not_refined_to_a_more_unstable_model(runs, kcs
                                         "model doubles in 3 L/U0, of the fit it started from "
                                         "in 8 L/U0")
     assert report["straight_run_stable"] is False and report["largest_change"] is None
+    assert kept.info["straight_run"]["stable"] is False
     assert 8.0 / 3.0 > refining.INSTABILITY_MARGIN > 8.0 / 7.0
     monkeypatch.setattr(refining, "straight_run_stability", doubling(8.0, 7.0))
     refined = refine(prior, runs, max_evaluations=4, validate=False)

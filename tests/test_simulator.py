@@ -174,3 +174,20 @@ def test_fly_takes_a_fitted_model_as_it_does_an_mmg(kcs):
     (direct,) = fly(model, plan)
     (through,) = fly(model.dynamics(), plan)
     np.testing.assert_array_equal(direct.state(), through.state())
+
+
+def test_a_replayed_rudder_is_interpolated_exactly_as_numpy_does():
+    """The replayed angle is np.interp's, to the last bit: at, between, before and after the
+    samples, for records of one, two and many samples."""
+    from sindyship.simulation.kernels import PrescribedRudder
+
+    rng = np.random.default_rng(20261127)
+    for n in (1, 2, 7, 500):
+        times = np.cumsum(rng.uniform(0.05, 2.0, n))
+        angles = rng.normal(0.0, 0.3, n)
+        rudder = PrescribedRudder(times, angles)
+        probes = np.concatenate([times, times - 1e-7, times + 1e-7,
+                                 rng.uniform(times[0] - 3.0, times[-1] + 3.0, 400)])
+        for t in probes:
+            assert rudder.value(float(t), None) == float(np.interp(t, times, angles)), (n, t)
+    assert math.isnan(PrescribedRudder(np.array([0.0, 1.0]), np.zeros(2)).value(math.nan, None))

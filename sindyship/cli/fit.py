@@ -209,6 +209,10 @@ def _refined(model, records, args, n_jobs=1):
         progress("warning: the refined model is unstable in straight running, so a disturbance "
                  "grows in its flights; refine a --optimizer prior fit, which starts stable, "
                  "and fly it on records it was not refined on.")
+    elif not done["straight_run_stable"] and "straight_run" not in refined.info:
+        progress("warning: the model (its fitted coefficients kept) is unstable in straight "
+                 "running, so a disturbance grows in its flights; fit it with --optimizer "
+                 "prior, which starts stable.")
     return refined
 
 

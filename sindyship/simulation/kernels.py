@@ -67,9 +67,8 @@ class StepCommand(RudderCommand):
     def __init__(self, times: Sequence[float], angles: Sequence[float]):
         times = np.asarray(times, dtype=float)
         angles = np.asarray(angles, dtype=float)
-        # keep only the samples where the command changes: they are the step's breakpoints
-        keep = np.ones(len(angles), dtype=bool)
-        keep[1:] = angles[1:] != angles[:-1]
+        # only the samples where the command changes: they are the steps' breakpoints
+        keep = np.concatenate([np.ones(min(len(angles), 1), dtype=bool), angles[1:] != angles[:-1]])
         self.times = times[keep]
         self.angles = angles[keep]
 
@@ -136,16 +135,11 @@ class PrescribedRudder(RudderCommand):
         self.angles = np.asarray(angles, dtype=float)
         self._rate = np.diff(self.angles) / np.diff(self.times)
 
-    def value(self, t, state):
-        """The angle at ``t``: ``np.interp``'s arithmetic (held outside the record), with the
-        interval's slope computed once."""
-        times, angles = self.times, self.angles
-        k = int(times.searchsorted(t, side="right")) - 1
-        if k < 0:
-            return float(angles[0])
-        if k >= len(self._rate) or times[k] == t:
-            return float(angles[min(k, len(angles) - 1)])
-        return float(self._rate[k] * (t - times[k]) + angles[k])
+    def value(self, t, state):  # np.interp's arithmetic, each interval's slope computed once
+        k = int(self.times.searchsorted(t, side="right")) - 1
+        if t != t or k < 0 or k >= len(self._rate) or self.times[k] == t:  # NaN, ends, samples
+            return math.nan if t != t else float(self.angles[min(max(k, 0), len(self.angles) - 1)])
+        return float(self._rate[k] * (t - self.times[k]) + self.angles[k])
 
     def rate(self, t: float) -> float:
         k = int(self.times.searchsorted(t + 1e-9, side="right")) - 1
@@ -213,9 +207,8 @@ class SimulationResult:
     @property
     def valid(self) -> np.ndarray:
         """Mask of the samples before any divergence."""
-        if self.diverged_at is None:
-            return np.ones(self.t.shape, dtype=bool)
-        return self.t < self.diverged_at
+        return np.ones(self.t.shape, dtype=bool) if self.diverged_at is None \
+            else self.t < self.diverged_at
 
 
 def diverged(state: np.ndarray, L: float, U0: float) -> np.ndarray:
