@@ -252,8 +252,7 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
             stopped=("refined on half of the records, the model flew the other half "
                      f"{check['ratio']:.3g} times as far off as fitted ({check['why']}); the "
                      "fitted coefficients are kept"),
-            refused_validation=True, refused_unstable=False, refused_turning=None,
-            validation=check)
+            refused_validation=True, validation=check)
         if "straight_run" in model.info:  # the fit's own record, as it was
             kept.info["straight_run"] = dict(model.info["straight_run"])
         return kept
@@ -281,12 +280,12 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
     info = dict(model.info)
     candidate = _with_changes(model, problem.coefficients(p), info)
     after = straight_run_stability(candidate)
-    stable = after.stable
+    stable, moved = after.stable, bool(np.any(p))  # the checks judge a model that moved
     promised = bool(info.get("straight_run", {}).get("stable"))
-    doublings = None if promised or "straight_run" not in info or not np.any(p) \
+    doublings = None if promised or "straight_run" not in info or not moved \
         else _more_unstable(model, after)
-    refused_unstable = (promised and not stable) or doublings is not None
-    turns = None if refused_unstable or not np.any(p) else turns_kept(model, candidate, records)
+    refused_unstable = moved and ((promised and not stable) or doublings is not None)
+    turns = None if refused_unstable or not moved else turns_kept(model, candidate, records)
     if refused_unstable:  # a prior fit's straight running is never made less stable
         p, cost_after, stable, flight_after = start, cost_before, promised, flight_before
         stopped = ("the refined model was unstable in straight running, which the fit it "
