@@ -215,10 +215,12 @@ def _rk4(z, sens, m, j, h, data, physics, sensitivity, work, k, ks, zs, ss):
                                          + ks[3, i, p])
 
 
-def _fly(state0, data, physics, sensitivity, closed, h, n_steps, every, states, jacobian):
+def _fly(state0, data, physics, sensitivity, closed, h, n_steps, every, states, jacobian,
+         stopped):
     """Every segment flown from its first state by RK4 (and its sensitivities), into
-    ``states`` (M, n_out, 6; from a divergence on, the last state in range) and ``jacobian``
-    (M, n_out, 6, P); the segments in parallel (each on its own).  A segment with a zig-zag in
+    ``states`` (M, n_out, 6; from a divergence on, the last state in range), ``jacobian``
+    (M, n_out, 6, P) and ``stopped`` (M; the step at whose end a segment diverged, left as it
+    is where none did); the segments in parallel (each on its own).  A segment with a zig-zag in
     ``closed`` flies it closed loop (:func:`_fly_closed_one`)."""
     rudder, rate, extras = data
     tables, weights, inertia, minv, U0, L = physics
@@ -234,14 +236,15 @@ def _fly(state0, data, physics, sensitivity, closed, h, n_steps, every, states, 
         sensitivity_m = (perturbed, steps, rows, cols, with_sens)
         if sign[m] == 0:
             _fly_one(m, state0, (rudder, rate, extras), physics_m, sensitivity_m, h, n_steps,
-                     every, states, jacobian)
+                     every, states, jacobian, stopped)
         else:
             _fly_closed_one(m, state0, extras, physics_m, sensitivity_m,
                             (sign[m], check[m], psi0[m], levels[m, :count[m]], delta0[m],
-                             servo, commanded), h, n_steps, every, states, jacobian)
+                             servo, commanded), h, n_steps, every, states, jacobian, stopped)
 
 
-def _fly_one(m, state0, data, physics, sensitivity, h, n_steps, every, states, jacobian):
+def _fly_one(m, state0, data, physics, sensitivity, h, n_steps, every, states, jacobian,
+             stopped):
     """Segment ``m`` flown from its first state (:func:`_fly`)."""
     tables, _, _, _, U0, L = physics
     n_par = sensitivity[2].shape[0]
@@ -259,6 +262,7 @@ def _fly_one(m, state0, data, physics, sensitivity, h, n_steps, every, states, j
             held_sens[:, :] = sens
         _rk4(z, sens, m, j, h, data, physics, sensitivity, work, k, ks, zs, ss)
         if _diverged(z, U0, L):  # every later sample holds the last state in range
+            stopped[m] = j
             for out in range(j // every, n_steps // every):
                 states[m, out, :] = held
                 if sensitivity[4]:
@@ -375,7 +379,7 @@ def _crossing(psi_start, r_start, psi_end, r_end, h, sign, psi0, check):
 
 
 def _fly_closed_one(m, state0, extras, physics, sensitivity, loop, h, n_steps, every, states,
-                    jacobian):
+                    jacobian, stopped):
     """Segment ``m`` flown as a zig-zag, closed loop: the rudder (a state, through the servo)
     reverses when the heading change reaches the check angle, located inside the step; the
     sensitivities jump there by the change of the rudder rate times the event time's own
@@ -421,6 +425,7 @@ def _fly_closed_one(m, state0, extras, physics, sensitivity, loop, h, n_steps, e
                     sens[6, p] -= (before - after) * sens[5, p] / z[2]
             t, left = t + theta * left, (1.0 - theta) * left
         if _diverged(z, U0, L):  # every later sample holds the last state in range
+            stopped[m] = j
             for out in range(j // every, n_steps // every):
                 states[m, out, :] = held[:6]
                 if sensitivity[4]:
@@ -453,8 +458,9 @@ if COMPILED:
 
 def fly_compiled(model, segments, weights, slots, perturbed, steps, sensitivities, *,
                  python: bool = False):
-    """:func:`sindyship.shooting.fly_segments` through the compiled loop, or None when the
-    model has no compiled tables (numba missing, or a factor of a number).  With ``python``
+    """:func:`sindyship.shooting.fly_segments` through the compiled loop (its states,
+    sensitivities or None, and the step each segment diverged at, -1 where none did), or None
+    when the model has no compiled tables (numba missing, or a factor of a number).  With ``python``
     the same loop runs where numba is missing, as Python (slowly): the zig-zags flown closed
     loop have no other implementation."""
     from ._forces_compiled import tables as factor_tables
@@ -491,10 +497,11 @@ def fly_compiled(model, segments, weights, slots, perturbed, steps, sensitivitie
               zigzag.psi0.astype(float), np.ascontiguousarray(zigzag.levels, dtype=float),
               zigzag.count.astype(np.int64), zigzag.delta0.astype(float),
               tuple(float(x) for x in servo_of(model.ship)), model.rudder_signal == "commanded")
+    stopped = np.full(m, -1, dtype=np.int64)
     _fly(np.ascontiguousarray(segments.state0, dtype=float), data, physics, sensitivity,
          closed, float(segments.step), int(segments.n_steps), int(segments.every), states,
-         jacobian)
-    return states, (jacobian if sensitivities else None)
+         jacobian, stopped)
+    return states, (jacobian if sensitivities else None), stopped
 
 
 def _tables(model, names, integer_tables, channel_names):

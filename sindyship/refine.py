@@ -300,6 +300,7 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
         stopped = (f"the refined model {turns}, which the fit it started from flies; the "
                    "fitted coefficients are kept")
         candidate = _with_changes(model, problem.coefficients(p), info)
+        stable = straight_run_stability(candidate).stable  # of the model kept
     if "straight_run" in info:  # the prior fit's record describes the model saved
         info["straight_run"] = {**info["straight_run"], "stable": stable}
     moved = int(np.argmax(np.abs(p))) if np.any(p) else None

@@ -13,16 +13,18 @@ import math
 import warnings
 
 import numpy as np
+import pandas as pd
 
 from .evaluation import compare_flights
-from .flights import fly_jobs_like
 from .identify import fit
 from .library import nondimensional_variables
 from .manoeuvres import Manoeuvre, fly, turning_figures
 from .model import AbkowitzModel
+from .shooting import fly_segments, make_segments
+from .trajectory import Trajectory
 
 __all__ = ["TURN_CHECK_FACTOR", "TURN_CHECK_TIMES", "VALIDATION_RATIO", "carries_over",
-           "fitted_again", "hard_over_diameters", "turns_kept"]
+           "fitted_again", "flown_whole", "hard_over_diameters", "turns_kept"]
 
 #: A refinement is kept when, refined on half the records, it flies the others at most this
 #: share of the distance of the fit on that half alone (geometric mean).
@@ -82,15 +84,18 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
     """Whether refining carries over to flights it was not refined on (a two-way split of the
     records): fitted again on every other record, as the model was, and refined on those
     (``refined_on(fitted, records)``), the model flies the rest (whole, as
-    :func:`sindyship.evaluation.evaluate` flies them) closer than its fit on them alone does
-    (geometric mean of the mean distances over the windows both cover below
-    :data:`VALIDATION_RATIO`, and no new divergence)."""
+    :func:`sindyship.evaluation.evaluate` flies them, on the refinement's grid:
+    :func:`flown_whole`) closer than its fit on them alone does (geometric mean of the mean
+    distances over the windows both cover below :data:`VALIDATION_RATIO`, and no new
+    divergence)."""
     fitted_on, flown = list(records[0::2]), list(records[1::2])
     half_fit = fitted_again(model, fitted_on)
     half = refined_on(half_fit, fitted_on)
-    before, after = fly_jobs_like([(half_fit, flown), (half, flown)])  # side by side
     ratios, worse = [], []
-    for b, a, record in zip(before, after, flown, strict=True):
+    for (b, record), (a, _) in zip(flown_whole(half_fit, flown), flown_whole(half, flown),
+                                   strict=True):
+        if b is None:  # fewer than two samples from its flight start: nothing to compare
+            continue
         common = compare_flights(b, a, record, model.ship.L)
         if common["worse"] == "after" and a.meta.get("diverged_at") is not None:
             worse.append(record.name)
@@ -102,6 +107,40 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
            "no closer" if not accepted else "closer")
     return {"refined_on": [r.name for r in fitted_on], "flown": [r.name for r in flown],
             "ratio": ratio, "accepted": accepted, "why": why}
+
+
+def flown_whole(model: AbkowitzModel, records) -> list[tuple]:
+    """Each record flown whole from its flight start by the refinement's compiled loop
+    (:func:`sindyship.shooting.make_segments` without segments: a zig-zag closed loop, any
+    other record replaying its rudder, as :func:`sindyship.evaluation.evaluate` flies them,
+    with RK4 steps of whole samples): per record the flight and the record at the compared
+    samples (its first and every ``every``-th step's), or (None, None) for a record of fewer
+    than two samples from its start.  A diverged flight holds ``diverged_at`` (its first
+    compared sample out of range) and NaN from there on, as
+    :func:`sindyship.simulation.simulate_batch` gives it; the flights hold the states only.
+    """
+    out: list[tuple] = [(None, None)] * len(records)
+    names = ("u", "v", "r", "x", "y", "psi")
+    for batch in make_segments(model, records, None):
+        stopped = np.empty(batch.n_segments, dtype=np.int64)
+        states, _ = fly_segments(model, batch, stopped=stopped)
+        n_out = states.shape[1]
+        for k, index in enumerate(batch.record):
+            valid = np.concatenate([[True], batch.valid[k]])
+            t = (batch.start[k] + batch.step * batch.every * np.arange(n_out + 1))[valid]
+            measured = np.vstack([batch.state0[k], batch.measured[k]])[valid]
+            flight = np.vstack([batch.state0[k], states[k]])[valid]
+            meta = {"diverged_at": None}
+            if stopped[k] >= 0:
+                first = stopped[k] // batch.every + 1  # the initial state is row 0
+                flight[first:] = np.nan
+                meta["diverged_at"] = float(t[first]) if first < len(t) else None
+            frames = [pd.DataFrame({"t": t, **dict(zip(names, rows.T, strict=True))})
+                      for rows in (flight, measured)]
+            name = records[index].name
+            out[index] = (Trajectory(frames[0], name=name, meta=meta),
+                          Trajectory(frames[1], name=name))
+    return out
 
 
 def fitted_again(model: AbkowitzModel, records) -> AbkowitzModel:

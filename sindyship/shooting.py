@@ -439,7 +439,8 @@ class _RightHandSide:
 
 
 def fly_segments(model, segments: Segments, weights: np.ndarray | None = None, slots=None,
-                 *, sensitivities: bool = False, compiled: bool = True):
+                 *, sensitivities: bool = False, compiled: bool = True,
+                 stopped: np.ndarray | None = None):
     """Fly every segment from its first state (RK4, :class:`Segments`' grid).
 
     Parameters
@@ -457,6 +458,9 @@ def fly_segments(model, segments: Segments, weights: np.ndarray | None = None, s
     compiled : bool
         Fly through the compiled loop of :mod:`sindyship._shooting_compiled` where numba is
         installed (the same numbers to rounding); False flies the numpy reference.
+    stopped : ndarray of int, shape (M,), optional
+        Filled with the RK4 step at whose end each segment diverged (-1: it did not); its
+        first held compared sample is ``step // segments.every``.
 
     Returns
     -------
@@ -474,34 +478,38 @@ def fly_segments(model, segments: Segments, weights: np.ndarray | None = None, s
     if slots is None:
         slots = model_slots(model)
     rhs = _RightHandSide(model, segments, weights, slots)
-    if compiled:
-        done = fly_compiled(model, segments, weights, slots, rhs.perturbed, rhs.steps,
-                            sensitivities)
-        if done is not None:
-            return done
-    closed = segments.zigzag.sign != 0
-    if closed.any():  # zig-zags flown closed loop: the loop, as Python without numba
-        states, jacobian = _fly_numpy(model, segments.take(~closed), weights, slots,
-                                      sensitivities)
-        done = fly_compiled(model, segments.take(closed), weights, slots, rhs.perturbed,
-                            rhs.steps, sensitivities, python=True)
-        return _merged(closed, (states, jacobian), done)
-    return _fly_numpy(model, segments, weights, slots, sensitivities)
+    done = fly_compiled(model, segments, weights, slots, rhs.perturbed, rhs.steps,
+                        sensitivities) if compiled else None
+    if done is None:
+        closed = segments.zigzag.sign != 0
+        if closed.any():  # zig-zags flown closed loop: the loop, as Python without numba
+            done = _merged(closed, _fly_numpy(model, segments.take(~closed), weights, slots,
+                                              sensitivities),
+                           fly_compiled(model, segments.take(closed), weights, slots,
+                                        rhs.perturbed, rhs.steps, sensitivities, python=True))
+        else:
+            done = _fly_numpy(model, segments, weights, slots, sensitivities)
+    if stopped is not None:
+        stopped[:] = done[2]
+    return done[0], done[1]
 
 
 def _merged(closed, replayed, flown):
     """The results of the replayed and the closed-loop segments in the batch's order."""
     states = np.empty((len(closed), *flown[0].shape[1:]))
     states[~closed], states[closed] = replayed[0], flown[0]
+    stopped = np.empty(len(closed), dtype=np.int64)
+    stopped[~closed], stopped[closed] = replayed[2], flown[2]
     if flown[1] is None:
-        return states, None
+        return states, None, stopped
     jacobian = np.empty((len(closed), *flown[1].shape[1:]))
     jacobian[~closed], jacobian[closed] = replayed[1], flown[1]
-    return states, jacobian
+    return states, jacobian, stopped
 
 
 def _fly_numpy(model, segments, weights, slots, sensitivities):
-    """The numpy reference of :func:`fly_segments` (segments replaying their rudder)."""
+    """The numpy reference of :func:`fly_segments` (segments replaying their rudder): states,
+    sensitivities (or None) and the step each segment diverged at (-1: none)."""
     from .simulation import diverged
 
     z = segments.state0.astype(float).copy()
@@ -509,8 +517,9 @@ def _fly_numpy(model, segments, weights, slots, sensitivities):
     n_out = segments.n_steps // segments.every
     states = np.empty((m, n_out, 6))
     jacobian = np.zeros((m, n_out, 6, len(slots[0]))) if sensitivities else None
+    stopped = np.full(m, -1, dtype=np.int64)
     if m == 0:
-        return states, jacobian
+        return states, jacobian, stopped
     rhs = _RightHandSide(model, segments, weights, slots)
     sens = np.zeros((m, 6, len(slots[0]))) if sensitivities else None
     alive = np.ones(m, dtype=bool)
@@ -527,6 +536,7 @@ def _fly_numpy(model, segments, weights, slots, sensitivities):
                 z_new = z + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             bad = diverged(np.vstack([z_new[:, :6].T, np.zeros(m)]), model.ship.L,
                            model.ship.U0)
+            stopped[bad & alive] = j
             alive &= ~bad
             z = np.where(alive[:, None], z_new, z)  # a diverged segment holds its last state
             if sensitivities:
@@ -536,7 +546,7 @@ def _fly_numpy(model, segments, weights, slots, sensitivities):
                 states[:, k] = z
                 if sensitivities:
                     jacobian[:, k] = sens
-    return states, jacobian
+    return states, jacobian, stopped
 
 
 def _rk4_with_sensitivities(rhs, z, sens, h, halves):

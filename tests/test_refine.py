@@ -100,6 +100,51 @@ def test_a_segment_flies_as_the_model_flies_the_same_stretch_alone(runs, fitted)
     np.testing.assert_allclose(states[1, :, 4], alone["y"][rows], atol=1.0)
 
 
+def test_whole_flights_on_the_refinement_grid_fly_as_evaluate_flies(runs, fitted):
+    """The check of a refinement flies whole records by the compiled loop on the
+    refinement's grid (every other sample, closed-loop zig-zags): the mean distances of
+    :func:`fly_like_batch`'s flights to a thousandth, and a divergence where they diverge."""
+    import sindyship.refine_checks as checks
+    from sindyship.evaluation import compare_flights
+
+    broken = _with(fitted, {("N", "r"): -3.0 * fitted.coefficients["N"]["r"]})
+    for model, diverges in ((fitted, False), (broken, True)):
+        whole = checks.flown_whole(model, runs)
+        for (flown, measured), reference, record in zip(
+                whole, fly_like_batch(model, runs), runs, strict=True):
+            assert measured["t"].tolist() == record["t"][::2].tolist()
+            assert (flown.meta["diverged_at"] is not None) == diverges
+            if not diverges:
+                ours = compare_flights(flown, flown, measured, model.ship.L)["before_mean_L"]
+                theirs = compare_flights(reference, reference, record,
+                                         model.ship.L)["before_mean_L"]
+                assert ours == pytest.approx(theirs, rel=5e-3)
+                continue
+            cut = flown.t >= flown.meta["diverged_at"]
+            assert np.isnan(flown["x"][cut]).all() and np.isfinite(flown["x"][~cut]).all()
+            assert reference.meta["diverged_at"] is not None  # the integrator's flight too
+
+
+def test_the_step_a_segment_diverged_at_is_the_same_compiled_or_not(runs, fitted):
+    broken = _with(fitted, {("N", "r"): -3.0 * fitted.coefficients["N"]["r"]})
+    found = []
+    for compiled in (True, False):
+        steps = []
+        for segments in make_segments(broken, runs, None):
+            stopped = np.full(segments.n_segments, -7)
+            states, _ = fly_segments(broken, segments, stopped=stopped, compiled=compiled)
+            for k, step in enumerate(stopped):  # held from its first compared sample on
+                assert step >= 0 and np.all(states[k, step // segments.every:]
+                                            == states[k, step // segments.every])
+            steps.extend(stopped.tolist())
+        found.append(steps)
+    assert found[0] == found[1]
+    (segments,) = make_segments(fitted, runs[:1], None)
+    stopped = np.zeros(1, dtype=int)
+    fly_segments(fitted, segments, stopped=stopped)
+    assert stopped.tolist() == [-1]
+
+
 #: A small library the protocol's records determine well (linear and cubic sway and yaw).
 SMALL = {"X": ["1", "du", "du^2", "v^2", "r^2", "delta^2", "v r"],
          "Y": ["v", "r", "delta", "v^3", "v^2 r", "v r^2", "r^3", "delta^3"],
@@ -270,6 +315,28 @@ def test_a_prior_fit_stays_stable_in_straight_running(runs, kcs, fitted, monkeyp
     refined_ls = refine(fitted, runs, max_evaluations=4)
     assert refined_ls.info["refined"]["straight_run_stable"] is False
     assert refined_ls.info["refined"]["refused_unstable"] is False
+
+
+def test_a_refinement_refused_for_its_turns_reports_the_stability_of_the_model_kept(
+        runs, kcs, fitted, monkeypatch):
+    """Refused because it loses the hard-over turns, a refinement keeps the fitted
+    coefficients, and the stability it reports is theirs, not the refused model's."""
+    refining = importlib.import_module("sindyship.refine")  # the module, not the function
+    from sindyship.stability import Stability, straight_run_stability
+
+    def stability(model):  # the refined coefficients unstable, the fitted ones as they are
+        if model.coefficients == fitted.coefficients:
+            return straight_run_stability(model)
+        return Stability(eigenvalues=(0.1, -1.0), jacobian=np.eye(2), stable=False,
+                         doubling_time_L_over_U=6.9)
+
+    assert straight_run_stability(fitted).stable
+    monkeypatch.setattr(refining, "straight_run_stability", stability)
+    monkeypatch.setattr(refining, "turns_kept", lambda *args: "diverges in a hard-over turn")
+    kept = refine(fitted, runs, max_evaluations=4)
+    report = kept.info["refined"]
+    assert kept.coefficients == fitted.coefficients and report["refused_turning"]
+    assert report["straight_run_stable"] is True and report["refused_unstable"] is False
 
 
 def test_an_unstable_prior_fit_is_not_refined_to_a_more_unstable_model(runs, kcs,
