@@ -1,7 +1,9 @@
 """sindyship: discover a ship's manoeuvring equations from trajectory data.
 
 The names a notebook needs, from one place (each is loaded on first use, so
-``import sindyship`` stays fast):
+``import sindyship`` stays fast).  ``ss.refine`` and ``ss.diagnose`` are the functions,
+also once their modules are imported; the modules themselves are
+``importlib.import_module("sindyship.refine")`` and ``"sindyship.diagnose"``:
 
 >>> import sindyship as ss
 >>> ship = ss.load_ship("kcs")
@@ -15,6 +17,8 @@ The names a notebook needs, from one place (each is loaded on first use, so
 from __future__ import annotations
 
 import importlib
+import sys
+import types
 
 __version__ = "0.1.0"
 
@@ -49,6 +53,25 @@ _EXPORTS = {
 }
 
 __all__ = ["__version__", *sorted(_EXPORTS)]
+
+#: Exported functions named as the module that defines them (``sindyship.refine`` is the
+#: function; its module is ``importlib.import_module("sindyship.refine")``).
+_FUNCTIONS_OVER_MODULES = frozenset(name for name, module in _EXPORTS.items()
+                                    if module == f"{__name__}.{name}")
+
+
+class _Package(types.ModuleType):
+    """The package, whose attributes named as a submodule stay the exported functions: the
+    import system binds a submodule to its package once it is imported, which would turn
+    ``sindyship.diagnose`` from the function into the module behind a notebook's back."""
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in _FUNCTIONS_OVER_MODULES and isinstance(value, types.ModuleType):
+            return  # the module stays in sys.modules; the name goes on to the function
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
 
 
 def __getattr__(name: str):
