@@ -2,8 +2,10 @@
 
 The names a notebook needs, from one place (each is loaded on first use, so
 ``import sindyship`` stays fast).  ``ss.refine`` and ``ss.diagnose`` are the functions,
-also once their modules are imported; the modules themselves are
-``importlib.import_module("sindyship.refine")`` and ``"sindyship.diagnose"``:
+also once their modules are imported, so the package's attribute never leads to those
+modules: reach them and theirs by ``from sindyship.diagnose import discovery`` or
+``importlib.import_module("sindyship.refine")`` (``import sindyship.refine as r`` gives the
+function, and ``import sindyship.diagnose.discovery as d`` fails):
 
 >>> import sindyship as ss
 >>> ship = ss.load_ship("kcs")
@@ -66,8 +68,8 @@ class _Package(types.ModuleType):
     ``sindyship.diagnose`` from the function into the module behind a notebook's back."""
 
     def __setattr__(self, name: str, value) -> None:
-        if name in _FUNCTIONS_OVER_MODULES and isinstance(value, types.ModuleType):
-            return  # the module stays in sys.modules; the name goes on to the function
+        if name in _FUNCTIONS_OVER_MODULES and value is sys.modules.get(f"{__name__}.{name}"):
+            return  # the import system's binding: the name goes on to the function
         super().__setattr__(name, value)
 
 

@@ -460,9 +460,10 @@ def fly_compiled(model, segments, weights, slots, perturbed, steps, sensitivitie
                  python: bool = False):
     """:func:`sindyship.shooting.fly_segments` through the compiled loop (its states,
     sensitivities or None, and the step each segment diverged at, -1 where none did), or None
-    when the model has no compiled tables (numba missing, or a factor of a number).  With ``python``
-    the same loop runs where numba is missing, as Python (slowly): the zig-zags flown closed
-    loop have no other implementation."""
+    when the model has no compiled tables (numba missing, or a factor of a number).  With
+    ``python`` the same loop runs where numba is missing, as Python (slowly): the zig-zags
+    flown closed loop have no other implementation; None there too when a variable or factor
+    has no form in the loop (:func:`loop_flies`)."""
     from ._forces_compiled import tables as factor_tables
     from .simulation import servo_of
 
@@ -502,6 +503,16 @@ def fly_compiled(model, segments, weights, slots, perturbed, steps, sensitivitie
          closed, float(segments.step), int(segments.n_steps), int(segments.every), states,
          jacobian, stopped)
     return states, (jacobian if sensitivities else None), stopped
+
+
+def loop_flies(model) -> bool:
+    """Whether the loop, compiled or run as Python, can fly the model: every factor and
+    variable of its library has a form in it (a factor of a number has none)."""
+    from ._forces_compiled import tables as factor_tables
+
+    compiled = factor_tables(model._bases, model._factors, model._slots)
+    return compiled is not None and _tables(model, list(compiled[0]), compiled[1],
+                                            list(model.recorded_channels)) is not None
 
 
 def _tables(model, names, integer_tables, channel_names):

@@ -11,11 +11,14 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
 
+from ._shooting_compiled import loop_flies
 from .evaluation import compare_flights
+from .flights import flown_part, fly_jobs_like
 from .identify import fit
 from .library import nondimensional_variables
 from .manoeuvres import Manoeuvre, fly, turning_figures
@@ -92,8 +95,7 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
     half_fit = fitted_again(model, fitted_on)
     half = refined_on(half_fit, fitted_on)
     ratios, worse = [], []
-    for (b, record), (a, _) in zip(flown_whole(half_fit, flown), flown_whole(half, flown),
-                                   strict=True):
+    for (b, record), (a, _) in zip(*flown_whole([half_fit, half], flown), strict=True):
         if b is None:  # fewer than two samples from its flight start: nothing to compare
             continue
         common = compare_flights(b, a, record, model.ship.L)
@@ -109,38 +111,64 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
             "ratio": ratio, "accepted": accepted, "why": why}
 
 
-def flown_whole(model: AbkowitzModel, records) -> list[tuple]:
-    """Each record flown whole from its flight start by the refinement's compiled loop
-    (:func:`sindyship.shooting.make_segments` without segments: a zig-zag closed loop, any
-    other record replaying its rudder, as :func:`sindyship.evaluation.evaluate` flies them,
-    with RK4 steps of whole samples): per record the flight and the record at the compared
-    samples (its first and every ``every``-th step's), or (None, None) for a record of fewer
-    than two samples from its start.  A diverged flight holds ``diverged_at`` (its first
-    compared sample out of range) and NaN from there on, as
-    :func:`sindyship.simulation.simulate_batch` gives it; the flights hold the states only.
+def flown_whole(models: Sequence[AbkowitzModel], records) -> list[list[tuple]]:
+    """Each record flown whole by each model, from its flight start, on the refinement's
+    grid: as :func:`sindyship.evaluation.evaluate` flies it (a zig-zag closed loop, any other
+    record replaying its rudder), by the compiled loop of the refinement
+    (:func:`sindyship.shooting.make_segments` without segments).
+
+    Parameters
+    ----------
+    models : sequence of AbkowitzModel
+        Models of one library, ship and rudder signal (a fit and its refinement): the
+        records' segments are made once and flown with each model's coefficients.
+    records : sequence of Trajectory
+
+    Returns
+    -------
+    list of list of (Trajectory, Trajectory)
+        Per model, per record: the flight and the record at the compared samples (the first
+        and the end of every step of whole samples near 0.1 L/U0; one sample for a record too
+        short for a step; ``(None, None)`` for one of fewer than two samples from its
+        start).  The flight holds the states (no rudder) and ``diverged_at``, its first
+        compared sample out of range, with NaN from there on, as
+        :func:`sindyship.simulation.simulate_batch` gives it; its divergence can come some
+        seconds apart from the integrator's, whose steps differ.  Where the loop cannot fly
+        the library (:func:`sindyship._shooting_compiled.loop_flies`), the flights of
+        :func:`sindyship.flights.fly_jobs_like` and the records themselves.
     """
-    out: list[tuple] = [(None, None)] * len(records)
+    if not loop_flies(models[0]):
+        flights = fly_jobs_like([(model, records) for model in models])
+        return [list(zip(flown, records, strict=True)) for flown in flights]
+    out = [[(None, None)] * len(records) for _ in models]
     names = ("u", "v", "r", "x", "y", "psi")
-    for batch in make_segments(model, records, None):
-        stopped = np.empty(batch.n_segments, dtype=np.int64)
-        states, _ = fly_segments(model, batch, stopped=stopped)
-        n_out = states.shape[1]
-        for k, index in enumerate(batch.record):
-            valid = np.concatenate([[True], batch.valid[k]])
-            t = (batch.start[k] + batch.step * batch.every * np.arange(n_out + 1))[valid]
-            measured = np.vstack([batch.state0[k], batch.measured[k]])[valid]
-            flight = np.vstack([batch.state0[k], states[k]])[valid]
-            meta = {"diverged_at": None}
-            if stopped[k] >= 0:
-                first = stopped[k] // batch.every + 1  # the initial state is row 0
-                flight[first:] = np.nan
-                meta["diverged_at"] = float(t[first]) if first < len(t) else None
-            frames = [pd.DataFrame({"t": t, **dict(zip(names, rows.T, strict=True))})
-                      for rows in (flight, measured)]
-            name = records[index].name
-            out[index] = (Trajectory(frames[0], name=name, meta=meta),
-                          Trajectory(frames[1], name=name))
+    for batch in make_segments(models[0], records, None):
+        parts = {index: flown_part(records[index]) for index in batch.record}
+        for m, model in enumerate(models):
+            stopped = np.empty(batch.n_segments, dtype=np.int64)
+            states, _ = fly_segments(model, batch, stopped=stopped)
+            for k, index in enumerate(batch.record):
+                out[m][index] = _pair(batch, k, states[k], stopped[k], parts[index], names)
     return out
+
+
+def _pair(batch, k: int, states: np.ndarray, stopped: int, record, names) -> tuple:
+    """The flight of segment ``k`` of a batch of whole records and its record, at the
+    compared samples (the record's own times)."""
+    valid = np.concatenate([[True], batch.valid[k]])
+    rows = np.rint(batch.step * batch.every * np.arange(len(valid)) / record.dt).astype(int)
+    t = record.t[rows[valid]]
+    measured = np.vstack([batch.state0[k], batch.measured[k]])[valid]
+    flight = np.vstack([batch.state0[k], states])[valid]
+    meta = {"diverged_at": None}
+    if stopped >= 0:
+        first = stopped // batch.every + 1  # the initial state is row 0
+        flight[first:] = np.nan
+        meta["diverged_at"] = float(t[first]) if first < len(t) else None
+    frames = [pd.DataFrame({"t": t, **dict(zip(names, values.T, strict=True))})
+              for values in (flight, measured)]
+    return (Trajectory(frames[0], name=record.name, meta=meta),
+            Trajectory(frames[1], name=record.name))
 
 
 def fitted_again(model: AbkowitzModel, records) -> AbkowitzModel:

@@ -457,7 +457,8 @@ def fly_segments(model, segments: Segments, weights: np.ndarray | None = None, s
         Also integrate the sensitivities of the states to those coefficients.
     compiled : bool
         Fly through the compiled loop of :mod:`sindyship._shooting_compiled` where numba is
-        installed (the same numbers to rounding); False flies the numpy reference.
+        installed (the same numbers to rounding); False flies the numpy reference (zig-zags
+        flown closed loop: that loop's own code, run as Python).
     stopped : ndarray of int, shape (M,), optional
         Filled with the RK4 step at whose end each segment diverged (-1: it did not); its
         first held compared sample is ``step // segments.every``.
@@ -483,10 +484,16 @@ def fly_segments(model, segments: Segments, weights: np.ndarray | None = None, s
     if done is None:
         closed = segments.zigzag.sign != 0
         if closed.any():  # zig-zags flown closed loop: the loop, as Python without numba
+            flown = fly_compiled(model, segments.take(closed), weights, slots, rhs.perturbed,
+                                 rhs.steps, sensitivities, python=True)
+            if flown is None:
+                raise SindyshipInputError(
+                    "the model's library has a term the shooting loop cannot evaluate (a "
+                    "factor of a number, or a variable it has no form for), so its zig-zags "
+                    "cannot be flown closed loop; refine on segments (segment_s) instead of "
+                    "whole flights.")
             done = _merged(closed, _fly_numpy(model, segments.take(~closed), weights, slots,
-                                              sensitivities),
-                           fly_compiled(model, segments.take(closed), weights, slots,
-                                        rhs.perturbed, rhs.steps, sensitivities, python=True))
+                                              sensitivities), flown)
         else:
             done = _fly_numpy(model, segments, weights, slots, sensitivities)
     if stopped is not None:

@@ -38,7 +38,7 @@ def test_the_speed_figures_hold_what_the_readme_says():
     """One run of benchmarks/bench_speed.py against the checkout before the refinement by
     multiple shooting: the flights at least 7 times as fast as a scalar solve_ivp reference
     (and as accurate), `fit --refine 10` on the protocol at least 6 times as fast, reproduce
-    at least 3.5 times (3.8 to 4.1 in the last runs: the machine's noise); every speed-up is
+    at least 3.5 times (its ratio moves by a tenth between runs of one checkout); every speed-up is
     the ratio of the two timings and every target flag what the timing says (some targets
     are missed on this machine: the JSON keeps it)."""
     result = _load("speed.json")

@@ -30,10 +30,10 @@ module = importlib.import_module("sindyship.refine")
 assert isinstance(module, types.ModuleType) and module.refine is ss.refine
 assert isinstance(ss.diagnose, types.FunctionType), type(ss.diagnose)
 assert isinstance(ss.refine, types.FunctionType), type(ss.refine)
-from sindyship.diagnose import diagnose
-assert diagnose is ss.diagnose
-ss.other = 1
-assert ss.other == 1
+from sindyship.diagnose import diagnose, discovery
+assert diagnose is ss.diagnose and isinstance(discovery, types.ModuleType)
+ss.refine = print  # a user's own assignment is kept
+assert ss.refine is print
 print("ok")
 """
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

@@ -102,16 +102,16 @@ def test_a_segment_flies_as_the_model_flies_the_same_stretch_alone(runs, fitted)
 
 def test_whole_flights_on_the_refinement_grid_fly_as_evaluate_flies(runs, fitted):
     """The check of a refinement flies whole records by the compiled loop on the
-    refinement's grid (every other sample, closed-loop zig-zags): the mean distances of
-    :func:`fly_like_batch`'s flights to a thousandth, and a divergence where they diverge."""
+    refinement's grid (every other sample here, zig-zags closed loop): the mean distances of
+    :func:`fly_like_batch`'s flights within 0.5 %, and a divergence where they diverge."""
     import sindyship.refine_checks as checks
     from sindyship.evaluation import compare_flights
 
     broken = _with(fitted, {("N", "r"): -3.0 * fitted.coefficients["N"]["r"]})
-    for model, diverges in ((fitted, False), (broken, True)):
-        whole = checks.flown_whole(model, runs)
+    whole = checks.flown_whole([fitted, broken], runs)
+    for model, diverges, pairs in ((fitted, False, whole[0]), (broken, True, whole[1])):
         for (flown, measured), reference, record in zip(
-                whole, fly_like_batch(model, runs), runs, strict=True):
+                pairs, fly_like_batch(model, runs), runs, strict=True):
             assert measured["t"].tolist() == record["t"][::2].tolist()
             assert (flown.meta["diverged_at"] is not None) == diverges
             if not diverges:
@@ -123,9 +123,16 @@ def test_whole_flights_on_the_refinement_grid_fly_as_evaluate_flies(runs, fitted
             cut = flown.t >= flown.meta["diverged_at"]
             assert np.isnan(flown["x"][cut]).all() and np.isfinite(flown["x"][~cut]).all()
             assert reference.meta["diverged_at"] is not None  # the integrator's flight too
+    assert checks.flown_whole([fitted], runs)[0][0][0].data.equals(whole[0][0][0].data)
 
 
-def test_the_step_a_segment_diverged_at_is_the_same_compiled_or_not(runs, fitted):
+def test_the_step_a_segment_diverged_at_is_where_it_first_leaves_the_plausible_range(
+        runs, fitted):
+    """``stopped`` names the step at whose end a segment diverged: flown that many steps it
+    has not diverged, one more and it has; the states are held from its compared sample on;
+    the compiled loop and the numpy reference (the zig-zag: the loop's code as Python) agree."""
+    from dataclasses import replace
+
     broken = _with(fitted, {("N", "r"): -3.0 * fitted.coefficients["N"]["r"]})
     found = []
     for compiled in (True, False):
@@ -133,9 +140,14 @@ def test_the_step_a_segment_diverged_at_is_the_same_compiled_or_not(runs, fitted
         for segments in make_segments(broken, runs, None):
             stopped = np.full(segments.n_segments, -7)
             states, _ = fly_segments(broken, segments, stopped=stopped, compiled=compiled)
-            for k, step in enumerate(stopped):  # held from its first compared sample on
+            for k, step in enumerate(stopped):
                 assert step >= 0 and np.all(states[k, step // segments.every:]
                                             == states[k, step // segments.every])
+                for n_steps, expected in ((step, -1), (step + 1, step)):
+                    short = replace(segments.take(np.array([k])), n_steps=int(n_steps))
+                    again = np.full(1, -7)
+                    fly_segments(broken, short, stopped=again, compiled=compiled)
+                    assert again.tolist() == [expected]
             steps.extend(stopped.tolist())
         found.append(steps)
     assert found[0] == found[1]
@@ -143,6 +155,27 @@ def test_the_step_a_segment_diverged_at_is_the_same_compiled_or_not(runs, fitted
     stopped = np.zeros(1, dtype=int)
     fly_segments(fitted, segments, stopped=stopped)
     assert stopped.tolist() == [-1]
+
+
+def test_a_library_the_shooting_loop_cannot_fly_is_checked_by_the_integrator(four, kcs):
+    """A factor of a number has no form in the shooting loop: the check on every other
+    record flies the integrator's flights instead, and whole flights of zig-zags are
+    refused in one sentence."""
+    import sindyship.refine_checks as checks
+    from sindyship.library import TermLibrary
+
+    library = TermLibrary("half", "prime-I", "", {
+        "X": ["du", "v r", "0.5 r^2"], "Y": ["v", "r", "delta", "v^3"],
+        "N": ["v", "r", "delta", "r^3"]})
+    model = fit(four, kcs, library=library, optimizer="ls")
+    (pairs,) = checks.flown_whole([model], four)
+    for (flown, record), reference in zip(pairs, fly_like_batch(model, four), strict=True):
+        assert flown.data.equals(reference.data) and record is not None
+    refined = refine(model, four, max_evaluations=3)
+    assert 0 < refined.info["refined"]["validation"]["ratio"] < math.inf
+    with pytest.raises(SindyshipInputError, match=r"^the model's library has a term the "
+                       r"shooting loop cannot evaluate .* refine on segments"):
+        refine(model, four, max_evaluations=3, segment_s="whole", validate=False)
 
 
 #: A small library the protocol's records determine well (linear and cubic sway and yaw).
