@@ -127,8 +127,8 @@ def flown_whole(models: Sequence[AbkowitzModel], records) -> list[list[tuple]]:
     Returns
     -------
     list of list of (Trajectory, Trajectory)
-        Per model, per record: the flight and the record at the compared samples (the first
-        and the end of every step of whole samples near 0.1 L/U0; one sample for a record too
+        Per model, per record: the flight and the record at the compared samples (the first,
+        and every sample the RK4 steps of about 0.1 L/U0 reach; one sample for a record too
         short for a step; ``(None, None)`` for one of fewer than two samples from its
         start).  The flight holds the states (no rudder) and ``diverged_at``, its first
         compared sample out of range, with NaN from there on, as
