@@ -283,6 +283,39 @@ def _servo_rate(delta, command, servo):
     return min(max((target - delta) / time_constant, -rate_max), rate_max)
 
 
+def _servo_slope(value, target, time_constant, rate_max):
+    """The servo's rate [rad/s] from angle ``value`` toward ``target`` (paper eq. 12-13),
+    limited as Python's ``min(max(s, -rate_max), rate_max)`` limits it (NaN passes)."""
+    s = (target - value) / max(time_constant, 1e-9)
+    if -rate_max > s:
+        s = -rate_max
+    if rate_max < s:
+        s = rate_max
+    return s
+
+
+def servo_angles(t, command, delta0, time_constant, rate_max, angle, rate):
+    """The servo's angle and rate at the samples ``t`` into ``angle`` and ``rate``, from
+    ``delta0``, each sample's ``command`` held to the next one: RK4 in equal steps of at most
+    a quarter of the time constant [s] (:func:`sindyship.shooting.servo_rudder`)."""
+    h_max = 0.25 * max(time_constant, 1e-9)
+    delta = delta0
+    n = t.shape[0]
+    for i in range(n):
+        angle[i] = delta
+        rate[i] = _servo_slope(delta, command[i], time_constant, rate_max)
+        if i + 1 == n:
+            break
+        n_sub = max(1, math.ceil((t[i + 1] - t[i]) / h_max))
+        h = (t[i + 1] - t[i]) / n_sub
+        for _ in range(n_sub):
+            k1 = _servo_slope(delta, command[i], time_constant, rate_max)
+            k2 = _servo_slope(delta + 0.5 * h * k1, command[i], time_constant, rate_max)
+            k3 = _servo_slope(delta + 0.5 * h * k2, command[i], time_constant, rate_max)
+            k4 = _servo_slope(delta + h * k3, command[i], time_constant, rate_max)
+            delta += h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+
 def _extras_at(extras, m, t, h, out):
     """The channels of segment ``m`` at time ``t`` from its start (linear between the half
     steps they are given at)."""
@@ -449,6 +482,8 @@ if COMPILED:
     _fly_one = numba.njit(cache=True, nogil=True, error_model="numpy")(_fly_one)
     _servo_rate = numba.njit(cache=True, nogil=True, error_model="numpy")(_servo_rate)
     _extras_at = numba.njit(cache=True, nogil=True, error_model="numpy")(_extras_at)
+    _servo_slope = numba.njit(cache=True, nogil=True, error_model="numpy")(_servo_slope)
+    servo_angles = numba.njit(cache=True, nogil=True, error_model="numpy")(servo_angles)
     _closed_rate = numba.njit(cache=True, nogil=True, error_model="numpy")(_closed_rate)
     _closed_step = numba.njit(cache=True, nogil=True, error_model="numpy")(_closed_step)
     _crossing = numba.njit(cache=True, nogil=True, error_model="numpy")(_crossing)

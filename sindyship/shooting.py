@@ -154,29 +154,18 @@ def servo_rudder(record: Trajectory, ship) -> tuple[np.ndarray, np.ndarray]:
     """The actual rudder angle [rad] and its rate [rad/s] at the record's samples that the
     ship's servo (paper eq. 12-13) makes of the recorded command ``delta_c``, from the first
     sample's rudder angle (actual if recorded) as a flight starts; the servo does not depend
-    on the ship's motion."""
+    on the ship's motion.  RK4 on the command held from sample to sample, in steps of at
+    most a quarter of the servo's time constant, as the flights' servo
+    (:func:`sindyship._shooting_compiled.servo_angles`)."""
+    from ._shooting_compiled import servo_angles
+
     time_constant, rate_max, delta_max = servo_of(ship)
-    t, command = record.t, np.clip(record["delta_c"], -delta_max, delta_max)
-    h_max = 0.25 * max(time_constant, 1e-9)
-    angle = np.empty(len(t))
-    rate = np.empty(len(t))
-    delta = float(record.rudder[0])  # the flights' first state: the actual angle if recorded
-
-    def slope(value: float, target: float) -> float:
-        return min(max((target - value) / max(time_constant, 1e-9), -rate_max), rate_max)
-
-    for i in range(len(t)):
-        angle[i], rate[i] = delta, slope(delta, command[i])
-        if i + 1 == len(t):
-            break
-        n_sub = max(1, math.ceil((t[i + 1] - t[i]) / h_max))
-        h = (t[i + 1] - t[i]) / n_sub
-        for _ in range(n_sub):  # RK4 on the held command, as the flights' servo
-            k1 = slope(delta, command[i])
-            k2 = slope(delta + 0.5 * h * k1, command[i])
-            k3 = slope(delta + 0.5 * h * k2, command[i])
-            k4 = slope(delta + h * k3, command[i])
-            delta += h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    t = np.ascontiguousarray(record.t, dtype=float)
+    command = np.ascontiguousarray(np.clip(record["delta_c"], -delta_max, delta_max),
+                                   dtype=float)
+    angle, rate = np.empty(len(t)), np.empty(len(t))
+    # the flights' first state: the actual angle if recorded
+    servo_angles(t, command, float(record.rudder[0]), time_constant, rate_max, angle, rate)
     return angle, rate
 
 

@@ -52,6 +52,44 @@ def test_segments_start_at_measured_states_and_cover_every_sample(runs, fitted, 
     assert segments.valid[:4].sum() == 4 * 50 - 1 and segments.valid[4:].sum() == 3 * 50 - 1
 
 
+def test_the_servo_replays_a_command_as_its_rk4_in_python_does(kcs):
+    """The servo's angles of a recorded command (paper eq. 12-13, RK4 on the held command)
+    equal, bit for bit, the same steps written out in Python, the rate limit and NaN
+    included; the compiled loop where numba is installed."""
+    import sindyship._shooting_compiled as loop
+    from sindyship.simulation import servo_of
+
+    time_constant, rate_max, delta_max = servo_of(kcs)
+    generator = np.random.default_rng(3)
+    t = np.cumsum(generator.uniform(0.2, 3.0, 400))
+    command = np.clip(generator.normal(0.0, 0.4, 400), -delta_max, delta_max)
+    command[250] = math.nan
+
+    def slope(value, target):
+        return min(max((target - value) / max(time_constant, 1e-9), -rate_max), rate_max)
+
+    expected, expected_rate, delta = [], [], 0.05
+    for i in range(len(t)):
+        expected.append(delta)
+        expected_rate.append(slope(delta, command[i]))
+        if i + 1 == len(t):
+            break
+        n_sub = max(1, math.ceil((t[i + 1] - t[i]) / (0.25 * time_constant)))
+        h = (t[i + 1] - t[i]) / n_sub
+        for _ in range(n_sub):
+            k1 = slope(delta, command[i])
+            k2 = slope(delta + 0.5 * h * k1, command[i])
+            k3 = slope(delta + 0.5 * h * k2, command[i])
+            k4 = slope(delta + h * k3, command[i])
+            delta += h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    angle, rate = np.empty(len(t)), np.empty(len(t))
+    loop.servo_angles(t, command, 0.05, time_constant, rate_max, angle, rate)
+    np.testing.assert_array_equal(angle, expected)
+    np.testing.assert_array_equal(rate, expected_rate)
+    assert np.isfinite(angle[:251]).all() and np.isnan(angle[251:]).all()
+    assert np.abs(np.diff(angle[:251])).max() <= rate_max * np.diff(t).max() * (1 + 1e-12)
+
+
 @pytest.mark.parametrize("compiled", [True, False])
 def test_sensitivities_equal_central_differences(runs, fitted, compiled):
     if compiled and importlib.util.find_spec("numba") is None:
