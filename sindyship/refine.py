@@ -276,7 +276,6 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
         p, cost_after = np.zeros_like(p), cost_before
     flight_before, flight_after = last["flight_rms_fitted"], last["flight_rms_after"]
     stopped, converged = last["stopped"], last["converged"]
-    start = np.zeros_like(p)
     info = dict(model.info)
     candidate = _with_changes(model, problem.coefficients(p), info)
     after = straight_run_stability(candidate)
@@ -287,23 +286,22 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
     refused_unstable = moved and ((promised and not stable) or doublings is not None)
     turns = None if refused_unstable or not moved else turns_kept(model, candidate, records)
     if refused_unstable:  # a prior fit's straight running is never made less stable
-        p, cost_after, stable, flight_after = start, cost_before, promised, flight_before
         stopped = ("the refined model was unstable in straight running, which the fit it "
                    "started from is not; the fitted coefficients are kept") if promised else (
             f"in straight running a disturbance of the refined model doubles in "
             f"{doublings[1]:.3g} L/U0, of the fit it started from in {doublings[0]:.3g} L/U0 (an "
             "unstable prior fit is not refined to a more unstable model); the fitted "
             "coefficients are kept")
-        candidate = _with_changes(model, problem.coefficients(p), info)
     elif turns is not None:  # it flew hard-over turns it can no longer fly
-        p, cost_after, flight_after = start, cost_before, flight_before
         stopped = (f"the refined model {turns}, which the fit it started from flies; the "
                    "fitted coefficients are kept")
+    if refused_unstable or turns is not None:  # the fitted coefficients, as they were
+        p, cost_after, flight_after = np.zeros_like(p), cost_before, flight_before
         candidate = _with_changes(model, problem.coefficients(p), info)
-        stable = straight_run_stability(candidate).stable  # of the model kept
+        stable = promised if refused_unstable else straight_run_stability(candidate).stable
     if "straight_run" in info:  # the prior fit's record describes the model saved
         info["straight_run"] = {**info["straight_run"], "stable": stable}
-    moved = int(np.argmax(np.abs(p))) if np.any(p) else None
+    largest = int(np.argmax(np.abs(p))) if np.any(p) else None
     keys = problem.keys
     info["refined"] = {
         "method": "multiple shooting", "records": [r.name for r in records],
@@ -313,9 +311,9 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
         "flight_rms_before": flight_before, "flight_rms_after": flight_after,
         "evaluations": evaluations, "jacobians": jacobians, "stopped": stopped,
         "converged": bool(converged),
-        "largest_change": None if moved is None else {
-            "coefficient": f"{keys[moved][0]}[{keys[moved][1]}]",
-            "relative": float(p[moved])},
+        "largest_change": None if largest is None else {
+            "coefficient": f"{keys[largest][0]}[{keys[largest][1]}]",
+            "relative": float(p[largest])},
         "straight_run_stable": stable,
         "refused_unstable": refused_unstable,
         "refused_turning": turns,

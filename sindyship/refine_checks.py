@@ -111,6 +111,10 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
             "ratio": ratio, "accepted": accepted, "why": why}
 
 
+#: The states a flight of the shooting loop holds, in its order.
+_STATES = ("u", "v", "r", "x", "y", "psi")
+
+
 def flown_whole(models: Sequence[AbkowitzModel], records) -> list[list[tuple]]:
     """Each record flown whole by each model, from its flight start, on the refinement's
     grid: as :func:`sindyship.evaluation.evaluate` flies it (a zig-zag closed loop, any other
@@ -141,18 +145,17 @@ def flown_whole(models: Sequence[AbkowitzModel], records) -> list[list[tuple]]:
         flights = fly_jobs_like([(model, records) for model in models])
         return [list(zip(flown, records, strict=True)) for flown in flights]
     out = [[(None, None)] * len(records) for _ in models]
-    names = ("u", "v", "r", "x", "y", "psi")
     for batch in make_segments(models[0], records, None):
         parts = {index: flown_part(records[index]) for index in batch.record}
         for m, model in enumerate(models):
             stopped = np.empty(batch.n_segments, dtype=np.int64)
             states, _ = fly_segments(model, batch, stopped=stopped)
             for k, index in enumerate(batch.record):
-                out[m][index] = _pair(batch, k, states[k], stopped[k], parts[index], names)
+                out[m][index] = _pair(batch, k, states[k], stopped[k], parts[index])
     return out
 
 
-def _pair(batch, k: int, states: np.ndarray, stopped: int, record, names) -> tuple:
+def _pair(batch, k: int, states: np.ndarray, stopped: int, record) -> tuple:
     """The flight of segment ``k`` of a batch of whole records and its record, at the
     compared samples (the record's own times)."""
     valid = np.concatenate([[True], batch.valid[k]])
@@ -165,7 +168,7 @@ def _pair(batch, k: int, states: np.ndarray, stopped: int, record, names) -> tup
         first = stopped // batch.every + 1  # the initial state is row 0
         flight[first:] = np.nan
         meta["diverged_at"] = float(t[first]) if first < len(t) else None
-    frames = [pd.DataFrame({"t": t, **dict(zip(names, values.T, strict=True))})
+    frames = [pd.DataFrame({"t": t, **dict(zip(_STATES, values.T, strict=True))})
               for values in (flight, measured)]
     return (Trajectory(frames[0], name=record.name, meta=meta),
             Trajectory(frames[1], name=record.name))
