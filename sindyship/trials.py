@@ -353,15 +353,35 @@ def _holds(command: np.ndarray) -> list[tuple[int, int, float]]:
     holds = []
     i, n = 0, len(command)
     while i < n:
-        j, low, high = i + 1, command[i], command[i]
-        while j < n and max(high, command[j]) - min(low, command[j]) <= HOLD_RANGE:
-            low, high = min(low, command[j]), max(high, command[j])
-            j += 1
+        j = _stretch_end(command, i)
         level = float(np.median(command[i:j]))
         if j - i >= HOLD_SAMPLES and abs(level) >= 1.0:
             holds.append((i, j - 1, level))
         i = j
     return holds
+
+
+def _stretch_end(command: np.ndarray, i: int) -> int:
+    """The end (exclusive) of the stretch from sample ``i`` whose spread (largest minus
+    smallest angle) stays within HOLD_RANGE: the first sample that widens it beyond.
+
+    A NaN sample inside a stretch is passed over; a stretch that starts at NaN is that
+    sample alone.  Read in windows that grow eightfold, so a long hold costs a few array
+    operations instead of one comparison per sample.
+    """
+    n = len(command)
+    if np.isnan(command[i]):
+        return i + 1
+    size = 32
+    while True:
+        window = command[i:i + size]
+        spread = np.fmax.accumulate(window) - np.fmin.accumulate(window)
+        wider = np.flatnonzero(spread > HOLD_RANGE)
+        if wider.size:
+            return i + int(wider[0])
+        if i + size >= n:
+            return n
+        size *= 8
 
 
 def _longest_alternation(plateaus):

@@ -23,7 +23,14 @@ from sindyship.plausibility import CHECKS, frame_misfit, heading_gain
 from sindyship.ships import load_ship
 from sindyship.simulation import RudderCommand, simulate_batch
 from sindyship.trajectory import Trajectory
-from sindyship.trials import explain_zigzag, recognise_zigzag, trim, underway_window
+from sindyship.trials import (
+    HOLD_RANGE,
+    _stretch_end,
+    explain_zigzag,
+    recognise_zigzag,
+    trim,
+    underway_window,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -305,6 +312,30 @@ def test_logged_zigzag_is_recognised(logged_trial, kcs):
     assert (amplitude, check, first_sign, start_time) == (20.0, 20.0, 1, 350.0)
     zigzag, reason = explain_zigzag(trim(record, underway_window(record, kcs)))
     assert zigzag == (20.0, 20.0, 1, 350.0) and "plateaus at 19.0, 21.0" in reason
+
+
+def _stretch_end_one_by_one(command, i):
+    """The rule of a rudder hold, sample by sample: extend while the spread stays within
+    HOLD_RANGE (Python's max and min pass over NaN)."""
+    j, low, high = i + 1, command[i], command[i]
+    while j < len(command) and max(high, command[j]) - min(low, command[j]) <= HOLD_RANGE:
+        low, high = min(low, command[j]), max(high, command[j])
+        j += 1
+    return j
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_rudder_holds_end_where_the_sample_by_sample_rule_ends_them(seed):
+    rng = np.random.default_rng(seed)
+    lengths = rng.integers(1, 400, 20)
+    pieces = [rng.uniform(-35, 35) + rng.normal(0.0, rng.choice([0.05, 0.2, 0.6]), n)
+              for n in lengths]
+    command = np.concatenate([np.concatenate([p, np.linspace(p[-1], 0.0, 7)]) for p in pieces])
+    command[rng.integers(0, len(command), 5)] = np.nan
+    starts = [0, *rng.integers(0, len(command), 200)]
+    got = [_stretch_end(command, int(i)) for i in starts]
+    assert got == [_stretch_end_one_by_one(command, int(i)) for i in starts]
+    assert max(got) > 100  # long holds cross the first window
 
 
 def test_protocol_zigzags_are_recognised_and_turns_are_not(protocol_runs):
