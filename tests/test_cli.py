@@ -27,6 +27,34 @@ def test_help_lists_the_verbs():
         assert verb in out
 
 
+def test_the_parsers_optimizer_names_are_the_registrys():
+    from sindyship.cli._common import OPTIMIZER_NAMES
+    from sindyship.optimizers import OPTIMIZERS
+
+    assert sorted(OPTIMIZER_NAMES) == sorted(OPTIMIZERS)
+
+
+def test_help_and_simulate_answer_without_scikit_learn():
+    """The parser of a verb builds that verb's options alone: ``--help`` and ``simulate``
+    import neither scikit-learn nor pysindy, and every verb's full help still lists the same
+    options as the parser of every verb."""
+    script = (
+        "import sys\n"
+        "from sindyship.cli import build_parser, _verb_of\n"
+        "for argv in (['--help'], ['simulate', '--help'], ['effects']):\n"
+        "    build_parser({_verb_of(argv)})\n"
+        "print(sorted(m for m in ('sklearn', 'pysindy', 'sympy') if m in sys.modules))\n")
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.split("\n")[0] == "[]"
+    from sindyship.cli import VERBS, build_parser
+
+    everything = build_parser()._subparsers._group_actions[0].choices
+    for verb in VERBS:
+        alone = build_parser({verb})._subparsers._group_actions[0].choices[verb]
+        assert alone.format_help() == everything[verb].format_help()
+
+
 @pytest.fixture(scope="module")
 def records(tmp_path_factory):
     folder = tmp_path_factory.mktemp("records")

@@ -63,17 +63,34 @@ def _terminate(signum, frame):
     raise KeyboardInterrupt
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The parser of every verb."""
+def build_parser(verbs=None) -> argparse.ArgumentParser:
+    """The command line's parser.
+
+    Parameters
+    ----------
+    verbs : collection of str, optional
+        The verbs whose options are built (default: every verb); the others are listed by
+        their summary line only.  A verb's options import what its defaults and choices name,
+        so ``main`` builds those of the verb it runs alone.
+    """
     parser = OneLineParser(
         prog="sindyship",
         description="Discover a ship's manoeuvring equations (Abkowitz model) from trajectories.",
     )
     parser.add_argument("--version", action="version", version=f"sindyship {__version__}")
     sub = parser.add_subparsers(dest="verb", metavar="VERB", required=True)
-    for module in VERBS.values():
-        module.add_parser(sub)
+    for name, module in VERBS.items():
+        if verbs is None or name in verbs:
+            module.add_parser(sub)
+        else:
+            sub.add_parser(name, help=module.SUMMARY)
     return parser
+
+
+def _verb_of(argv: list[str]) -> str | None:
+    """The verb ``argv`` names: its first word that is not an option (the command's own
+    options take no value)."""
+    return next((word for word in argv if not word.startswith("-")), None)
 
 
 def _tolerant_streams() -> None:
@@ -93,7 +110,8 @@ def main(argv: list[str] | None = None) -> int:
     """Run one verb; return its exit status.  A reader that goes away (``--json | head``)
     ends the output quietly, with the status the verb had."""
     _tolerant_streams()
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser({_verb_of(argv)})
     args = parser.parse_args(argv)
     previous = None
     if threading.current_thread() is threading.main_thread():

@@ -19,6 +19,10 @@ from ..errors import SindyshipInputError
 
 #: Default term library of every verb that fits.
 DEFAULT_LIBRARY = "abkowitz"
+#: The names of :data:`sindyship.optimizers.OPTIMIZERS`, spelled out so that building the
+#: parser imports no scikit-learn (``sindyship --help``, ``simulate`` and a refused argument
+#: answer without it); a test keeps them equal.
+OPTIMIZER_NAMES = ("lasso", "ls", "prior", "stlsq", "svr")
 
 #: Longest record [s] a verb simulates (11.6 days), and the most samples it holds.
 MAX_DURATION = 1e6
@@ -204,7 +208,6 @@ def add_identification(p, *, optimizer: bool = True, recommended: bool = False) 
     ``prior`` by default, on the recommended library of the speed form
     (:func:`sindyship.identify.recommended_library`)."""
     from ..identify import RECOMMENDED_LIBRARIES
-    from ..optimizers import OPTIMIZERS
 
     if recommended:
         design, instantaneous = (RECOMMENDED_LIBRARIES[form]
@@ -226,7 +229,7 @@ def add_identification(p, *, optimizer: bool = True, recommended: bool = False) 
         what = ("prior, least squares drawn toward the ship's semi-empirical derivatives, the "
                 "recommended fit; ls is the paper's least squares" if recommended else
                 "ls, least squares")
-        p.add_argument("--optimizer", default=default, choices=sorted(OPTIMIZERS),
+        p.add_argument("--optimizer", default=default, choices=OPTIMIZER_NAMES,
                        help=f"regression method (default: {what})")
     p.add_argument("--speed", default="auto", choices=["auto", "design", "instantaneous"],
                    help="the speed the forces and variables are made non-dimensional with: the "

@@ -4,11 +4,14 @@ from __future__ import annotations
 
 from ._common import add_ship, bounded_float, bounded_int, progress, ship_file
 
+#: The verb's line in ``sindyship --help``.
+SUMMARY = "virtual captive (towing-tank) tests of the MMG model, as a CSV"
+
 
 def add_parser(sub) -> None:
     """Add ``captive``: virtual steady captive tests of the MMG model, written as a CSV."""
     p = sub.add_parser(
-        "captive", help="virtual captive (towing-tank) tests of the MMG model, as a CSV",
+        "captive", help=SUMMARY,
         description="Hold the MMG model of a ship on steady motions (static drift, rudder "
         "angle, pure yaw, drift with yaw) and write the hydrodynamic forces a dynamometer "
         "measures (rigid-body inertia removed), dimensional, body axes at midship.")

@@ -30,12 +30,16 @@ MAX_ROUNDS = 20
 MAX_CONFIRM = 20
 
 
+#: The verb's line in ``sindyship --help``.
+SUMMARY = "show where a fitted model fails and which effect is missing"
+
+
 def add_parser(sub) -> None:
     from ..diagnose import MEANINGFUL_SHARE
 
     p = sub.add_parser(
         "diagnose",
-        help="show where a fitted model fails and which effect is missing",
+        help=SUMMARY,
         description="Fit the library on the training records, fly it like each record, show "
         "the force residuals and rank the catalogued physical effects "
         "(libraries/effects/*.toml) by the share of the cross-validated force error they "

@@ -19,13 +19,16 @@ from ._common import (
 from ._records import read_records
 from .fit import fit_inputs
 
+#: The verb's line in ``sindyship --help``.
+SUMMARY = "discover a missing effect that no catalogue lists"
+
 
 def add_parser(sub) -> None:
     from ..diagnose import MEANINGFUL_SHARE
 
     p = sub.add_parser(
         "discover",
-        help="discover a missing effect that no catalogue lists",
+        help=SUMMARY,
         description="Fit the library on the records and search what its cross-validated force "
         "residual still holds: a channel that lags the force it causes (the rudder angle), and "
         "terms of pysindy feature libraries over the heading, the position, the rudder, the "

@@ -6,9 +6,12 @@ import textwrap
 
 from ._common import add_json, emit
 
+#: The verb's line in ``sindyship --help``.
+SUMMARY = "list the catalogue of physical effects and their physics"
+
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("effects", help="list the catalogue of physical effects and their physics",
+    p = sub.add_parser("effects", help=SUMMARY,
                        description="List the catalogued effects the diagnosis scores "
                        "(libraries/effects/*.toml): name, title, the channels each needs beyond "
                        "u, v, r and delta, its terms and what it means physically.")

@@ -14,9 +14,12 @@ from ._common import (
 )
 from ._records import read_records
 
+#: The verb's line in ``sindyship --help``.
+SUMMARY = "fly a model like each record, report distances"
+
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("evaluate", help="fly a model like each record, report distances",
+    p = sub.add_parser("evaluate", help=SUMMARY,
                        description="Fly a saved model the way each record was flown (a zig-zag "
                        "closed loop and a turn from its rudder execute, a manual approach "
                        "neither flown nor scored) and report the Table-10 distance per file.")

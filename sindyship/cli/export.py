@@ -22,9 +22,13 @@ from ._common import (
 MAX_PRECISION = 17
 
 
+#: The verb's line in ``sindyship --help``.
+SUMMARY = "write a model's equations (LaTeX) or a standalone simulator (Python)"
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser(
-        "export", help="write a model's equations (LaTeX) or a standalone simulator (Python)",
+        "export", help=SUMMARY,
         description="Print a saved model's equations, write them with its coefficient table "
         "as LaTeX, or write a standalone Python simulator that needs only numpy.")
     p.add_argument("model", help="saved model JSON")

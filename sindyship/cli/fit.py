@@ -21,9 +21,12 @@ from ._common import (
 from ._records import read_records
 from ._streamed import add_stream_options, streamed_fit
 
+#: The verb's line in ``sindyship --help``.
+SUMMARY = "identify an Abkowitz model from records"
+
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("fit", help="identify an Abkowitz model from records",
+    p = sub.add_parser("fit", help=SUMMARY,
                        description="Identify an Abkowitz model (paper eq. 14-17) from "
                        "measurement CSVs (or Parquet files with the same columns; quoted glob "
                        "patterns such as 'fleet/*.parquet' name many) and save it as JSON.")

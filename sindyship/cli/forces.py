@@ -7,11 +7,14 @@ from pathlib import Path
 from ..errors import SindyshipInputError
 from ._common import add_json, add_ship, emit
 
+#: The verb's line in ``sindyship --help``.
+SUMMARY = "compare a model's forces with captive (towing-tank) tests"
+
 
 def add_parser(sub) -> None:
     """Add ``forces``: a saved model's forces against a captive CSV."""
     p = sub.add_parser(
-        "forces", help="compare a model's forces with captive (towing-tank) tests",
+        "forces", help=SUMMARY,
         description="Predict what a captive dynamometer measures from a saved model "
         "(fitted force plus added-mass Coriolis and Munk terms) and compare with a captive "
         "CSV: correlation and relative RMS error of X, Y, N per test type and inside/outside "

@@ -4,9 +4,12 @@ from __future__ import annotations
 
 from ._common import OUT_NOTE, add_json, emit, progress
 
+#: The verb's line in ``sindyship --help``.
+SUMMARY = "run the paper's experiment on the KCS"
+
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("reproduce", help="run the paper's experiment on the KCS",
+    p = sub.add_parser("reproduce", help=SUMMARY,
                        description="Train on the paper's manoeuvres, fit every optimizer, fly "
                        "the held-out manoeuvres and compare with the paper's Table 10.")
     p.add_argument("--out", default="reproduce-output", metavar="DIR",

@@ -23,10 +23,14 @@ from ._common import (
 MANOEUVRES = ["turning-circle", "zigzag", "spiral", "pull-out", "straight", "random"]
 
 
+#: The verb's line in ``sindyship --help``.
+SUMMARY = "fly a manoeuvre with the MMG simulator, write a CSV"
+
+
 def add_parser(sub) -> None:
     from ..effects import EFFECT_RANGES
 
-    p = sub.add_parser("simulate", help="fly a manoeuvre with the MMG simulator, write a CSV",
+    p = sub.add_parser("simulate", help=SUMMARY,
                        description="Fly a standard manoeuvre with the MMG model of a ship and "
                        "write the measurement CSV (bare SI headers).")
     add_ship(p)

@@ -30,6 +30,7 @@ use; sindyship simulates fitted models with its own equations of motion, eq. 14.
 
 >>> import numpy as np
 >>> import pysindy as ps
+>>> from sindyship.library import DOFS, AbkowitzFeatureLibrary, load_library
 >>> library = load_library("abkowitz")
 >>> rng = np.random.default_rng(0)
 >>> x = rng.uniform(-0.2, 0.2, size=(300, 3))  # du, v, r
@@ -63,7 +64,6 @@ from ._files import (
     names_a_file,
 )
 from ._objects import Effect, TermLibrary
-from ._pysindy import AbkowitzFeatureLibrary
 from ._variables import (
     SPEED_FACTOR,
     SPEED_FLOOR,
@@ -101,3 +101,13 @@ __all__ = [
     "rescaled_to_speed",
     "speed_ratio",
 ]
+
+
+def __getattr__(name: str):
+    """``AbkowitzFeatureLibrary`` on first use: it subclasses pysindy's feature library, and
+    importing pysindy (with scikit-learn) takes longer than everything else the library does."""
+    if name == "AbkowitzFeatureLibrary":
+        from ._pysindy import AbkowitzFeatureLibrary
+
+        return AbkowitzFeatureLibrary
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
