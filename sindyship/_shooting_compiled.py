@@ -12,6 +12,7 @@ its own: its numbers do not depend on the other segments of the batch.
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -19,11 +20,8 @@ from ._forces_compiled import COMPILED
 
 try:  # optional: pip install "sindyship[fast]"
     import numba
-
-    numba_prange = numba.prange
 except ImportError:
     numba = None
-    numba_prange = range
 
 #: How an extra variable (beyond du, v, r, delta, psi) is made from a segment's inputs.
 (CHANNEL, CHANNEL_OVER_SPEED, POSITION_X, POSITION_Y, RUDDER_RATE, WIND_SPEED, WIND_ANGLE,
@@ -215,32 +213,39 @@ def _rk4(z, sens, m, j, h, data, physics, sensitivity, work, k, ks, zs, ss):
                                          + ks[3, i, p])
 
 
-def _fly(state0, data, physics, sensitivity, closed, h, n_steps, every, states, jacobian,
-         stopped):
-    """Every segment flown from its first state by RK4 (and its sensitivities), into
-    ``states`` (M, n_out, 6; from a divergence on, the last state in range), ``jacobian``
-    (M, n_out, 6, P) and ``stopped`` (M; the step at whose end a segment diverged, left as it
-    is where none did); the segments in parallel (each on its own).  A segment with a zig-zag in
+def _fly(members, state0, data, physics, sensitivity, closed, h, n_steps, every, states,
+         jacobian, stopped):
+    """The segments ``members`` flown from their first states by RK4 (and their
+    sensitivities), into ``states`` (M, n_out, 6; from a divergence on, the last state in
+    range), ``jacobian`` (M, n_out, 6, P) and ``stopped`` (M; the step at whose end a segment
+    diverged, left as it is where none did), each on its own.  A segment with a zig-zag in
     ``closed`` flies it closed loop (:func:`_fly_closed_one`)."""
     rudder, rate, extras = data
-    tables, weights, inertia, minv, U0, L = physics
-    (kinds, sources, shapes, wind_rows, instantaneous, floor, base_variable, base_function,
-     factor_base, factor_power, slots) = tables
-    perturbed, steps, rows, cols, with_sens = sensitivity
     sign, check, psi0, levels, count, delta0, servo, commanded = closed
-    for m in numba_prange(state0.shape[0]):  # the tuples are rebuilt: a parallel loop takes
-        physics_m = ((kinds, sources, shapes, wind_rows, instantaneous, floor,  # arrays
-                      base_variable,
-                      base_function, factor_base, factor_power, slots), weights, inertia,
-                     minv, U0, L)  # and numbers only
-        sensitivity_m = (perturbed, steps, rows, cols, with_sens)
+    for m in members:
         if sign[m] == 0:
-            _fly_one(m, state0, (rudder, rate, extras), physics_m, sensitivity_m, h, n_steps,
+            _fly_one(m, state0, (rudder, rate, extras), physics, sensitivity, h, n_steps,
                      every, states, jacobian, stopped)
         else:
-            _fly_closed_one(m, state0, extras, physics_m, sensitivity_m,
+            _fly_closed_one(m, state0, extras, physics, sensitivity,
                             (sign[m], check[m], psi0[m], levels[m, :count[m]], delta0[m],
                              servo, commanded), h, n_steps, every, states, jacobian, stopped)
+
+
+def _fly_in_threads(n_segments: int, *arguments) -> None:
+    """:func:`_fly` of every segment, shared out in turn among numba's threads
+    (``NUMBA_NUM_THREADS``, the machine's cores by default): the compiled loop releases the
+    GIL, and every segment writes its own rows.  (A parallel loop compiled by numba would take
+    twice as long to compile, the first time a machine flies a model.)"""
+    members = np.arange(n_segments, dtype=np.int64)
+    n_threads = min(numba.config.NUMBA_NUM_THREADS if numba is not None else 1, n_segments)
+    if n_threads <= 1:
+        _fly(members, *arguments)
+        return
+    with ThreadPoolExecutor(n_threads) as pool:
+        for done in [pool.submit(_fly, members[k::n_threads], *arguments)
+                     for k in range(n_threads)]:
+            done.result()
 
 
 def _fly_one(m, state0, data, physics, sensitivity, h, n_steps, every, states, jacobian,
@@ -488,7 +493,7 @@ if COMPILED:
     _closed_step = numba.njit(cache=True, nogil=True, error_model="numpy")(_closed_step)
     _crossing = numba.njit(cache=True, nogil=True, error_model="numpy")(_crossing)
     _fly_closed_one = numba.njit(cache=True, nogil=True, error_model="numpy")(_fly_closed_one)
-    _fly = numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)(_fly)
+    _fly = numba.njit(cache=True, nogil=True, error_model="numpy")(_fly)
 
 
 def fly_compiled(model, segments, weights, slots, perturbed, steps, sensitivities, *,
@@ -534,9 +539,9 @@ def fly_compiled(model, segments, weights, slots, perturbed, steps, sensitivitie
               zigzag.count.astype(np.int64), zigzag.delta0.astype(float),
               tuple(float(x) for x in servo_of(model.ship)), model.rudder_signal == "commanded")
     stopped = np.full(m, -1, dtype=np.int64)
-    _fly(np.ascontiguousarray(segments.state0, dtype=float), data, physics, sensitivity,
-         closed, float(segments.step), int(segments.n_steps), int(segments.every), states,
-         jacobian, stopped)
+    _fly_in_threads(m, np.ascontiguousarray(segments.state0, dtype=float), data, physics,
+                    sensitivity, closed, float(segments.step), int(segments.n_steps),
+                    int(segments.every), states, jacobian, stopped)
     return states, (jacobian if sensitivities else None), stopped
 
 
