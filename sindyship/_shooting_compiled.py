@@ -233,18 +233,18 @@ def _fly(members, state0, data, physics, sensitivity, closed, h, n_steps, every,
 
 
 def _fly_in_threads(n_segments: int, *arguments) -> None:
-    """:func:`_fly` of every segment, shared out in turn among numba's threads
-    (``NUMBA_NUM_THREADS``, the machine's cores by default): the compiled loop releases the
-    GIL, and every segment writes its own rows.  (A parallel loop compiled by numba would take
-    twice as long to compile, the first time a machine flies a model.)"""
-    members = np.arange(n_segments, dtype=np.int64)
-    n_threads = min(numba.config.NUMBA_NUM_THREADS if numba is not None else 1, n_segments)
+    """:func:`_fly` of every segment, shared out in turn among as many threads as numba may
+    use (``numba.get_num_threads()``: the machine's cores unless ``NUMBA_NUM_THREADS`` or
+    ``numba.set_num_threads`` say fewer): the compiled loop releases the GIL, and every
+    segment writes its own rows.  (A parallel loop compiled by numba would take twice as long
+    to compile, the first time a machine flies a model.)"""
+    n_threads = min(numba.get_num_threads() if numba is not None else 1, n_segments)
     if n_threads <= 1:
-        _fly(members, *arguments)
+        _fly(np.arange(n_segments, dtype=np.int64), *arguments)
         return
-    with ThreadPoolExecutor(n_threads) as pool:
-        for done in [pool.submit(_fly, members[k::n_threads], *arguments)
-                     for k in range(n_threads)]:
+    with ThreadPoolExecutor(n_threads) as pool:  # contiguous index arrays: one compiled form
+        for done in [pool.submit(_fly, np.arange(k, n_segments, n_threads, dtype=np.int64),
+                                 *arguments) for k in range(n_threads)]:
             done.result()
 
 

@@ -71,6 +71,8 @@ STEADY_ACCELERATION = 0.03  # U0 per L/U0
 PROPELLER_RUNNING = 0.5  # of the median n under way
 HOLD_RANGE = 1.0  # deg
 HOLD_SAMPLES = 5
+#: Samples of a stretch compared one by one before the rest is read in windows.
+SHORT_STRETCH = 8
 PLATEAU_SPREAD = 2.5  # deg
 ROUNDING = 1.5  # deg
 CHECK_SPREAD = 3.0  # deg
@@ -365,23 +367,33 @@ def _stretch_end(command: np.ndarray, i: int) -> int:
     """The end (exclusive) of the stretch from sample ``i`` whose spread (largest minus
     smallest angle) stays within HOLD_RANGE: the first sample that widens it beyond.
 
-    A NaN sample inside a stretch is passed over; a stretch that starts at NaN is that
-    sample alone.  Read in windows that grow eightfold, so a long hold costs a few array
-    operations instead of one comparison per sample.
+    A NaN sample inside a stretch is passed over; a stretch that starts at NaN or infinity is
+    that sample alone.  The first samples are compared one by one (a moving or noisy rudder
+    makes short stretches), the rest in windows of up to 65536 samples carrying the running
+    extremes, so a long hold costs a few array operations instead of a comparison per sample.
     """
     n = len(command)
-    if np.isnan(command[i]):
+    if not np.isfinite(command[i]):
         return i + 1
-    size = 32
-    while True:
-        window = command[i:i + size]
-        spread = np.fmax.accumulate(window) - np.fmin.accumulate(window)
-        wider = np.flatnonzero(spread > HOLD_RANGE)
+    low = high = command[i]
+    lead = min(n, i + SHORT_STRETCH)
+    for j in range(i + 1, lead):
+        value = command[j]  # Python's max and min pass over NaN, as fmax and fmin do
+        if max(high, value) - min(low, value) > HOLD_RANGE:
+            return j
+        low, high = min(low, value), max(high, value)
+    j, size = lead, 32
+    while j < n:
+        window = command[j:j + size]
+        highs = np.fmax(np.fmax.accumulate(window), high)
+        lows = np.fmin(np.fmin.accumulate(window), low)
+        wider = np.flatnonzero(highs - lows > HOLD_RANGE)
         if wider.size:
-            return i + int(wider[0])
-        if i + size >= n:
-            return n
-        size *= 8
+            return j + int(wider[0])
+        low, high = lows[-1], highs[-1]
+        j += len(window)
+        size = min(8 * size, 65536)
+    return n
 
 
 def _longest_alternation(plateaus):

@@ -325,17 +325,31 @@ def _stretch_end_one_by_one(command, i):
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_rudder_holds_end_where_the_sample_by_sample_rule_ends_them(seed):
+@pytest.mark.parametrize("quantum", [0.0, 0.5, 1.0])
+def test_rudder_holds_end_where_the_sample_by_sample_rule_ends_them(seed, quantum):
+    """Holds of every length (the windows' edges crossed), ramps, NaN and infinite samples,
+    and logs quantised to 0.5 or 1 deg (spreads of exactly HOLD_RANGE)."""
     rng = np.random.default_rng(seed)
-    lengths = rng.integers(1, 400, 20)
+    lengths = rng.integers(1, 3000, 12) // rng.integers(1, 40, 12)
     pieces = [rng.uniform(-35, 35) + rng.normal(0.0, rng.choice([0.05, 0.2, 0.6]), n)
               for n in lengths]
     command = np.concatenate([np.concatenate([p, np.linspace(p[-1], 0.0, 7)]) for p in pieces])
-    command[rng.integers(0, len(command), 5)] = np.nan
-    starts = [0, *rng.integers(0, len(command), 200)]
-    got = [_stretch_end(command, int(i)) for i in starts]
-    assert got == [_stretch_end_one_by_one(command, int(i)) for i in starts]
-    assert max(got) > 100  # long holds cross the first window
+    if quantum:
+        command = np.round(command / quantum) * quantum
+    odd = rng.integers(0, len(command), 9)
+    command[odd] = [np.nan] * 5 + [np.inf, -np.inf, np.inf, np.nan]
+    command[(odd[5] + 1) % len(command)] = np.inf  # two in a row: inf - inf is NaN
+    n = len(command)
+    starts = sorted({0, n - 1, n - 2, *odd, *(odd + 1) % n, *rng.integers(0, n, 150),
+                     *range(0, min(n, 300))})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the rule under test warns of nothing
+        got = [_stretch_end(command, int(i)) for i in starts]
+    with np.errstate(invalid="ignore"):  # inf - inf in the reference's arithmetic
+        expected = [_stretch_end_one_by_one(command, int(i)) for i in starts]
+    assert got == expected
+    assert max(got[k] - i for k, i in enumerate(starts)) > 100  # windows were read
+    assert got[starts.index(n - 1)] == n
 
 
 def test_protocol_zigzags_are_recognised_and_turns_are_not(protocol_runs):

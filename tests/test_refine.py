@@ -121,6 +121,26 @@ def test_the_compiled_segments_equal_the_numpy_reference(runs, fitted):
     assert np.max(np.abs(compiled[1] - reference[1])) < 1e-8 * scale
 
 
+def test_segments_shared_among_threads_fly_as_in_one_thread(runs, fitted, kcs, monkeypatch):
+    if importlib.util.find_spec("numba") is None:
+        pytest.skip("numba is not installed: the compiled path does not run")
+    import numba
+
+    whole = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=400),
+                                Manoeuvre("zigzag", rudder=10, check=10, duration=400),
+                                Manoeuvre("turning-circle", rudder=-25, duration=400)])
+    (closed,) = make_segments(fitted, whole, None)  # two zig-zags closed loop, a turn replayed
+    (pieces,) = make_segments(fitted, runs, 100.0)
+    assert closed.n_segments == 3 and pieces.n_segments > 3
+    for batch in (closed, pieces):
+        monkeypatch.setattr(numba, "get_num_threads", lambda: 1)
+        alone = fly_segments(fitted, batch, sensitivities=True)
+        monkeypatch.setattr(numba, "get_num_threads", lambda: 3)
+        shared = fly_segments(fitted, batch, sensitivities=True)
+        for one, many in zip(alone, shared, strict=True):
+            np.testing.assert_array_equal(one, many)
+
+
 def test_a_segment_flies_as_the_model_flies_the_same_stretch_alone(runs, fitted):
     """A segment is the model's own flight of that stretch of the record, from its measured
     state, with the recorded rudder: the kernel's flight of the stretch agrees to a metre."""

@@ -79,6 +79,8 @@ def build_parser(verbs=None) -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"sindyship {__version__}")
     sub = parser.add_subparsers(dest="verb", metavar="VERB", required=True)
+    if isinstance(verbs, str):
+        verbs = {verbs}
     for name, module in VERBS.items():
         if verbs is None or name in verbs:
             module.add_parser(sub)

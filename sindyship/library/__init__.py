@@ -109,5 +109,11 @@ def __getattr__(name: str):
     if name == "AbkowitzFeatureLibrary":
         from ._pysindy import AbkowitzFeatureLibrary
 
+        globals()[name] = AbkowitzFeatureLibrary
         return AbkowitzFeatureLibrary
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    """The module's names, ``AbkowitzFeatureLibrary`` included before its first use."""
+    return sorted({*globals(), *__all__})
