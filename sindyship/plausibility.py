@@ -64,7 +64,6 @@ import math
 from collections.abc import Callable, Iterable, Mapping
 
 import numpy as np
-from scipy.integrate import cumulative_trapezoid
 
 from sindyship.errors import SindyshipInputError
 
@@ -278,8 +277,16 @@ def _check_forward_speed(u: np.ndarray, context: _Context) -> None:
 # heading
 
 
+def _running_integral(y: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The trapezoidal integral of ``y`` over ``t`` from the first sample (scipy's, imported on
+    first use: scipy.integrate takes half a second to import, every command would pay it)."""
+    from scipy.integrate import cumulative_trapezoid
+
+    return cumulative_trapezoid(y, t, initial=0.0)
+
+
 def _yaw_integral(data) -> np.ndarray:
-    return cumulative_trapezoid(data["r"], data["t"], initial=0.0)
+    return _running_integral(data["r"], data["t"])
 
 
 def _unwrap_heading(data, context: _Context) -> tuple[np.ndarray, str | None]:
@@ -322,7 +329,7 @@ def heading_gain(t: np.ndarray, r: np.ndarray, psi: np.ndarray) -> tuple[float, 
     >>> round(gain, 2), round(span, 2)
     (57.3, 0.99)
     """
-    turned = cumulative_trapezoid(r, t, initial=0.0)
+    turned = _running_integral(r, t)
     change = psi - psi[0]
     span = float(np.max(np.abs(turned)))
     if span == 0.0:
@@ -380,7 +387,7 @@ def _segments(n: int) -> np.ndarray:
 
 
 def _displacements(t: np.ndarray, velocity: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    travelled = cumulative_trapezoid(velocity, t, initial=0.0)
+    travelled = _running_integral(velocity, t)
     return travelled[edges[1:]] - travelled[edges[:-1]]
 
 

@@ -63,6 +63,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .errors import PriorCoverageNote
 from .ships import Ship
 from .terms import Term
 
@@ -273,10 +274,6 @@ def estimates_outside(ship: Ship, terms: dict[str, Sequence[str]]) -> dict[str, 
         if missing:
             out[dof] = missing
     return out
-
-
-class PriorCoverageNote(UserWarning):
-    """The ``prior`` fit's library has no term for some of the ship's estimates."""
 
 
 def coverage_note(ship: Ship, library) -> str | None:

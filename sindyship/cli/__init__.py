@@ -17,7 +17,7 @@ import threading
 import warnings
 
 from .. import __version__
-from ..errors import SindyshipInputError
+from ..errors import PriorCoverageNote, SindyshipInputError
 from . import (
     captive,
     diagnose,
@@ -139,8 +139,6 @@ def _quiet_stdout() -> None:
 
 def _run(args) -> int:
     """Run the verb ``args`` name; turn bad input into status 2 and anything else into 1."""
-    from ..priors import PriorCoverageNote
-
     try:
         with warnings.catch_warnings():
             # fit and diagnose say it once, as a note, not once per fitted model
