@@ -131,7 +131,7 @@ def test_segments_shared_among_threads_fly_as_in_one_thread(runs, fitted, kcs, m
                                 Manoeuvre("turning-circle", rudder=-25, duration=400)])
     (closed,) = make_segments(fitted, whole, None)  # two zig-zags closed loop, a turn replayed
     (pieces,) = make_segments(fitted, runs, 100.0)
-    assert closed.n_segments == 3 and pieces.n_segments > 3
+    assert np.count_nonzero(closed.zigzag.sign) == 2 and pieces.n_segments > 3
     for batch in (closed, pieces):
         monkeypatch.setattr(numba, "get_num_threads", lambda: 1)
         alone = fly_segments(fitted, batch, sensitivities=True)
