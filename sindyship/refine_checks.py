@@ -23,7 +23,7 @@ from .identify import fit
 from .library import nondimensional_variables
 from .manoeuvres import Manoeuvre, fly, turning_figures
 from .model import AbkowitzModel
-from .shooting import fly_segments, make_segments
+from .shooting import SHOOTING_STATES, fly_segments, make_segments
 from .trajectory import Trajectory
 
 __all__ = ["TURN_CHECK_FACTOR", "TURN_CHECK_TIMES", "VALIDATION_RATIO", "carries_over",
@@ -111,10 +111,6 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
             "ratio": ratio, "accepted": accepted, "why": why}
 
 
-#: The states a flight of the shooting loop holds, in its order.
-_STATES = ("u", "v", "r", "x", "y", "psi")
-
-
 def flown_whole(models: Sequence[AbkowitzModel], records) -> list[list[tuple]]:
     """Each record flown whole by each model, from its flight start, on the refinement's
     grid: as :func:`sindyship.evaluation.evaluate` flies it (a zig-zag closed loop, any other
@@ -168,7 +164,7 @@ def _pair(batch, k: int, states: np.ndarray, stopped: int, record) -> tuple:
         first = stopped // batch.every + 1  # the initial state is row 0
         flight[first:] = np.nan
         meta["diverged_at"] = float(t[first]) if first < len(t) else None
-    frames = [pd.DataFrame({"t": t, **dict(zip(_STATES, values.T, strict=True))})
+    frames = [pd.DataFrame({"t": t, **dict(zip(SHOOTING_STATES, values.T, strict=True))})
               for values in (flight, measured)]
     return (Trajectory(frames[0], name=record.name, meta=meta),
             Trajectory(frames[1], name=record.name))

@@ -37,11 +37,13 @@ from .errors import SindyshipInputError
 from .library import SPEED_FACTOR
 from .simulation import default_step, servo_of
 from .targets import DOFS, coriolis_factors
-from .trajectory import Trajectory
+from .trajectory import STATE_COLUMNS, Trajectory
 from .trials import flight_start
 
 __all__ = ["CHANNEL_SCALES", "Segments", "make_segments", "fly_segments", "servo_rudder"]
 
+#: The states a segment flies, in the loop's order (the record's columns without delta).
+SHOOTING_STATES = STATE_COLUMNS[:6]
 #: The compared channels u, v, r, x, y, psi, and how each is made non-dimensional (1/U0,
 #: 1/U0, L/U0, 1/L, 1/L, 1 rad): (power of L, power of U0).
 CHANNEL_SCALES = ((0, -1), (0, -1), (1, -1), (-1, 0), (-1, 0), (0, 0))
@@ -258,7 +260,7 @@ def _batch(model, key, members) -> Segments:
         rudder, rate = _whole_inputs(model, record) if whole else _inputs(model, record)
         loop = _closed_loop(record) if whole else None
         channels = _channel_values(model, record, names)
-        states = np.column_stack([record[c] for c in ("u", "v", "r", "x", "y", "psi")])
+        states = np.column_stack([record[c] for c in SHOOTING_STATES])
         firsts = [0] if whole else range(0, record.n_samples - 1, samples * n_out)
         for first in firsts:
             times = t[first] + half
