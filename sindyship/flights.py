@@ -29,6 +29,7 @@ import pandas as pd
 from .manoeuvres import result_to_trajectory
 from .simulation import (
     PrescribedRudder,
+    RecordedZigZag,
     SimulationResult,
     StepCommand,
     ZigZagCommand,
@@ -44,34 +45,6 @@ from .trials import (  # noqa: F401  (detect_zigzag and recognised_zigzag are us
     trim,
     zigzag_levels,
 )
-
-
-class RecordedZigZag(ZigZagCommand):
-    """A closed-loop zig-zag whose legs hold the rudder angles a logged trial held.
-
-    The reversals come from the flight's own heading at the check angle, as in any zig-zag;
-    leg k holds ``levels[k]`` (the last one thereafter), so plateaus a degree off the nominal
-    angle are flown as they were steered.
-    """
-
-    def __init__(self, rudder: float, check: float, first_sign: int = 1, *,
-                 levels: tuple[float, ...] = ()):
-        super().__init__(rudder, check, first_sign)
-        self.levels = tuple(levels)
-        self._leg = 0
-
-    def reset(self, state0):
-        super().reset(state0)
-        self._leg = 0
-
-    def value(self, t, state):
-        if not self.levels:
-            return super().value(t, state)
-        return self._sign * self.levels[min(self._leg, len(self.levels) - 1)]
-
-    def on_event(self):
-        super().on_event()
-        self._leg += 1
 
 
 def command_for(record: Trajectory):
@@ -217,6 +190,16 @@ class _Stacked:
         self.rudder_input = first.rudder_input
         self.uses_position = any(d.uses_position for d, _, _ in parts)
         self.uses_rudder_rate = any(d.uses_rudder_rate for d, _, _ in parts)
+
+    def fly_compiled(self, integ, commands, t, state0, step, check_divergence, on_step):
+        """The models' flights through the compiled loop (each on its members), or None
+        where it has no form for one (:meth:`sindyship.model.AbkowitzDynamics.fly_compiled`)."""
+        if not all(d.model._compiled_flights for d, _, _ in self.parts):
+            return None
+        from ._flights_compiled import fly
+
+        return fly(self.parts, integ, commands, t, state0, step, check_divergence,
+                   self.ship.L, self.ship.U0, on_step)
 
     def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None,
                       position=None, rudder_rate=None):

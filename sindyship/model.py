@@ -125,6 +125,16 @@ class AbkowitzDynamics:
         values = self.variables_at(u, v, r, delta, psi, t, members, position, rudder_rate)
         return self.accelerations_from(model.forces_from_values(values), values)
 
+    def fly_compiled(self, integ, commands, t, state0, step, check_divergence, on_step):
+        """The kernel's flights of this model through the compiled loop
+        (:func:`sindyship._flights_compiled.fly`), or None where it has no form for them."""
+        if not self.model._compiled_flights:
+            return None
+        from ._flights_compiled import fly
+
+        return fly([(self, 0, len(commands))], integ, commands, t, state0, step,
+                   check_divergence, self.ship.L, self.ship.U0, on_step)
+
     def variables_at(self, u, v, r, delta, psi, t=None, members=None, position=None,
                      rudder_rate=None) -> dict:
         """The library's non-dimensional variables at SI states (as :meth:`accelerations`)."""

@@ -298,8 +298,8 @@ def _whole_inputs(model, record: Trajectory) -> tuple[np.ndarray, np.ndarray]:
 def _closed_loop(record: Trajectory):
     """``(sign, check, psi0, levels, delta0)`` of a zig-zag flown closed loop from the
     record's first row (its execute), or None for a record replayed."""
-    from .flights import RecordedZigZag, command_for
-    from .simulation import ZigZagCommand
+    from .flights import command_for
+    from .simulation import RecordedZigZag, ZigZagCommand
 
     command = command_for(record)
     if not isinstance(command, ZigZagCommand):

@@ -36,6 +36,7 @@ from .kernels import (
     diverged,
     integrate,
 )
+from .recorded import RecordedZigZag
 
 __all__ = [
     "N_STATE",
@@ -43,6 +44,7 @@ __all__ = [
     "ConstantCommand",
     "FeedbackCommand",
     "PrescribedRudder",
+    "RecordedZigZag",
     "RudderCommand",
     "SimulationResult",
     "StepCommand",

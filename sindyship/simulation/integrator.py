@@ -50,7 +50,9 @@ def simulate_batch(
     dynamics : object
         Provides ``ship`` and ``accelerations(u, v, r, delta, psi, branch=None)``; optionally
         ``switching(state)`` (a function whose sign selects a branch of a discontinuous
-        right-hand side) and ``current`` (north, east) [m/s].
+        right-hand side), ``current`` (north, east) [m/s] and ``fly_compiled(integ,
+        commands, t, state0, step, check_divergence, on_step)``, which flies the batch as
+        the kernel would (compiled) or returns None to leave it to the kernel.
     commands : sequence of RudderCommand
         One per manoeuvre.
     t : ndarray
@@ -65,7 +67,7 @@ def simulate_batch(
         time; its later samples are NaN and ``diverged_at`` holds that time.
     on_step : callable, optional
         Called with the length [s] of every Runge-Kutta step taken (a progress bar's
-        ``update``).
+        ``update``), or of every few hundred steps where the dynamics fly compiled.
 
     Returns
     -------
@@ -75,5 +77,11 @@ def simulate_batch(
     ship = dynamics.ship
     integ = integrator_for(dynamics, commands)
     h_max = float(step) if step is not None else default_step(ship)
+    compiled = getattr(dynamics, "fly_compiled", None)  # the same flights, compiled
+    if compiled is not None:
+        results = compiled(integ, commands, np.asarray(t, dtype=float), state0, h_max,
+                           check_divergence, on_step)
+        if results is not None:
+            return results
     return integrate(integ, commands, np.asarray(t, dtype=float), state0, h_max,
                      check_divergence, ship.L, ship.U0, on_step)
