@@ -22,7 +22,8 @@ ZERO, SERIES, FIXED, POSITION_X, POSITION_Y, RUDDER_RATE = range(6)
 
 
 def command_form(commands):
-    """The commands as the loop's arrays, or None when one has no form in it."""
+    """The commands as the loop's arrays, or None when one has no form in it (a feedback
+    command, a subclass, a step command without steps, a replay of fewer than two samples)."""
     n = len(commands)
     kind = np.empty(n, dtype=np.int64)
     param = np.zeros((n, 2))
@@ -35,7 +36,7 @@ def command_form(commands):
         elif form in (ZigZagCommand, RecordedZigZag):
             kind[m], param[m] = ZIGZAG, (float(cmd.rudder), float(cmd.check))
             levels.extend(float(x) for x in getattr(cmd, "levels", ()))
-        elif form is StepCommand:
+        elif form is StepCommand and len(cmd.times):
             kind[m] = STEP
             times.append(cmd.times), angles.append(cmd.angles), rates.append(cmd.angles * 0.0)
         elif form is PrescribedRudder and len(cmd.times) >= 2:
@@ -58,7 +59,7 @@ def model_tables(parts, integ, n_members, L, U0):
     extra_kind, extra_source, extra_value, extra_start = [], [], [], [0]
     base_variable, base_function, base_start = [], [], [0]
     factor_base, factor_power, factor_start = [], [], [0]
-    slots, weights, term_start = [], [], [0]
+    slot_tables, weights, term_start = [], [], [0]
     inertia, minv, rows, series_times = [], [], {}, None
     for dynamics, start, stop in parts:
         model = getattr(dynamics, "model", None)
@@ -75,8 +76,11 @@ def model_tables(parts, integ, n_members, L, U0):
             kind, value = _variable_form(name, dynamics, integ)
             if kind is None:
                 return None
-            if kind == SERIES:
-                rows.setdefault(name, []).append((series.values[name], start, stop))
+            if kind == SERIES:  # the kernel reads the series' first rows, one per member
+                if series.values[name].shape[0] < stop - start:
+                    return None
+                rows.setdefault(name, []).append((series.values[name][: stop - start], start,
+                                                  stop))
             extra_kind.append(kind)
             extra_source.append(list(rows).index(name) if kind == SERIES else 0)
             extra_value.append(value)
@@ -85,14 +89,17 @@ def model_tables(parts, integ, n_members, L, U0):
         base_start.append(len(base_variable))
         factor_base.extend(f_base), factor_power.extend(f_power)
         factor_start.append(len(factor_base))
-        slots.append((term_slots, len(f_base))), weights.append(model._weights)
+        slot_tables.append((term_slots, len(f_base))), weights.append(model._weights)
         term_start.append(term_start[-1] + term_slots.shape[1])
         inertia.append(model._inertia), minv.append(model.inverse_mass)
-    width = max(s.shape[0] for s, _ in slots)
-    all_slots = np.zeros((width, term_start[-1]), dtype=np.int64)
-    for (s, one), first, last in zip(slots, term_start[:-1], term_start[1:], strict=True):
-        all_slots[:, first:last] = one  # a factor of one fills a shorter model's rows
-        all_slots[: s.shape[0], first:last] = s
+    # each term's factors; a model whose terms have fewer factors than another's fills the
+    # rest with its factor of one (its last)
+    width = max(s.shape[0] for s, _ in slot_tables)
+    slots = np.zeros((width, term_start[-1]), dtype=np.int64)
+    for (s, one), first, last in zip(slot_tables, term_start[:-1], term_start[1:],
+                                     strict=True):
+        slots[:, first:last] = one
+        slots[: s.shape[0], first:last] = s
     n_times = 1 if series_times is None else len(series_times)
     values = np.zeros((max(len(rows), 1), n_members, n_times))
     for row, pieces in enumerate(rows.values()):
@@ -105,7 +112,7 @@ def model_tables(parts, integ, n_members, L, U0):
               np.asarray(base_function, dtype=np.int64),
               np.asarray(factor_start, dtype=np.int64), np.asarray(factor_base, dtype=np.int64),
               np.asarray(factor_power, dtype=np.int64), np.asarray(term_start, dtype=np.int64),
-              all_slots, np.ascontiguousarray(np.concatenate(weights, axis=1), dtype=float),
+              slots, np.ascontiguousarray(np.concatenate(weights, axis=1), dtype=float),
               np.array(inertia, dtype=float), np.array(minv, dtype=float), float(U0), float(L))
     channels = (np.zeros(1) if series_times is None else np.asarray(series_times, dtype=float),
                 values)

@@ -1,10 +1,10 @@
 """Whole flights of identified models by a compiled loop (numba): the arithmetic of
 :func:`sindyship.simulation.integrate`, member by member.
 
-The kernel (:mod:`sindyship.simulation.kernels`) is the reference, and flies every model.
-For the dynamics of identified models in the design form
-(:class:`sindyship.model.AbkowitzDynamics`, alone or several side by side) this module
-repeats its steps with the same operations in the same order: classical RK4, the first stage
+The kernel (:mod:`sindyship.simulation.kernels`) is the reference and can fly every model;
+it flies whatever :func:`fly` leaves to it.  For the dynamics of identified models in the
+design form (:class:`sindyship.model.AbkowitzDynamics`, alone or several side by side) this
+module repeats its steps with the same operations in the same order: classical RK4, the first stage
 taken from the last one's end, steps split at scheduled command changes and at a zig-zag's
 check angle (regula falsi on the step's cubic Hermite interpolant), cubic Hermite outputs and
 the protocol's divergence test at the output times.  The forces are those of
@@ -12,8 +12,12 @@ the protocol's divergence test at the output times.  The forces are those of
 the rounding of the library functions sin and cos) while a step costs microseconds instead of
 a millisecond of Python.
 
-:func:`fly` returns None for anything else (a feedback command, a variable made from the
-motion, a factor of a number, numba missing): the kernel flies those.
+:func:`fly` returns None, and the kernel flies, where numba is missing or switched off
+(``SINDYSHIP_NO_COMPILE=1``), for dynamics with a switching function, a model in the
+instantaneous-speed form or with a variable the loop does not make (a shape, the apparent wind,
+a factor of a number: :attr:`sindyship.model.AbkowitzModel._compiled_flights`), recorded
+channels on different grids, and commands it does not know (feedback, subclasses, empty steps,
+replays of fewer than two samples).
 """
 
 from __future__ import annotations
@@ -36,7 +40,7 @@ from ._flight_tables import (
     model_tables,
 )
 from ._forces_compiled import COMPILED
-from .simulation import SimulationResult, diverged
+from .simulation import RecordedZigZag, SimulationResult, ZigZagCommand, diverged
 
 try:  # optional: pip install "sindyship[fast]"
     import numba
@@ -49,8 +53,8 @@ STEPS_PER_REPORT = 200
 
 # -------------------- rudder commands (the kernel's RudderCommand methods) ----------------
 def _after(a, x):
-    """``np.searchsorted(a, x, side="right")``: how many of the increasing ``a`` are <= x
-    (all of them for a NaN, which numpy sorts last)."""
+    """How many of the increasing ``a`` (no NaN) are <= x: ``np.searchsorted(a, x,
+    side="right")``, also for a NaN ``x`` (all of them: numpy sorts NaN last)."""
     low, high = 0, a.shape[0]
     while low < high:
         middle = (low + high) // 2
@@ -496,9 +500,11 @@ def fly(parts, integ, commands, t, state0, h_max, check_divergence, L, U0, on_st
     if not COMPILED or integ.switching is not None:
         return None
     n_members = len(commands)
-    members = np.empty(n_members, dtype=np.int64)
+    model_of = np.full(n_members, -1, dtype=np.int64)  # the part flying each member
     for p, (_, start, stop) in enumerate(parts):
-        members[start:stop] = p
+        model_of[start:stop] = p
+    if (model_of < 0).any():
+        return None
     tables = model_tables(parts, integ, n_members, L, U0)
     command_tables = command_form(commands)
     if tables is None or command_tables is None:
@@ -506,23 +512,13 @@ def fly(parts, integ, commands, t, state0, h_max, check_divergence, L, U0, on_st
     models, channels, work = tables
     t = np.asarray(t, dtype=float)
     n_out = len(t)
-    y = np.array(state0, dtype=float).reshape(7, -1)
-    if y.shape[1] == 1 and n_members > 1:
-        y = np.repeat(y, n_members, axis=1)
-    if y.shape[1] != n_members:
-        raise ValueError("state0 must have one column per command")
-    if n_out > 1 and np.any(np.diff(t) <= 0):
-        raise ValueError("output times must increase")
-    for j, cmd in enumerate(commands):
-        cmd.reset(y[:, j])
-        if cmd.prescribed:
-            y[6, j] = cmd.value(t[0], y[:, j])
+    y = _first_states(commands, t, state0)
     out = np.full((7, n_out, n_members), np.nan)
     out_cmd = np.full((n_out, n_members), np.nan)
     out[:, 0, :] = y
     out_cmd[0] = [c.value(t[0], y[:, j]) for j, c in enumerate(commands)]
     loop = (np.array([1 if getattr(c, "first_sign", 1) >= 0 else -1 for c in commands],
-                     dtype=np.int64), np.zeros(n_members, dtype=np.int64), y[5].copy(), members)
+                     dtype=np.int64), np.zeros(n_members, dtype=np.int64), y[5].copy(), model_of)
     diverged_at = np.full(n_members, np.nan)
     active = np.ones(n_members, dtype=bool)
     if check_divergence:
@@ -540,6 +536,29 @@ def fly(parts, integ, commands, t, state0, h_max, check_divergence, L, U0, on_st
                          out_cmd, STEPS_PER_REPORT)
             if on_step is not None:
                 on_step(flown)
+    for j, cmd in enumerate(commands):  # the zig-zags' last leg, as the kernel leaves them
+        if isinstance(cmd, ZigZagCommand):
+            cmd._sign = int(loop[0][j])
+        if isinstance(cmd, RecordedZigZag):
+            cmd._leg = int(loop[1][j])
     return [SimulationResult(t=t.copy(), states=out[:, :, j], delta_c=out_cmd[:, j],
                              diverged_at=None if np.isnan(diverged_at[j])
                              else float(diverged_at[j])) for j in range(n_members)]
+
+
+def _first_states(commands, t, state0) -> np.ndarray:
+    """The members' first states (7, M), the commands reset to them, a replayed rudder at its
+    record's angle (as the kernel's ``integrate`` starts)."""
+    n_members = len(commands)
+    y = np.array(state0, dtype=float).reshape(7, -1)
+    if y.shape[1] == 1 and n_members > 1:
+        y = np.repeat(y, n_members, axis=1)
+    if y.shape[1] != n_members:
+        raise ValueError("state0 must have one column per command")
+    if len(t) > 1 and np.any(np.diff(t) <= 0):
+        raise ValueError("output times must increase")
+    for j, cmd in enumerate(commands):
+        cmd.reset(y[:, j])
+        if cmd.prescribed:
+            y[6, j] = cmd.value(t[0], y[:, j])
+    return y

@@ -194,8 +194,6 @@ class _Stacked:
     def fly_compiled(self, integ, commands, t, state0, step, check_divergence, on_step):
         """The models' flights through the compiled loop (each on its members), or None
         where it has no form for one (:meth:`sindyship.model.AbkowitzDynamics.fly_compiled`)."""
-        if not all(d.model._compiled_flights for d, _, _ in self.parts):
-            return None
         from ._flights_compiled import fly
 
         return fly(self.parts, integ, commands, t, state0, step, check_divergence,

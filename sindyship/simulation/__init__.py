@@ -1,7 +1,9 @@
 """Time integration of a manoeuvring model with a rudder servo and rudder commands.
 
 One integrator flies every model (the MMG simulator and every identified Abkowitz model) and
-every manoeuvre, so that a comparison between them differs only in the dynamics.  The state is
+every manoeuvre, so that a comparison between them differs only in the dynamics (identified
+models fly in a compiled copy of its loop, :mod:`sindyship._flights_compiled`, with the same
+numbers).  The state is
 ``[u, v, r, x, y, psi, delta]`` in SI units (body-fixed u, v [m/s], yaw rate r [rad/s],
 earth-fixed x north and y east [m], heading psi [rad], actual rudder angle delta [rad]).
 

@@ -77,11 +77,13 @@ def simulate_batch(
     ship = dynamics.ship
     integ = integrator_for(dynamics, commands)
     h_max = float(step) if step is not None else default_step(ship)
+    t = np.asarray(t, dtype=float)
+    if not np.isfinite(t).all():
+        raise ValueError("output times must be finite numbers")
     compiled = getattr(dynamics, "fly_compiled", None)  # the same flights, compiled
     if compiled is not None:
-        results = compiled(integ, commands, np.asarray(t, dtype=float), state0, h_max,
-                           check_divergence, on_step)
+        results = compiled(integ, commands, t, state0, h_max, check_divergence, on_step)
         if results is not None:
             return results
-    return integrate(integ, commands, np.asarray(t, dtype=float), state0, h_max,
+    return integrate(integ, commands, t, state0, h_max,
                      check_divergence, ship.L, ship.U0, on_step)

@@ -1,10 +1,10 @@
-"""The numerical kernel every flight runs: rudder commands, the servo, classical RK4 with exact
+"""The numerical kernel of every flight: rudder commands, the servo, classical RK4 with exact
 splitting at discontinuities, cubic Hermite outputs and the divergence test (paper eq. 12-14).
 
 It imports only numpy and the standard library and knows nothing of sindyship: the library's
-integrator (:func:`sindyship.simulation.simulate_batch`) runs it, and the standalone simulator
-that :func:`sindyship.export.generate_python` writes carries its source text (everything below
-the line that marks the kernel's start), so both fly a model with the same code.
+integrator (:func:`sindyship.simulation.simulate_batch`) runs it (or its compiled copy,
+:mod:`sindyship._flights_compiled`), and the simulator :func:`sindyship.export.generate_python`
+writes carries its source (all below the kernel's start mark): all fly a model alike.
 """
 
 from __future__ import annotations
