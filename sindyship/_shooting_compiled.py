@@ -153,7 +153,7 @@ def _stage(zs, ss, inputs, physics, sensitivity, work, k_out, ks_out):
     jac[:, :] = 0.0
     for i in range(perturbed.shape[0]):
         q = perturbed[i]
-        moved[:] = zs
+        _copy(zs, moved)
         moved[q] += steps[q]
         _accelerations(moved, rudder, rate, extras, tables, weights, inertia, minv, U0, L,
                        variables, base, factor, scratch, a_moved)
@@ -180,6 +180,19 @@ def _sensitivity_rate(jac, ss, columns, rows, cols, minv, scale, L, ks_out):
         ks_out[3, p] = jac[3, 0] * s0 + jac[3, 1] * s1 + jac[3, 5] * s5
         ks_out[4, p] = jac[4, 0] * s0 + jac[4, 1] * s1 + jac[4, 5] * s5
         ks_out[5, p] = s2
+
+
+def _copy(source, target):
+    """``target[:] = source[:len(target)]`` as a loop (a slice copy compiles numba's messages
+    for mismatched shapes); :func:`_copy_matrix` the same for matrices."""
+    for i in range(target.shape[0]):
+        target[i] = source[i]
+
+
+def _copy_matrix(source, target):
+    for i in range(target.shape[0]):
+        for j in range(target.shape[1]):
+            target[i, j] = source[i, j]
 
 
 def _diverged(z, U0, L) -> bool:
@@ -262,21 +275,21 @@ def _fly_one(m, state0, data, physics, sensitivity, h, n_steps, every, states, j
     k, ks = np.zeros((4, 6)), np.zeros((4, 6, n_par))
     held, held_sens = np.empty(6), np.zeros((6, n_par))
     for j in range(n_steps):
-        held[:] = z
+        _copy(z, held)
         if sensitivity[4]:
-            held_sens[:, :] = sens
+            _copy_matrix(sens, held_sens)
         _rk4(z, sens, m, j, h, data, physics, sensitivity, work, k, ks, zs, ss)
         if _diverged(z, U0, L):  # every later sample holds the last state in range
             stopped[m] = j
             for out in range(j // every, n_steps // every):
-                states[m, out, :] = held
+                _copy(held, states[m, out])
                 if sensitivity[4]:
-                    jacobian[m, out, :, :] = held_sens
+                    _copy_matrix(held_sens, jacobian[m, out])
             break
         if (j + 1) % every == 0:
-            states[m, (j + 1) // every - 1, :] = z
+            _copy(z, states[m, (j + 1) // every - 1])
             if sensitivity[4]:
-                jacobian[m, (j + 1) // every - 1, :, :] = sens
+                _copy_matrix(sens, jacobian[m, (j + 1) // every - 1])
 
 
 # --------------------------------------------------------------- zig-zags flown closed loop
@@ -351,7 +364,7 @@ def _closed_rate(zs, ss, command, ext, physics, sensitivity, loop, work, k_out, 
     jac[:, :] = 0.0
     for i in range(perturbed.shape[0] + 1):
         q = perturbed[i] if i < perturbed.shape[0] else 6  # and the rudder angle
-        moved[:] = zs
+        _copy(zs, moved)
         moved[q] += steps[q] if q < 6 else 1e-7
         moved_rate = _servo_rate(moved[6], command, servo)
         _accelerations(moved, command if commanded else moved[6], moved_rate, ext, tables,
@@ -430,7 +443,7 @@ def _fly_closed_one(m, state0, extras, physics, sensitivity, loop, h, n_steps, e
             np.ones(tables[8].shape[0] + 1), np.empty(n_terms), np.empty(n_terms), np.empty(3),
             np.empty(3), np.empty(7), np.zeros((7, 7)))
     z = np.empty(7)
-    z[:6] = state0[m]
+    _copy(state0[m], z[:6])
     z[6] = delta0
     sens, ss = np.zeros((7, n_par)), np.zeros((7, n_par))
     k, ks = np.zeros((4, 7)), np.zeros((4, 7, n_par))
@@ -439,20 +452,20 @@ def _fly_closed_one(m, state0, extras, physics, sensitivity, loop, h, n_steps, e
     held, held_sens = np.empty(7), np.zeros((7, n_par))
     leg = 0
     for j in range(n_steps):
-        held[:] = z
-        held_sens[:, :] = sens
+        _copy(z, held)
+        _copy_matrix(sens, held_sens)
         t, left = j * h, h
         for _ in range(4):  # a bounded number of reversals in one step
-            start[:] = z
-            start_sens[:, :] = sens
+            _copy(z, start)
+            _copy_matrix(sens, start_sens)
             command = sign * levels[min(leg, levels.shape[0] - 1)]
             _closed_step(z, sens, t, left, h, m, command, extras, physics, sensitivity, loop,
                          work, k, ks, zs, ss, ext)
             if sign * (z[5] - psi0) - check < 0.0 or sign * (start[5] - psi0) - check >= 0.0:
                 break
             theta = _crossing(start[5], start[2], z[5], z[2], left, sign, psi0, check)
-            z[:] = start
-            sens[:, :] = start_sens
+            _copy(start, z)
+            _copy_matrix(start_sens, sens)
             _closed_step(z, sens, t, theta * left, h, m, command, extras, physics, sensitivity,
                          loop, work, k, ks, zs, ss, ext)
             before = _servo_rate(z[6], command, servo)
@@ -465,35 +478,29 @@ def _fly_closed_one(m, state0, extras, physics, sensitivity, loop, h, n_steps, e
         if _diverged(z, U0, L):  # every later sample holds the last state in range
             stopped[m] = j
             for out in range(j // every, n_steps // every):
-                states[m, out, :] = held[:6]
+                _copy(held, states[m, out])
                 if sensitivity[4]:
-                    jacobian[m, out, :, :] = held_sens[:6]
+                    _copy_matrix(held_sens, jacobian[m, out])
             break
         if (j + 1) % every == 0:
-            states[m, (j + 1) // every - 1, :] = z[:6]
+            _copy(z, states[m, (j + 1) // every - 1])
             if sensitivity[4]:
-                jacobian[m, (j + 1) // every - 1, :, :] = sens[:6]
+                _copy_matrix(sens, jacobian[m, (j + 1) // every - 1])
 
 
 if COMPILED:
-    _variables = numba.njit(cache=True, nogil=True, error_model="numpy")(_variables)
-    _columns = numba.njit(cache=True, nogil=True, error_model="numpy")(_columns)
-    _accelerations = numba.njit(cache=True, nogil=True, error_model="numpy")(_accelerations)
-    _sensitivity_rate = numba.njit(cache=True, nogil=True,
-                                   error_model="numpy")(_sensitivity_rate)
-    _stage = numba.njit(cache=True, nogil=True, error_model="numpy")(_stage)
-    _diverged = numba.njit(cache=True, nogil=True, error_model="numpy")(_diverged)
-    _rk4 = numba.njit(cache=True, nogil=True, error_model="numpy")(_rk4)
-    _fly_one = numba.njit(cache=True, nogil=True, error_model="numpy")(_fly_one)
-    _servo_rate = numba.njit(cache=True, nogil=True, error_model="numpy")(_servo_rate)
-    _extras_at = numba.njit(cache=True, nogil=True, error_model="numpy")(_extras_at)
-    _servo_slope = numba.njit(cache=True, nogil=True, error_model="numpy")(_servo_slope)
-    servo_angles = numba.njit(cache=True, nogil=True, error_model="numpy")(servo_angles)
-    _closed_rate = numba.njit(cache=True, nogil=True, error_model="numpy")(_closed_rate)
-    _closed_step = numba.njit(cache=True, nogil=True, error_model="numpy")(_closed_step)
-    _crossing = numba.njit(cache=True, nogil=True, error_model="numpy")(_crossing)
-    _fly_closed_one = numba.njit(cache=True, nogil=True, error_model="numpy")(_fly_closed_one)
-    _fly = numba.njit(cache=True, nogil=True, error_model="numpy")(_fly)
+    _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+    _variables, _columns, _accelerations = _jit(_variables), _jit(_columns), \
+        _jit(_accelerations)
+    _sensitivity_rate, _stage, _diverged = _jit(_sensitivity_rate), _jit(_stage), \
+        _jit(_diverged)
+    _copy, _copy_matrix, _rk4, _fly_one = _jit(_copy), _jit(_copy_matrix), _jit(_rk4), \
+        _jit(_fly_one)
+    _servo_rate, _extras_at, _servo_slope = _jit(_servo_rate), _jit(_extras_at), \
+        _jit(_servo_slope)
+    servo_angles, _closed_rate, _closed_step = _jit(servo_angles), _jit(_closed_rate), \
+        _jit(_closed_step)
+    _crossing, _fly_closed_one, _fly = _jit(_crossing), _jit(_fly_closed_one), _jit(_fly)
 
 
 def fly_compiled(model, segments, weights, slots, perturbed, steps, sensitivities, *,
