@@ -1,6 +1,20 @@
 """The tables the compiled flights (:mod:`sindyship._flights_compiled`) read: rudder commands
 and identified models as flat arrays, each member's and each model's rows one after the
-other."""
+other.
+
+The loop reads them as tuples, by position:
+
+- commands (:func:`command_form`): ``(kind, start, times, angles, rates, param, level_start,
+  levels)``: member m's kind (:data:`CONSTANT` ...), its steps' or samples' times, angles and
+  slopes in ``[start[m], start[m + 1])``, ``param[m]`` = (angle or amplitude, check angle),
+  a recorded zig-zag's leg angles in ``[level_start[m], level_start[m + 1])``;
+- models (:func:`model_tables`): ``(extra_start, extra_kind, extra_source, extra_value,
+  base_start, base_variable, base_function, factor_start, factor_base, factor_power,
+  term_start, slots, weights, inertia, inverse_mass, U0, L)``: model p's variables beyond the
+  state's, factor bases, factors and terms in ``[x_start[p], x_start[p + 1])``, as
+  :func:`sindyship._forces_compiled.tables` gives them for one model;
+- channels: ``(times, values)``, the recorded channels' rows (name, member, sample).
+"""
 
 from __future__ import annotations
 

@@ -3,9 +3,9 @@
 One integrator flies every model (the MMG simulator and every identified Abkowitz model) and
 every manoeuvre, so that a comparison between them differs only in the dynamics (identified
 models fly in a compiled copy of its loop, :mod:`sindyship._flights_compiled`, with the same
-numbers).  The state is
-``[u, v, r, x, y, psi, delta]`` in SI units (body-fixed u, v [m/s], yaw rate r [rad/s],
-earth-fixed x north and y east [m], heading psi [rad], actual rudder angle delta [rad]).
+numbers).  The state is ``[u, v, r, x, y, psi, delta]`` in SI units (body-fixed u, v [m/s],
+yaw rate r [rad/s], earth-fixed x north and y east [m], heading psi [rad], actual rudder angle
+delta [rad]).
 
 Dynamics are any object with ``accelerations(u, v, r, delta, psi) -> (du/dt, dv/dt, dr/dt)``
 (vectorised over numpy arrays), a ``ship`` (for L, U0 and the servo) and optionally a

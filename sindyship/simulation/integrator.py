@@ -85,5 +85,5 @@ def simulate_batch(
         results = compiled(integ, commands, t, state0, h_max, check_divergence, on_step)
         if results is not None:
             return results
-    return integrate(integ, commands, t, state0, h_max,
-                     check_divergence, ship.L, ship.U0, on_step)
+    return integrate(integ, commands, t, state0, h_max, check_divergence, ship.L, ship.U0,
+                     on_step)
