@@ -128,7 +128,7 @@ def model_tables(parts, integ, n_members, L, U0):
               np.asarray(factor_power, dtype=np.int64), np.asarray(term_start, dtype=np.int64),
               slots, np.ascontiguousarray(np.concatenate(weights, axis=1), dtype=float),
               np.array(inertia, dtype=float), np.array(minv, dtype=float), float(U0), float(L))
-    channels = (np.zeros(1) if series_times is None else np.asarray(series_times, dtype=float),
+    channels = (np.zeros(1) if series_times is None else np.array(series_times, dtype=float),
                 values)
     n_variables = N_STATE_VARIABLES + max(np.diff(extra_start), default=0)
     work = (np.empty(n_variables), np.empty(max(max(np.diff(base_start), default=0), 1)),

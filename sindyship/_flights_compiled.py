@@ -510,7 +510,7 @@ def fly(parts, integ, commands, t, state0, h_max, check_divergence, L, U0, on_st
     if tables is None or command_tables is None:
         return None
     models, channels, work = tables
-    t = np.asarray(t, dtype=float)
+    t = np.array(t, dtype=float)  # contiguous and writable: one compiled form of the loop
     n_out = len(t)
     y = _first_states(commands, t, state0)
     out = np.full((7, n_out, n_members), np.nan)
