@@ -479,7 +479,7 @@ if COMPILED:
 
 
 # -------------------- the flights' tables ---------------------------------------------------
-def fly(parts, integ, commands, t, state0, h_max, check_divergence, L, U0, on_step=None):
+def fly(parts, integ, commands, t, state0, h_max, check_divergence, on_step=None):
     """:func:`sindyship.simulation.integrate` of identified models through the compiled loop.
 
     Parameters
@@ -487,8 +487,9 @@ def fly(parts, integ, commands, t, state0, h_max, check_divergence, L, U0, on_st
     parts : sequence of (AbkowitzDynamics, int, int)
         Each model's dynamics and the range of members it flies (all members, covered once).
     integ : sindyship.simulation._Integrator
-        The kernel's integrator of these dynamics (servo, current, rudder input, inputs).
-    commands, t, state0, h_max, check_divergence, L, U0, on_step
+        The kernel's integrator of these dynamics (servo, current, rudder input, inputs; its
+        dynamics' ship gives L and U0).
+    commands, t, state0, h_max, check_divergence, on_step
         As :func:`sindyship.simulation.integrate`; ``on_step`` is called with the seconds of
         every few hundred steps.
 
@@ -499,6 +500,7 @@ def fly(parts, integ, commands, t, state0, h_max, check_divergence, L, U0, on_st
     """
     if not COMPILED or integ.switching is not None:
         return None
+    L, U0 = integ.dynamics.ship.L, integ.dynamics.ship.U0
     n_members = len(commands)
     model_of = np.full(n_members, -1, dtype=np.int64)  # the part flying each member
     for p, (_, start, stop) in enumerate(parts):
@@ -517,8 +519,8 @@ def fly(parts, integ, commands, t, state0, h_max, check_divergence, L, U0, on_st
     out_cmd = np.full((n_out, n_members), np.nan)
     out[:, 0, :] = y
     out_cmd[0] = [c.value(t[0], y[:, j]) for j, c in enumerate(commands)]
-    loop = (np.array([1 if getattr(c, "first_sign", 1) >= 0 else -1 for c in commands],
-                     dtype=np.int64), np.zeros(n_members, dtype=np.int64), y[5].copy(), model_of)
+    loop = (np.array([getattr(c, "_sign", 1) for c in commands], dtype=np.int64),  # as reset
+            np.zeros(n_members, dtype=np.int64), y[5].copy(), model_of)
     diverged_at = np.full(n_members, np.nan)
     active = np.ones(n_members, dtype=bool)
     if check_divergence:

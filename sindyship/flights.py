@@ -196,8 +196,7 @@ class _Stacked:
         where it has no form for one (:meth:`sindyship.model.AbkowitzDynamics.fly_compiled`)."""
         from ._flights_compiled import fly
 
-        return fly(self.parts, integ, commands, t, state0, step, check_divergence,
-                   self.ship.L, self.ship.U0, on_step)
+        return fly(self.parts, integ, commands, t, state0, step, check_divergence, on_step)
 
     def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None,
                       position=None, rudder_rate=None):

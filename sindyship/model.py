@@ -133,7 +133,7 @@ class AbkowitzDynamics:
         from ._flights_compiled import fly
 
         return fly([(self, 0, len(commands))], integ, commands, t, state0, step,
-                   check_divergence, self.ship.L, self.ship.U0, on_step)
+                   check_divergence, on_step)
 
     def variables_at(self, u, v, r, delta, psi, t=None, members=None, position=None,
                      rudder_rate=None) -> dict:
