@@ -402,6 +402,7 @@ class _Problem:
         self.penalty = penalty
         self.n_jobs = n_jobs
         self.flight_rms = math.nan
+        self._last = None  # (p, flights) of the last flight without sensitivities
         # both parts relative to their values at the fitted coefficients: the flights' mean
         # squared error, and the fit's own objective, each 1 there
         self.flight_norm = self.penalty_norm = 1.0
@@ -425,8 +426,16 @@ class _Problem:
         return weights
 
     def _flights(self, p: np.ndarray, sensitivities: bool):
-        return _fly_batches(self.model, self.batches, self.weights(p), self.slots,
-                            sensitivities, self.n_jobs)
+        """The segments flown at ``p``; the last flight without sensitivities is kept, since
+        the search asks for the same point more than once (a stage's start, the search's
+        first point, the point it ended at)."""
+        if not sensitivities and self._last is not None and np.array_equal(self._last[0], p):
+            return self._last[1]
+        flown = _fly_batches(self.model, self.batches, self.weights(p), self.slots,
+                             sensitivities, self.n_jobs)
+        if not sensitivities:
+            self._last = (np.array(p, dtype=float), flown)
+        return flown
 
     def _flight_part(self, flown) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
         """The flights' residuals and, from their sensitivities, their part of J^T J and

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import itertools
 import json
 import math
 
@@ -278,6 +279,33 @@ def test_a_model_whose_flights_diverge_still_gets_a_gradient(runs, fitted, kcs):
     refined = refine(broken, runs, max_evaluations=20, prior_weight=0.0)
     report = refined.info["refined"]
     assert report["flight_rms_after"] < 0.9 * report["flight_rms_before"]
+
+
+def test_a_refinement_flies_each_point_once_and_as_often_as_without_the_reuse(
+        runs, fitted, monkeypatch):
+    """A stage starts, the search begins and the stage ends at points already flown: those
+    flights are reused, and the result is what flying them again gives."""
+    module = importlib.import_module("sindyship.refine")
+    points, fly_batches = [], module._fly_batches
+
+    def counted(model, batches, weights, slots, sensitivities, n_jobs):
+        if not sensitivities:
+            points.append(weights.tobytes())
+        return fly_batches(model, batches, weights, slots, sensitivities, n_jobs)
+
+    monkeypatch.setattr(module, "_fly_batches", counted)
+    reused = refine(fitted, runs, max_evaluations=12, segment_s=[100.0, 300.0],
+                    validate=False)
+    repeats = sum(a == b for a, b in itertools.pairwise(points))
+    assert repeats == 0 and len(points) > 12
+    flights = len(points)
+    monkeypatch.setattr(module._Problem, "_flights", lambda self, p, sensitivities: counted(
+        self.model, self.batches, self.weights(p), self.slots, sensitivities, self.n_jobs))
+    again = refine(fitted, runs, max_evaluations=12, segment_s=[100.0, 300.0], validate=False)
+    # flown again, each of the two stages repeats at least its start and its search's start
+    assert len(points) - flights >= flights + 2 * 2
+    assert again.coefficients == reused.coefficients
+    assert again.info["refined"]["stages"] == reused.info["refined"]["stages"]
 
 
 def test_default_segments_grow_in_stages_up_to_the_longest_record(kcs, runs):
