@@ -12,6 +12,7 @@ its own: its numbers do not depend on the other segments of the batch.
 from __future__ import annotations
 
 import math
+import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -228,11 +229,10 @@ def _rk4(z, sens, m, j, h, data, physics, sensitivity, work, k, ks, zs, ss):
 
 def _fly(members, state0, data, physics, sensitivity, closed, h, n_steps, every, states,
          jacobian, stopped):
-    """The segments ``members`` flown from their first states by RK4 (and their
-    sensitivities), into ``states`` (M, n_out, 6; from a divergence on, the last state in
-    range), ``jacobian`` (M, n_out, 6, P) and ``stopped`` (M; the step at whose end a segment
-    diverged, left as it is where none did), each on its own.  A segment with a zig-zag in
-    ``closed`` flies it closed loop (:func:`_fly_closed_one`)."""
+    """The segments ``members`` flown by RK4 from their first states (with sensitivities)
+    into ``states`` (M, n_out, 6; from a divergence on, the last state in range), ``jacobian``
+    (M, n_out, 6, P) and ``stopped`` (M; the step at whose end a segment diverged, else as it
+    is), each on its own; one with a zig-zag in ``closed`` closed loop (:func:`_fly_closed_one`)."""
     rudder, rate, extras = data
     sign, check, psi0, levels, count, delta0, servo, commanded = closed
     for m in members:
@@ -246,18 +246,27 @@ def _fly(members, state0, data, physics, sensitivity, closed, h, n_steps, every,
 
 
 def _fly_in_threads(n_segments: int, *arguments) -> None:
-    """:func:`_fly` of every segment, shared out in turn among as many threads as numba may
-    use (``numba.get_num_threads()``: the machine's cores unless ``NUMBA_NUM_THREADS`` or
-    ``numba.set_num_threads`` say fewer): the compiled loop releases the GIL, and every
-    segment writes its own rows.  (A parallel loop compiled by numba would take twice as long
-    to compile, the first time a machine flies a model.)"""
+    """:func:`_fly` of every segment, in shares that this thread and as many others as numba
+    may use (``numba.get_num_threads()``: the cores unless ``NUMBA_NUM_THREADS`` or
+    ``numba.set_num_threads`` say fewer) take in turn, one that finishes early taking more:
+    the compiled loop releases the GIL, and every segment writes its own rows."""
     n_threads = min(numba.get_num_threads() if numba is not None else 1, n_segments)
-    if n_threads <= 1:
-        _fly(np.arange(n_segments, dtype=np.int64), *arguments)
-        return
-    with ThreadPoolExecutor(n_threads) as pool:  # contiguous index arrays: one compiled form
-        for done in [pool.submit(_fly, np.arange(k, n_segments, n_threads, dtype=np.int64),
-                                 *arguments) for k in range(n_threads)]:
+    n_shares, lock = min(n_segments, 4 * n_threads), threading.Lock()
+    shares = iter([np.arange(k, n_segments, n_shares, dtype=np.int64)  # one compiled form
+                   for k in range(max(n_shares, 1))])
+
+    def fly_shares():
+        while True:
+            with lock:
+                share = next(shares, None)
+            if share is None:
+                return
+            _fly(share, *arguments)
+
+    with ThreadPoolExecutor(max(n_threads - 1, 1)) as pool:
+        others = [pool.submit(fly_shares) for _ in range(n_threads - 1)]
+        fly_shares()
+        for done in others:
             done.result()
 
 
@@ -490,17 +499,12 @@ def _fly_closed_one(m, state0, extras, physics, sensitivity, loop, h, n_steps, e
 
 if COMPILED:
     _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-    _variables, _columns, _accelerations = _jit(_variables), _jit(_columns), \
-        _jit(_accelerations)
-    _sensitivity_rate, _stage, _diverged = _jit(_sensitivity_rate), _jit(_stage), \
-        _jit(_diverged)
-    _copy, _copy_matrix, _rk4, _fly_one = _jit(_copy), _jit(_copy_matrix), _jit(_rk4), \
-        _jit(_fly_one)
-    _servo_rate, _extras_at, _servo_slope = _jit(_servo_rate), _jit(_extras_at), \
-        _jit(_servo_slope)
-    servo_angles, _closed_rate, _closed_step = _jit(servo_angles), _jit(_closed_rate), \
-        _jit(_closed_step)
-    _crossing, _fly_closed_one, _fly = _jit(_crossing), _jit(_fly_closed_one), _jit(_fly)
+    (_variables, _columns, _accelerations, _sensitivity_rate, _stage, _diverged, _copy,
+     _copy_matrix, _rk4, _fly_one, _servo_rate, _extras_at, _servo_slope, servo_angles,
+     _closed_rate, _closed_step, _crossing, _fly_closed_one, _fly) = (_jit(f) for f in (
+        _variables, _columns, _accelerations, _sensitivity_rate, _stage, _diverged, _copy,
+        _copy_matrix, _rk4, _fly_one, _servo_rate, _extras_at, _servo_slope, servo_angles,
+        _closed_rate, _closed_step, _crossing, _fly_closed_one, _fly))
 
 
 def fly_compiled(model, segments, weights, slots, perturbed, steps, sensitivities, *,
