@@ -99,9 +99,12 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
         values = record_variables(record, library, ship.L, ship.U0, rudder_signal)
         factor = values.get(SPEED_FACTOR, 1.0)  # (U/U0)^2 of the instantaneous form
         forces = regression_targets(record, ship, method=derivative, window=window)
+        columns = {}  # a term of several degrees of freedom is evaluated once
         for dof in DOFS:
             for j, term in enumerate(library.terms[dof]):
-                features[dof][start:stop, j] = _term_column(term, values, factor, record)
+                if term.text not in columns:
+                    columns[term.text] = _term_column(term, values, factor, record)
+                features[dof][start:stop, j] = columns[term.text]
             target[dof][start:stop] = forces[dof]
         group_array[start:stop] = index
         start = stop
