@@ -162,7 +162,7 @@ def servo_rudder(record: Trajectory, ship) -> tuple[np.ndarray, np.ndarray]:
     from ._shooting_compiled import servo_angles
 
     time_constant, rate_max, delta_max = servo_of(ship)
-    t = np.ascontiguousarray(record.t, dtype=float)
+    t = np.array(record.t, dtype=float)  # a writable copy: the loop's one compiled form
     command = np.ascontiguousarray(np.clip(record["delta_c"], -delta_max, delta_max),
                                    dtype=float)
     angle, rate = np.empty(len(t)), np.empty(len(t))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import subprocess
 import sys
@@ -18,6 +20,16 @@ def run_cli(*args, cwd=None):
     proc = subprocess.run([sys.executable, "-m", "sindyship.cli", *map(str, args)],
                           capture_output=True, text=True, cwd=cwd, timeout=600)
     return proc.returncode, proc.stdout, proc.stderr
+
+
+def run_main(*args):
+    """``sindyship ARGS`` in this process (the exit status :func:`main` returns, stdout,
+    stderr): for the many one-line refusals, where a new interpreter would cost a second
+    each; :func:`run_cli` goes through ``python -m sindyship.cli``."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in args])
+    return code, out.getvalue(), err.getvalue()
 
 
 def test_help_lists_the_verbs():
@@ -143,7 +155,7 @@ def test_bad_csv_exits_2_with_one_line_naming_file_and_place(tmp_path, kind):
     path = tmp_path / "bad_input.csv"
     path.write_text(text)
     out_model = tmp_path / "model.json"
-    code, out, err = run_cli("fit", path, "--ship", "kcs", "--out", out_model, "--json")
+    code, out, err = run_main("fit", path, "--ship", "kcs", "--out", out_model, "--json")
     assert code == 2
     assert out == ""
     lines = err.strip().splitlines()
@@ -159,11 +171,11 @@ def test_unknown_ship_and_model_errors_exit_2(tmp_path, records):
     assert code == 2 and "titanic" in err
     bad = tmp_path / "truncated.json"
     bad.write_text('{"format_version": 1, "ship": "kcs", "coeff')
-    code, _, err = run_cli("evaluate", bad, records["tc35"])
+    code, _, err = run_main("evaluate", bad, records["tc35"])
     assert code == 2 and "truncated.json" in err and len(err.strip().splitlines()) == 1
     newer = tmp_path / "newer.json"
     newer.write_text(json.dumps({"format_version": 99, "ship": "kcs"}))
-    code, _, err = run_cli("evaluate", newer, records["tc35"])
+    code, _, err = run_main("evaluate", newer, records["tc35"])
     assert code == 2 and "newer" in err
 
 
@@ -213,7 +225,7 @@ def test_fit_with_smoothing_records_the_setting(records, tmp_path):
     model = tmp_path / "smoothed.json"
     train = [records[k] for k in ("tc35", "tc-35", "zz20", "spiral")]
     assert main(["fit", *map(str, train), "--ship", "kcs", "--smoothing", "savgol:21",
-                 "--out", str(model)]) == 0
+                 "--refine", "0", "--out", str(model)]) == 0
     info = json.loads(model.read_text())["info"]
     assert info["smoothing"] == {"method": "savgol", "window_s": 21.0, "order": 3}
     with pytest.raises(SystemExit) as stop:  # refused as the command line is read
