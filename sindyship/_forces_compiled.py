@@ -162,12 +162,13 @@ def tables(bases, factors, slots):
 
 def run_accelerations(dynamics, u, v, r, delta, psi, t, members, position, rudder_rate):
     """:meth:`sindyship.model.AbkowitzDynamics.accelerations` through :func:`accelerations`,
-    or None when the state values are not 1-D float64 arrays (the numpy path runs).  Views
-    and read-only arrays are copied: one compiled form serves every call."""
+    or None when the state values are not 1-D float64 arrays (the numpy path runs).  Strided
+    views, read-only and byte-swapped arrays are copied: one compiled form serves every call."""
     for a in (u, v, r, delta, psi):
         if type(a) is not np.ndarray or a.ndim != 1 or a.dtype.char != "d":
             return None
-    u, v, r, delta, psi = (np.require(a, requirements="CW") for a in (u, v, r, delta, psi))
+    u, v, r, delta, psi = (np.require(a, np.float64, requirements="CW")
+                           for a in (u, v, r, delta, psi))
     model = dynamics.model
     names, integer_tables = model._compiled
     extra = _extra_variables(dynamics, names[N_STATE_VARIABLES:], u.shape[0], t, members,

@@ -231,8 +231,8 @@ def _fly(members, state0, data, physics, sensitivity, closed, h, n_steps, every,
          jacobian, stopped):
     """The segments ``members`` flown by RK4 from their first states (with sensitivities)
     into ``states`` (M, n_out, 6; from a divergence on, the last state in range), ``jacobian``
-    (M, n_out, 6, P) and ``stopped`` (M; the step at whose end a segment diverged, else as it
-    is), each on its own; one with a zig-zag in ``closed`` closed loop (:func:`_fly_closed_one`)."""
+    (M, n_out, 6, P) and ``stopped`` (M; the step at whose end a segment diverged, untouched
+    if none), each on its own; a zig-zag in ``closed`` flies closed loop (_fly_closed_one)."""
     rudder, rate, extras = data
     sign, check, psi0, levels, count, delta0, servo, commanded = closed
     for m in members:
@@ -251,9 +251,9 @@ def _fly_in_threads(n_segments: int, *arguments) -> None:
     ``numba.set_num_threads`` say fewer) take in turn, one that finishes early taking more:
     the compiled loop releases the GIL, and every segment writes its own rows."""
     n_threads = min(numba.get_num_threads() if numba is not None else 1, n_segments)
-    n_shares, lock = min(n_segments, 4 * n_threads), threading.Lock()
+    n_shares, lock = max(min(n_segments, 4 * n_threads), 1), threading.Lock()
     shares = iter([np.arange(k, n_segments, n_shares, dtype=np.int64)  # one compiled form
-                   for k in range(max(n_shares, 1))])
+                   for k in range(n_shares)])
 
     def fly_shares():
         while True:

@@ -427,8 +427,8 @@ class _Problem:
 
     def _flights(self, p: np.ndarray, sensitivities: bool):
         """The segments flown at ``p``; the last flight without sensitivities is kept, since
-        the search asks for the same point more than once (a stage's start, the search's
-        first point, the point it ended at)."""
+        a stage asks for the same point more than once in a row (its start, the search's first
+        point, and the point the search ended at when its last trial was accepted)."""
         if not sensitivities and self._last is not None and np.array_equal(self._last[0], p):
             return self._last[1]
         flown = _fly_batches(self.model, self.batches, self.weights(p), self.slots,

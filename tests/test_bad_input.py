@@ -257,10 +257,10 @@ def fit_library(folder: Path, good_csv: str, library_text: str
     library = folder / "lib.toml"
     library.write_text(library_text)
     before = {p.name for p in folder.iterdir()}
-    # the file is under test, not the optimizer: least squares (the default refines by
-    # flights, seconds per example)
+    # the file is under test, not the refinement (seconds per example): the default fit
+    # without it
     code, out, err = run_cli(["fit", folder / "data.csv", "--library", library,
-                              "--optimizer", "ls", "--out", folder / "model.json", "--json"])
+                              "--refine", "0", "--out", folder / "model.json", "--json"])
     if code != 0:
         assert_nothing_written(folder, before)
     return code, out, err, library, folder
@@ -494,7 +494,7 @@ def fit_ship(folder: Path, good_csv: str, ship_text: str) -> tuple[int, str, str
     ship = folder / "ship.toml"
     ship.write_text(ship_text)
     before = {p.name for p in folder.iterdir()}
-    code, out, err = run_cli(["fit", folder / "data.csv", "--ship", ship, "--optimizer", "ls",
+    code, out, err = run_cli(["fit", folder / "data.csv", "--ship", ship, "--refine", "0",
                               "--out", folder / "model.json", "--json"])
     if code != 0:
         assert_nothing_written(folder, before)

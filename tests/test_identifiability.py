@@ -73,7 +73,7 @@ def test_fit_on_the_three_zigzags_warns_of_the_collinear_terms(protocol_runs, tm
 
     paths = [write_csv(r, tmp_path / f"{r.name}.csv") for r in protocol_runs["train"]
              if r.name.startswith("zz")]
-    # the fit warns before any refinement, which is left out
+    # the warning does not depend on the refinement, which is left out
     done = subprocess.run([sys.executable, "-m", "sindyship.cli", "fit", *map(str, paths),
                            "--ship", "kcs", "--refine", "0", "--out", str(tmp_path / "m.json"),
                            "--json"],
