@@ -307,6 +307,23 @@ def test_a_refinement_flies_a_point_it_just_flew_once_and_ends_as_flying_it_agai
     assert again.info["refined"]["stages"] == reused.info["refined"]["stages"]
 
 
+def test_a_refinement_flies_with_one_blas_thread(runs, fitted, monkeypatch):
+    """The segments fly on threads of their own; BLAS threads spinning between the products
+    of J^T J would take their cores."""
+    from threadpoolctl import threadpool_info
+
+    module = importlib.import_module("sindyship.refine")
+    seen, fly_batches = set(), module._fly_batches
+
+    def watched(*args):
+        seen.update(p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas")
+        return fly_batches(*args)
+
+    monkeypatch.setattr(module, "_fly_batches", watched)
+    refine(fitted, runs, max_evaluations=3, segment_s=100.0, validate=False)
+    assert seen <= {1}
+
+
 def test_default_segments_grow_in_stages_up_to_the_longest_record(kcs, runs):
     assert [round(s) for s in default_segments(kcs, runs)] == [93, 279]  # records of 400 s
     assert [round(s) for s in default_segments(kcs, [])] == [93, 279, 838]
