@@ -411,3 +411,18 @@ def test_refinement_flies_a_logged_zigzag_from_its_execute(logged_trial, kcs, pr
     (whole,) = make_segments(model, [logged], None)
     assert whole.start.tolist() == [350.0] and whole.zigzag.sign.tolist() == [1]
     assert math.degrees(whole.zigzag.check[0]) == pytest.approx(20.0)
+
+
+def test_the_running_integral_is_scipys_cumulative_trapezoid(seed):
+    """Written out so that reading a record does not import scipy.integrate; the heading
+    integrates r, the frame check the complex velocity x + i y."""
+    from scipy.integrate import cumulative_trapezoid
+
+    from sindyship.plausibility import _running_integral
+
+    rng = np.random.default_rng(seed)
+    for n in (1, 2, 7, 3200):
+        t = np.cumsum(rng.random(n))
+        for y in (rng.standard_normal(n), rng.standard_normal(n) + 1j * rng.standard_normal(n)):
+            np.testing.assert_array_equal(_running_integral(y, t),
+                                          cumulative_trapezoid(y, t, initial=0.0))
