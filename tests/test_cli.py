@@ -47,10 +47,10 @@ def test_the_parsers_optimizer_names_are_the_registrys():
 
 
 def test_help_and_simulate_answer_without_scikit_learn(tmp_path):
-    """The parser of a verb builds that verb's options alone: ``--help`` and ``simulate``
-    import neither scikit-learn, pysindy, sympy nor scipy.integrate (seconds of every
-    command), and every verb's full help still lists the same options as the parser of every
-    verb."""
+    """The parser of a verb builds that verb's options alone: ``--help``, ``simulate`` and
+    reading a record import neither scikit-learn, pysindy, sympy nor scipy.integrate (seconds
+    of every command), and every verb's full help still lists the same options as the parser
+    of every verb."""
     script = (
         "import sys\n"
         "from sindyship.cli import build_parser, _verb_of, main\n"
@@ -58,6 +58,8 @@ def test_help_and_simulate_answer_without_scikit_learn(tmp_path):
         "    build_parser({_verb_of(argv)})\n"
         "status = main(['simulate', '--manoeuvre', 'zigzag', '--rudder', '20', '--duration',\n"
         "               '100', '--out', sys.argv[1]])\n"
+        "from sindyship.measurements import read_csv\n"
+        "read_csv(sys.argv[1])  # every check of a record runs\n"
         "heavy = ('sklearn', 'pysindy', 'sympy', 'scipy.integrate')\n"
         "print(status, sorted(m for m in heavy if m in sys.modules))\n")
     out = subprocess.run([sys.executable, "-c", script, str(tmp_path / "zz.csv")],

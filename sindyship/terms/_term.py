@@ -8,9 +8,9 @@ from dataclasses import dataclass, field
 from decimal import Decimal, localcontext
 from fractions import Fraction
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import sympy
 
 from ..errors import SindyshipInputError
 from ._parser import Factor, _message, _parse, _quote, _TermError
@@ -25,6 +25,9 @@ from ._variables import (
     VARIABLES,
     describe_variable,
 )
+
+if TYPE_CHECKING:
+    import sympy
 
 
 def parse_term(text: str, *, source: str | Path | None = None, line: int | None = None) -> Term:
@@ -279,12 +282,14 @@ class Term:
         >>> Term("abs(v) v^2 0.5").sympy()
         v**2*Abs(v)/2
         """
+        import sympy
+
         expr: sympy.Expr = sympy.Integer(1)
         for function, base, power in self.factors:
             if isinstance(base, str):
                 atom = sympy.Symbol(base, real=True)
                 if function is not None:
-                    atom = _SYMPY_FUNCTIONS[function](atom)
+                    atom = getattr(sympy, _SYMPY_FUNCTIONS[function])(atom)
             else:
                 number = Fraction(repr(base))
                 atom = sympy.Rational(number.numerator, number.denominator)

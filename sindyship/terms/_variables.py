@@ -8,7 +8,6 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 import numpy as np
-import sympy
 
 from ._shapes import describe_shape, is_shape_name, parse_shape
 
@@ -48,7 +47,9 @@ def is_variable_name(name) -> bool:
 
 
 _NUMPY_FUNCTIONS = {"abs": np.abs, "sign": np.sign, "sin": np.sin, "cos": np.cos}
-_SYMPY_FUNCTIONS = {"abs": sympy.Abs, "sign": sympy.sign, "sin": sympy.sin, "cos": sympy.cos}
+#: The sympy function of each of the grammar's functions, by name (sympy is imported only
+#: where an expression is made: it costs every command a fifth of a second).
+_SYMPY_FUNCTIONS = {"abs": "Abs", "sign": "sign", "sin": "sin", "cos": "cos"}
 _LATEX_FUNCTIONS = {"sign": r"\operatorname{sgn}", "sin": r"\sin", "cos": r"\cos"}
 _TEXT_FUNCTIONS = {"sign": "sgn", "sin": "sin", "cos": "cos"}
 
