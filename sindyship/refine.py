@@ -373,11 +373,10 @@ def _search_stages(model, records, stages, penalty, max_evaluations, prior_weigh
         budget -= 0 if search is None else search.evaluations
         evaluations += 0 if search is None else search.evaluations
         jacobians += 0 if search is None else search.jacobians
-        problem.residuals(p)
+        cost_after = _cost(problem.residuals(p))  # and problem.flight_rms at p
         done.append({"segment_s": length, "segments": problem.n_segments,
                      "cost_fitted": start_cost, "flight_rms_fitted": start_rms,
-                     "cost_before": entry_cost,
-                     "cost_after": _cost(problem.residuals(p)),
+                     "cost_before": entry_cost, "cost_after": cost_after,
                      "flight_rms_before": entry_rms, "flight_rms_after": problem.flight_rms,
                      "evaluations": 0 if search is None else search.evaluations,
                      "stopped": "no active coefficient" if not len(p) else (
