@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
+import glob
 import importlib.util
+import io
 import json
 import os
 import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -44,15 +48,46 @@ def _shell_blocks() -> list[str]:
     return re.findall(r"```bash\n(.*?)```", first_hour, re.S)
 
 
-def test_the_first_hour_runs_as_written(tmp_path):
+def _readme_lines(block: str) -> list[str]:
+    """The commands of a shell block, continuation lines joined."""
+    return [line.strip() for line in block.replace("\\\n", " ").splitlines() if line.strip()]
+
+
+def _expanded(words: list[str]) -> list[str]:
+    """Words with their glob patterns expanded as bash does (sorted; kept when none match)."""
+    out = []
+    for word in words:
+        matches = sorted(glob.glob(word)) if any(c in word for c in "*?[") else []
+        out.extend(matches or [word])
+    return out
+
+
+def test_the_first_hour_runs_as_written(tmp_path, monkeypatch):
+    """Every command of the README's first hour, in order, in one folder.  The ``sindyship``
+    commands run in this process through :func:`sindyship.cli.main` with the README's own
+    arguments (a new interpreter would add a second each); the console script itself and
+    every other command run through bash."""
+    from sindyship.cli import main
+
     blocks = _shell_blocks()
     assert len(blocks) >= 4
     env = {**os.environ, "MPLBACKEND": "Agg", "PATH": f"{Path(sys.executable).parent}:"
            + os.environ.get("PATH", "")}
-    for block in blocks:
-        done = subprocess.run(["bash", "-e", "-c", block], cwd=tmp_path, env=env,
-                              capture_output=True, text=True, timeout=600)
-        assert done.returncode == 0, f"{block}\n{done.stderr[-2000:]}"
+    monkeypatch.chdir(tmp_path)
+    lines = [line for block in blocks for line in _readme_lines(block)]
+    assert len(lines) >= 12
+    for number, line in enumerate(lines):
+        words = shlex.split(line)
+        if words[0] == "sindyship" and number != len(lines) - 1:
+            out, err = io.StringIO(), io.StringIO()
+            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+                code = main(_expanded(words[1:]))
+            assert code == 0, f"{line}\n{err.getvalue()[-2000:]}"
+        else:  # the last command shows that the installed ``sindyship`` runs
+            done = subprocess.run(["bash", "-e", "-c", line], cwd=tmp_path, env=env,
+                                  capture_output=True, text=True, timeout=600)
+            assert done.returncode == 0, f"{line}\n{done.stderr[-2000:]}"
+    assert lines[-1].startswith("sindyship ")
     assert (tmp_path / "equations.tex").exists() and (tmp_path / "kcs_model.py").exists()
     forces = json.loads((tmp_path / "forces" / "forces.json").read_text())
     assert min(forces["by_test"][t]["Y"]["correlation"] for t in forces["by_test"]
