@@ -112,13 +112,13 @@ def test_simulate_with_effects_changes_the_record(tmp_path):
 def test_fit_then_evaluate_json(records, tmp_path):
     model = tmp_path / "model.json"
     train = [records[k] for k in ("tc35", "tc-35", "zz20", "spiral")]
-    code, out, err = run_cli("fit", *train, "--ship", "kcs", "--optimizer", "ls",
-                             "--out", model, "--json")
+    code, out, err = run_main("fit", *train, "--ship", "kcs", "--optimizer", "ls",
+                              "--out", model, "--json")
     assert code == 0, err
     assert json.loads(out)["active_terms"]["Y"] == 22
     saved = json.loads(model.read_text())
     assert saved["optimizer"]["name"] == "ls" and saved["rudder_signal"] == "actual"
-    code, out, err = run_cli("evaluate", model, records["zz20"], records["tc35"], "--json")
+    code, out, err = run_main("evaluate", model, records["zz20"], records["tc35"], "--json")
     assert code == 0, err
     errors = json.loads(out)["errors"]
     assert set(errors) == {"zz20", "tc35"}
@@ -169,7 +169,7 @@ def test_bad_csv_exits_2_with_one_line_naming_file_and_place(tmp_path, kind):
 
 
 def test_unknown_ship_and_model_errors_exit_2(tmp_path, records):
-    code, _, err = run_cli("fit", records["tc35"], "--ship", "titanic", "--out", tmp_path / "m")
+    code, _, err = run_main("fit", records["tc35"], "--ship", "titanic", "--out", tmp_path / "m")
     assert code == 2 and "titanic" in err
     bad = tmp_path / "truncated.json"
     bad.write_text('{"format_version": 1, "ship": "kcs", "coeff')
@@ -182,7 +182,7 @@ def test_unknown_ship_and_model_errors_exit_2(tmp_path, records):
 
 
 def test_reproduce_json_contract(tmp_path):
-    code, out, err = run_cli("reproduce", "--out", tmp_path / "rep", "--json")
+    code, out, err = run_main("reproduce", "--out", tmp_path / "rep", "--json")
     assert code == 0, err
     doc = json.loads(out)
     methods = [r["method"] for r in doc["results"]]

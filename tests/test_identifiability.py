@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
 
@@ -68,36 +66,33 @@ def test_the_full_training_set_still_cannot_separate_v_and_r(kcs, protocol_runs)
     assert report.vif["X"]["v^2"] < VIF_BOUND
 
 
-def test_fit_on_the_three_zigzags_warns_of_the_collinear_terms(protocol_runs, tmp_path):
+def test_fit_on_the_three_zigzags_warns_of_the_collinear_terms(protocol_runs, tmp_path,
+                                                               run_sindyship):
     from sindyship.measurements import write_csv
 
     paths = [write_csv(r, tmp_path / f"{r.name}.csv") for r in protocol_runs["train"]
              if r.name.startswith("zz")]
     # the warning does not depend on the refinement, which is left out
-    done = subprocess.run([sys.executable, "-m", "sindyship.cli", "fit", *map(str, paths),
-                           "--ship", "kcs", "--refine", "0", "--out", str(tmp_path / "m.json"),
-                           "--json"],
-                          capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    assert "Identifiability" in done.stderr
-    assert "Y and N: v^3, r^3, v^2 r" in done.stderr and "v' moves with r'" in done.stderr
-    document = json.loads(done.stdout)
+    code, out, err = run_sindyship("fit", *paths, "--ship", "kcs", "--refine", "0", "--out",
+                                   tmp_path / "m.json", "--json")
+    assert code == 0, err
+    assert "Identifiability" in err
+    assert "Y and N: v^3, r^3, v^2 r" in err and "v' moves with r'" in err
+    document = json.loads(out)
     flagged = {term for g in document["identifiability"]["groups"] for term in g["terms"]}
     assert {"v^3", "r^2 v", "v^2 r"} <= flagged
 
 
 def test_fit_with_the_prior_says_the_prior_decides_the_collinear_terms(protocol_runs,
-                                                                        tmp_path):
+                                                                        tmp_path, run_sindyship):
     from sindyship.measurements import write_csv
 
     paths = [write_csv(r, tmp_path / f"{r.name}.csv") for r in protocol_runs["train"]
              if r.name.startswith("zz")]
-    done = subprocess.run([sys.executable, "-m", "sindyship.cli", "fit", *map(str, paths),
-                           "--ship", "kcs", "--optimizer", "prior", "--refine", "0",
-                           "--out", str(tmp_path / "m.json")],
-                          capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    assert "the ship's prior decides what the records cannot" in done.stderr
+    code, _, err = run_sindyship("fit", *paths, "--ship", "kcs", "--optimizer", "prior",
+                                 "--refine", "0", "--out", tmp_path / "m.json")
+    assert code == 0, err
+    assert "the ship's prior decides what the records cannot" in err
     saved = json.loads((tmp_path / "m.json").read_text())
     assert saved["optimizer"]["name"] == "prior"
     assert saved["info"]["straight_run"]["stable"] is True

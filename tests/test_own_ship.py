@@ -117,19 +117,15 @@ def test_a_fitted_model_records_what_its_ship_assumed(own_ship, protocol_runs):
     assert any("Clarke" in a for a in model.info["ship_assumptions"])
 
 
-def test_the_command_line_names_what_the_ship_assumes(tmp_path, protocol_runs):
-    import subprocess
-    import sys
-
+def test_the_command_line_names_what_the_ship_assumes(tmp_path, protocol_runs, run_sindyship):
     from sindyship.measurements import write_csv
 
     path = tmp_path / "ship.toml"
     path.write_text(KCS_PARTICULARS, encoding="utf-8")
     record = tmp_path / "tc.csv"
     write_csv(protocol_runs["train"][1], record)
-    done = subprocess.run([sys.executable, "-m", "sindyship.cli", "fit", str(record), "--ship",
-                           str(path), "--optimizer", "ls", "--out", str(tmp_path / "m.json")],
-                          capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    notes = [line for line in done.stderr.splitlines() if line.startswith("note: ship")]
+    code, _, err = run_sindyship("fit", record, "--ship", path, "--optimizer", "ls", "--out",
+                                 tmp_path / "m.json")
+    assert code == 0, err
+    notes = [line for line in err.splitlines() if line.startswith("note: ship")]
     assert len(notes) == 3 and "Clarke" in notes[0] and "servo" in notes[1]

@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
-import subprocess
-import sys
 import warnings
 from pathlib import Path
 
@@ -58,21 +55,19 @@ def zigzag(protocol_runs):
 # --- refusals ----------------------------------------------------------------------------------
 
 
-def test_heading_in_degrees_under_a_bare_header_is_refused_by_fit(zigzag, tmp_path):
+def test_heading_in_degrees_under_a_bare_header_is_refused_by_fit(zigzag, tmp_path,
+                                                                  run_sindyship):
     data = zigzag.data.assign(psi=np.degrees(zigzag["psi"]))
     path = tmp_path / "zz.csv"
     data.to_csv(path, index=False)
-    done = subprocess.run(
-        [sys.executable, "-m", "sindyship.cli", "fit", str(path), "--ship", "kcs", "--out",
-         str(tmp_path / "model.json")],
-        capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
-    )
-    assert done.returncode == 2
-    assert done.stdout == ""
-    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
-    assert str(path) in done.stderr and "heading check" in done.stderr
-    assert "57.3" in done.stderr and "'psi [deg]'" in done.stderr
-    assert "skip_checks=['heading']" in done.stderr
+    code, out, err = run_sindyship("fit", path, "--ship", "kcs", "--out",
+                                   tmp_path / "model.json")
+    assert code == 2
+    assert out == ""
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert str(path) in err and "heading check" in err
+    assert "57.3" in err and "'psi [deg]'" in err
+    assert "skip_checks=['heading']" in err
     assert not (tmp_path / "model.json").exists()
     # with its unit the same numbers load
     record = trajectory_from_frame(data.rename(columns={"psi": "psi [deg]"}), ship="kcs")
