@@ -1,8 +1,6 @@
 """Shared fixtures and the MARIN-data rule.
 
-The protocol's KCS records are simulated once per test session.  ``run_sindyship`` runs the
-command line in the test's process (a new interpreter costs a second per command; tests of
-the installed command, of a hang or of a fresh process run it through ``subprocess``).
+The protocol's KCS records are simulated once per test session.
 
 Tests that read the MARIN KVLCC2 measurements carry the ``marin`` marker and skip when the
 files are absent (a fresh clone without ``../shared``).  Where the data are meant to be
@@ -13,8 +11,6 @@ skipped ``marin`` test is reported as a failure instead.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import os
 from pathlib import Path
 
@@ -36,26 +32,6 @@ def protocol_runs(kcs):
     plan = protocol_manoeuvres()
     mmg = MMGModel(kcs)
     return {"train": fly(mmg, plan["train"]), "test": fly(mmg, plan["test"])}
-
-
-@pytest.fixture
-def run_sindyship(monkeypatch):
-    """``run_sindyship(*args, cwd=None)``: the command line's exit status, stdout and stderr,
-    run in this process (in ``cwd`` when given)."""
-    from sindyship.cli import main
-
-    def run(*args, cwd=None) -> tuple[int, str, str]:
-        if cwd is not None:
-            monkeypatch.chdir(cwd)
-        out, err = io.StringIO(), io.StringIO()
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            try:
-                code = main([str(a) for a in args])
-            except SystemExit as exc:  # argparse
-                code = exc.code
-        return code, out.getvalue(), err.getvalue()
-
-    return run
 
 
 @pytest.fixture

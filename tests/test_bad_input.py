@@ -11,8 +11,6 @@ with status 1 and a one-line message.
 from __future__ import annotations
 
 import ast
-import contextlib
-import io
 import json
 import math
 import re
@@ -22,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_in_process import run_sindyship
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -41,17 +40,6 @@ PROPERTY = settings(max_examples=40, deadline=None, derandomize=True)
 # ---------------------------------------------------------------------------------------------
 # helpers
 # ---------------------------------------------------------------------------------------------
-def run_cli(argv: list[str]) -> tuple[int, str, str]:
-    """``sindyship ARGV`` in this process: (exit status, stdout, stderr)."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = main([str(a) for a in argv])
-        except SystemExit as exc:  # argparse
-            code = exc.code
-    return code, out.getvalue(), err.getvalue()
-
-
 def assert_one_line(code: int, out: str, err: str, status: int, *fragments: str) -> None:
     """Exit ``status``, nothing on stdout, exactly one line on stderr holding ``fragments``."""
     assert code == status, err
@@ -110,7 +98,7 @@ def fit_csv(folder: Path, text: str, *extra: str) -> tuple[int, str, str, Path]:
     path = folder / "data.csv"
     path.write_text(text)
     before = {p.name for p in folder.iterdir()}
-    code, out, err = run_cli(["fit", path, *extra, "--out", folder / "model.json", "--json"])
+    code, out, err = run_sindyship("fit", path, *extra, "--out", folder / "model.json", "--json")
     if code != 0:
         assert_nothing_written(folder, before)
     return code, out, err, path
@@ -243,7 +231,7 @@ def test_csv_arbitrary_bytes(new_folder, junk):
     folder = new_folder()
     path = folder / "junk.csv"
     path.write_bytes(junk)
-    code, out, err = run_cli(["fit", path, "--out", folder / "m.json", "--json"])
+    code, out, err = run_sindyship("fit", path, "--out", folder / "m.json", "--json")
     assert_one_line(code, out, err, 2, str(path))
     assert_nothing_written(folder, {"junk.csv"})
 
@@ -259,8 +247,8 @@ def fit_library(folder: Path, good_csv: str, library_text: str
     before = {p.name for p in folder.iterdir()}
     # the file is under test, not the refinement (seconds per example): the default fit
     # without it
-    code, out, err = run_cli(["fit", folder / "data.csv", "--library", library,
-                              "--refine", "0", "--out", folder / "model.json", "--json"])
+    code, out, err = run_sindyship("fit", folder / "data.csv", "--library", library,
+                              "--refine", "0", "--out", folder / "model.json", "--json")
     if code != 0:
         assert_nothing_written(folder, before)
     return code, out, err, library, folder
@@ -410,7 +398,7 @@ def evaluate_model(folder: Path, good_csv: str, model_text: str | bytes
         model.write_bytes(model_text)
     else:
         model.write_text(model_text)
-    code, out, err = run_cli(["evaluate", model, folder / "data.csv", "--json"])
+    code, out, err = run_sindyship("evaluate", model, folder / "data.csv", "--json")
     return code, out, err, model
 
 
@@ -494,8 +482,8 @@ def fit_ship(folder: Path, good_csv: str, ship_text: str) -> tuple[int, str, str
     ship = folder / "ship.toml"
     ship.write_text(ship_text)
     before = {p.name for p in folder.iterdir()}
-    code, out, err = run_cli(["fit", folder / "data.csv", "--ship", ship, "--refine", "0",
-                              "--out", folder / "model.json", "--json"])
+    code, out, err = run_sindyship("fit", folder / "data.csv", "--ship", ship, "--refine", "0",
+                              "--out", folder / "model.json", "--json")
     if code != 0:
         assert_nothing_written(folder, before)
     return code, out, err, ship
@@ -550,7 +538,7 @@ def test_missing_files_are_named(tmp_path, good_csv):
           tmp_path / "m.json", "--json"], "l.toml"),
         (["evaluate", tmp_path / "m.json", tmp_path / "data.csv", "--json"], "m.json"),
     ]:
-        assert_one_line(*run_cli(argv), 2, name)
+        assert_one_line(*run_sindyship(*argv), 2, name)
     assert {p.name for p in tmp_path.iterdir()} == {"data.csv"}
 
 
@@ -567,8 +555,8 @@ def test_an_internal_failure_exits_1_with_one_line(monkeypatch, tmp_path, good_c
 
     monkeypatch.setattr(sindyship.identify, "fit", broken)
     (tmp_path / "data.csv").write_text(good_csv)
-    code, out, err = run_cli(["fit", tmp_path / "data.csv", "--out", tmp_path / "m.json",
-                              "--json"])
+    code, out, err = run_sindyship("fit", tmp_path / "data.csv", "--out", tmp_path / "m.json",
+                              "--json")
     assert_one_line(code, out, err, 1, "internal error", type(error).__name__, "boom")
     assert {p.name for p in tmp_path.iterdir()} == {"data.csv"}
 
@@ -581,7 +569,7 @@ def test_a_failure_while_reading_is_not_taken_for_bad_input(monkeypatch, tmp_pat
 
     monkeypatch.setattr(sindyship.measurements, "read_csv", broken)
     (tmp_path / "data.csv").write_text(good_csv)
-    code, out, err = run_cli(["fit", tmp_path / "data.csv", "--out", tmp_path / "m.json"])
+    code, out, err = run_sindyship("fit", tmp_path / "data.csv", "--out", tmp_path / "m.json")
     assert_one_line(code, out, err, 1, "internal error", "TypeError", "a bug in the reader")
 
 

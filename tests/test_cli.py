@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import subprocess
 import sys
@@ -11,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_in_process import run_sindyship
 
 from sindyship.cli import main
 from sindyship.measurements import read_csv
@@ -20,16 +19,6 @@ def run_cli(*args, cwd=None):
     proc = subprocess.run([sys.executable, "-m", "sindyship.cli", *map(str, args)],
                           capture_output=True, text=True, cwd=cwd, timeout=600)
     return proc.returncode, proc.stdout, proc.stderr
-
-
-def run_main(*args):
-    """``sindyship ARGS`` in this process (the exit status :func:`main` returns, stdout,
-    stderr): for the many one-line refusals, where a new interpreter would cost a second
-    each; :func:`run_cli` goes through ``python -m sindyship.cli``."""
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return code, out.getvalue(), err.getvalue()
 
 
 def test_help_lists_the_verbs():
@@ -112,13 +101,13 @@ def test_simulate_with_effects_changes_the_record(tmp_path):
 def test_fit_then_evaluate_json(records, tmp_path):
     model = tmp_path / "model.json"
     train = [records[k] for k in ("tc35", "tc-35", "zz20", "spiral")]
-    code, out, err = run_main("fit", *train, "--ship", "kcs", "--optimizer", "ls",
+    code, out, err = run_sindyship("fit", *train, "--ship", "kcs", "--optimizer", "ls",
                               "--out", model, "--json")
     assert code == 0, err
     assert json.loads(out)["active_terms"]["Y"] == 22
     saved = json.loads(model.read_text())
     assert saved["optimizer"]["name"] == "ls" and saved["rudder_signal"] == "actual"
-    code, out, err = run_main("evaluate", model, records["zz20"], records["tc35"], "--json")
+    code, out, err = run_sindyship("evaluate", model, records["zz20"], records["tc35"], "--json")
     assert code == 0, err
     errors = json.loads(out)["errors"]
     assert set(errors) == {"zz20", "tc35"}
@@ -157,7 +146,7 @@ def test_bad_csv_exits_2_with_one_line_naming_file_and_place(tmp_path, kind):
     path = tmp_path / "bad_input.csv"
     path.write_text(text)
     out_model = tmp_path / "model.json"
-    code, out, err = run_main("fit", path, "--ship", "kcs", "--out", out_model, "--json")
+    code, out, err = run_sindyship("fit", path, "--ship", "kcs", "--out", out_model, "--json")
     assert code == 2
     assert out == ""
     lines = err.strip().splitlines()
@@ -169,20 +158,21 @@ def test_bad_csv_exits_2_with_one_line_naming_file_and_place(tmp_path, kind):
 
 
 def test_unknown_ship_and_model_errors_exit_2(tmp_path, records):
-    code, _, err = run_main("fit", records["tc35"], "--ship", "titanic", "--out", tmp_path / "m")
+    code, _, err = run_sindyship("fit", records["tc35"], "--ship", "titanic", "--out",
+                                 tmp_path / "m")
     assert code == 2 and "titanic" in err
     bad = tmp_path / "truncated.json"
     bad.write_text('{"format_version": 1, "ship": "kcs", "coeff')
-    code, _, err = run_main("evaluate", bad, records["tc35"])
+    code, _, err = run_sindyship("evaluate", bad, records["tc35"])
     assert code == 2 and "truncated.json" in err and len(err.strip().splitlines()) == 1
     newer = tmp_path / "newer.json"
     newer.write_text(json.dumps({"format_version": 99, "ship": "kcs"}))
-    code, _, err = run_main("evaluate", newer, records["tc35"])
+    code, _, err = run_sindyship("evaluate", newer, records["tc35"])
     assert code == 2 and "newer" in err
 
 
 def test_reproduce_json_contract(tmp_path):
-    code, out, err = run_main("reproduce", "--out", tmp_path / "rep", "--json")
+    code, out, err = run_sindyship("reproduce", "--out", tmp_path / "rep", "--json")
     assert code == 0, err
     doc = json.loads(out)
     methods = [r["method"] for r in doc["results"]]

@@ -18,7 +18,6 @@ T, ``hard:T`` a hard link to T.
 from __future__ import annotations
 
 import contextlib
-import io
 import json
 import os
 import re
@@ -29,6 +28,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from cli_in_process import run_sindyship
 
 import sindyship
 from sindyship.cli import main
@@ -623,14 +623,9 @@ def run_subprocess(argv: list[str], folder: Path) -> tuple[int, str, str]:
 def run_in_process(argv: list[str], folder: Path, monkeypatch) -> tuple[int, str, str]:
     monkeypatch.chdir(folder)
     before = _children(os.getpid())
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = main(argv)
-        except SystemExit as exc:  # argparse
-            code = exc.code
+    result = run_sindyship(*argv)
     assert _children(os.getpid()) <= before, "child processes left running"
-    return code, out.getvalue(), err.getvalue()
+    return result
 
 
 def _case_id(c: dict) -> str:

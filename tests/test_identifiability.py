@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from cli_in_process import run_sindyship
 
 from sindyship.identifiability import VIF_BOUND, identifiability
 
@@ -66,8 +67,7 @@ def test_the_full_training_set_still_cannot_separate_v_and_r(kcs, protocol_runs)
     assert report.vif["X"]["v^2"] < VIF_BOUND
 
 
-def test_fit_on_the_three_zigzags_warns_of_the_collinear_terms(protocol_runs, tmp_path,
-                                                               run_sindyship):
+def test_fit_on_the_three_zigzags_warns_of_the_collinear_terms(protocol_runs, tmp_path):
     from sindyship.measurements import write_csv
 
     paths = [write_csv(r, tmp_path / f"{r.name}.csv") for r in protocol_runs["train"]
@@ -84,7 +84,7 @@ def test_fit_on_the_three_zigzags_warns_of_the_collinear_terms(protocol_runs, tm
 
 
 def test_fit_with_the_prior_says_the_prior_decides_the_collinear_terms(protocol_runs,
-                                                                        tmp_path, run_sindyship):
+                                                                        tmp_path):
     from sindyship.measurements import write_csv
 
     paths = [write_csv(r, tmp_path / f"{r.name}.csv") for r in protocol_runs["train"]

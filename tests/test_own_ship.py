@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from cli_in_process import run_sindyship
 
 from sindyship.errors import SindyshipInputError
 from sindyship.evaluation import evaluate
@@ -117,7 +118,7 @@ def test_a_fitted_model_records_what_its_ship_assumed(own_ship, protocol_runs):
     assert any("Clarke" in a for a in model.info["ship_assumptions"])
 
 
-def test_the_command_line_names_what_the_ship_assumes(tmp_path, protocol_runs, run_sindyship):
+def test_the_command_line_names_what_the_ship_assumes(tmp_path, protocol_runs):
     from sindyship.measurements import write_csv
 
     path = tmp_path / "ship.toml"

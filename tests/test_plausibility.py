@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from cli_in_process import run_sindyship
 
 from sindyship.effects import add_noise, parse_effects, simulate_with_effects
 from sindyship.errors import SindyshipInputError
@@ -55,8 +56,7 @@ def zigzag(protocol_runs):
 # --- refusals ----------------------------------------------------------------------------------
 
 
-def test_heading_in_degrees_under_a_bare_header_is_refused_by_fit(zigzag, tmp_path,
-                                                                  run_sindyship):
+def test_heading_in_degrees_under_a_bare_header_is_refused_by_fit(zigzag, tmp_path):
     data = zigzag.data.assign(psi=np.degrees(zigzag["psi"]))
     path = tmp_path / "zz.csv"
     data.to_csv(path, index=False)

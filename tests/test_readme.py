@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from cli_in_process import run_sindyship
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
@@ -67,8 +68,6 @@ def test_the_first_hour_runs_as_written(tmp_path, monkeypatch):
     commands run in this process through :func:`sindyship.cli.main` with the README's own
     arguments (a new interpreter would add a second each); the console script itself and
     every other command run through bash."""
-    from sindyship.cli import main
-
     blocks = _shell_blocks()
     assert len(blocks) >= 4
     env = {**os.environ, "MPLBACKEND": "Agg", "PATH": f"{Path(sys.executable).parent}:"
@@ -79,10 +78,8 @@ def test_the_first_hour_runs_as_written(tmp_path, monkeypatch):
     for number, line in enumerate(lines):
         words = shlex.split(line)
         if words[0] == "sindyship" and number != len(lines) - 1:
-            out, err = io.StringIO(), io.StringIO()
-            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-                code = main(_expanded(words[1:]))
-            assert code == 0, f"{line}\n{err.getvalue()[-2000:]}"
+            code, _, err = run_sindyship(*_expanded(words[1:]))
+            assert code == 0, f"{line}\n{err[-2000:]}"
         else:  # the last command shows that the installed ``sindyship`` runs
             done = subprocess.run(["bash", "-e", "-c", line], cwd=tmp_path, env=env,
                                   capture_output=True, text=True, timeout=600)
