@@ -248,7 +248,7 @@ def fit_library(folder: Path, good_csv: str, library_text: str
     # the file is under test, not the refinement (seconds per example): the default fit
     # without it
     code, out, err = run_sindyship("fit", folder / "data.csv", "--library", library,
-                              "--refine", "0", "--out", folder / "model.json", "--json")
+                                   "--refine", "0", "--out", folder / "model.json", "--json")
     if code != 0:
         assert_nothing_written(folder, before)
     return code, out, err, library, folder
@@ -483,7 +483,7 @@ def fit_ship(folder: Path, good_csv: str, ship_text: str) -> tuple[int, str, str
     ship.write_text(ship_text)
     before = {p.name for p in folder.iterdir()}
     code, out, err = run_sindyship("fit", folder / "data.csv", "--ship", ship, "--refine", "0",
-                              "--out", folder / "model.json", "--json")
+                                   "--out", folder / "model.json", "--json")
     if code != 0:
         assert_nothing_written(folder, before)
     return code, out, err, ship
@@ -556,7 +556,7 @@ def test_an_internal_failure_exits_1_with_one_line(monkeypatch, tmp_path, good_c
     monkeypatch.setattr(sindyship.identify, "fit", broken)
     (tmp_path / "data.csv").write_text(good_csv)
     code, out, err = run_sindyship("fit", tmp_path / "data.csv", "--out", tmp_path / "m.json",
-                              "--json")
+                                   "--json")
     assert_one_line(code, out, err, 1, "internal error", type(error).__name__, "boom")
     assert {p.name for p in tmp_path.iterdir()} == {"data.csv"}
 

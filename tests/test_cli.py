@@ -15,14 +15,16 @@ from sindyship.cli import main
 from sindyship.measurements import read_csv
 
 
-def run_cli(*args, cwd=None):
+def run_in_subprocess(*args):
+    """``python -m sindyship.cli ARGS`` in a new interpreter: (exit status, stdout, stderr);
+    for what only a real process shows (its streams as a shell sees them)."""
     proc = subprocess.run([sys.executable, "-m", "sindyship.cli", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=600)
+                          capture_output=True, text=True, timeout=600)
     return proc.returncode, proc.stdout, proc.stderr
 
 
 def test_help_lists_the_verbs():
-    code, out, _ = run_cli("--help")
+    code, out, _ = run_in_subprocess("--help")
     assert code == 0
     for verb in ("simulate", "fit", "evaluate", "reproduce"):
         assert verb in out
@@ -101,13 +103,15 @@ def test_simulate_with_effects_changes_the_record(tmp_path):
 def test_fit_then_evaluate_json(records, tmp_path):
     model = tmp_path / "model.json"
     train = [records[k] for k in ("tc35", "tc-35", "zz20", "spiral")]
-    code, out, err = run_sindyship("fit", *train, "--ship", "kcs", "--optimizer", "ls",
-                              "--out", model, "--json")
+    # a real process: --json writes one document on stdout and nothing else does
+    code, out, err = run_in_subprocess("fit", *train, "--ship", "kcs", "--optimizer", "ls",
+                                       "--out", model, "--json")
     assert code == 0, err
     assert json.loads(out)["active_terms"]["Y"] == 22
     saved = json.loads(model.read_text())
     assert saved["optimizer"]["name"] == "ls" and saved["rudder_signal"] == "actual"
-    code, out, err = run_sindyship("evaluate", model, records["zz20"], records["tc35"], "--json")
+    code, out, err = run_in_subprocess("evaluate", model, records["zz20"], records["tc35"],
+                                       "--json")
     assert code == 0, err
     errors = json.loads(out)["errors"]
     assert set(errors) == {"zz20", "tc35"}
@@ -273,3 +277,32 @@ def test_fit_refine_flies_the_records_and_says_what_it_did(records, tmp_path, ca
     assert main(["fit", *train, "--ship", "kcs", "--optimizer", "ls", "--segment", "100",
                  "--out", str(tmp_path / "x.json")]) == 2
     assert "--segment sets the refinement, which is off" in capsys.readouterr().err
+
+
+def test_the_in_process_runner_shows_what_a_fresh_process_would(monkeypatch):
+    """The tests' in-process runner: warnings on stderr where they are raised (a library's
+    DeprecationWarning hidden, as Python hides it), exit status of SystemExit as a process's."""
+    import warnings
+
+    import sindyship.cli
+
+    def warns(argv):
+        print("before", file=sys.stderr)
+        warnings.warn("shown", UserWarning, stacklevel=1)
+        warnings.warn("hidden", DeprecationWarning, stacklevel=1)
+        print("after", file=sys.stderr)
+        return 0
+
+    monkeypatch.setattr(sindyship.cli, "main", warns)
+    code, out, err = run_sindyship("fit")
+    assert code == 0 and out == ""
+    lines = err.splitlines()
+    assert lines[0] == "before" and "UserWarning: shown" in lines[1] and lines[-1] == "after"
+    assert "hidden" not in err
+    for status, expected in ((None, 0), ("refused", 1), (2, 2)):
+        def stops(argv, status=status):
+            raise SystemExit(status)
+
+        monkeypatch.setattr(sindyship.cli, "main", stops)
+        code, _, err = run_sindyship("fit")
+        assert code == expected and (status != "refused" or err == "refused\n")

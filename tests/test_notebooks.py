@@ -1,10 +1,15 @@
 """Every notebook in notebooks/ runs top to bottom on small data (SINDYSHIP_FAST=1).
 
-The notebooks run one after another in one Jupyter kernel, as a user's session would: before
-each, the kernel's namespace is cleared (``%reset -f``, so a notebook that forgets an import
-fails), its figures closed, matplotlib's settings restored and its working folder moved to a
-new temporary folder.  Starting a kernel and importing sindyship in it cost two seconds per
-notebook, more than most notebooks take on small data.
+The notebooks run one after another in one Jupyter kernel: starting a kernel and importing
+sindyship in it cost two seconds per notebook, more than most notebooks take on small data.
+Before each, the kernel is brought back to how it started, as far as a kernel can be without
+a restart: its namespace cleared (``%reset -f``: a notebook that forgets an import fails), the
+environment variables, ``sys.path`` and warning filters it started with restored, any module
+imported since from outside the installed packages (a generated simulator) forgotten, figures
+closed, matplotlib's settings restored, and its working folder a new temporary folder.  What
+stays is what imports leave in the installed packages' modules (a submodule already imported
+is an attribute of its package).  A notebook that fails or times out (its cell interrupted)
+restarts the kernel for the next.
 """
 
 from __future__ import annotations
@@ -16,73 +21,134 @@ import pytest
 
 NOTEBOOKS = sorted((Path(__file__).parents[1] / "notebooks").glob("*.py"))
 
-#: Run in the shared kernel before each notebook: a clean namespace in a folder of its own.
+#: Run once in a new kernel: what :data:`FRESH_START` brings it back to.
+SNAPSHOT = """\
+import os, sys, types, warnings
+import sindyship
+start = types.ModuleType("_notebook_test_start")
+start.environ, start.path = dict(os.environ), list(sys.path)
+start.filters, start.modules = list(warnings.filters), set(sys.modules)
+start.installed = (sys.prefix, sys.base_prefix, os.path.dirname(sindyship.__file__))
+sys.modules[start.__name__] = start
+"""
+
+#: Run in the shared kernel before each notebook, in a folder of its own.
 FRESH_START = """\
 %reset -f
-import os
-import matplotlib
-import matplotlib.pyplot
-matplotlib.pyplot.close("all")
-matplotlib.rcdefaults()
+import os, sys, warnings
+start = sys.modules["_notebook_test_start"]
+os.environ.clear()
+os.environ.update(start.environ)
+sys.path[:] = start.path
+warnings.resetwarnings()
+warnings.filters[:] = start.filters
+for name in set(sys.modules) - start.modules:
+    if not (getattr(sys.modules[name], "__file__", None) or start.installed[0]).startswith(
+            start.installed):
+        del sys.modules[name]
+if "matplotlib.pyplot" in sys.modules:
+    sys.modules["matplotlib.pyplot"].close("all")
+    sys.modules["matplotlib"].rc_file_defaults()
 os.chdir({folder!r})
 assert os.environ["SINDYSHIP_FAST"] == "1" and os.environ["MPLBACKEND"] == "Agg"
-del os, matplotlib
+del os, sys, warnings, start
 """
 
 
-@pytest.fixture(scope="module")
-def kernel():
-    """One python3 kernel for the notebooks of this module, shut down after them."""
-    pytest.importorskip("jupytext")
-    pytest.importorskip("nbclient")
-    from jupyter_client.manager import KernelManager
-
-    manager = KernelManager(kernel_name="python3")
-    manager.start_kernel(env={**os.environ, "SINDYSHIP_FAST": "1", "MPLBACKEND": "Agg"})
-    try:
-        yield manager
-    finally:
-        manager.shutdown_kernel(now=True)
-
-
-@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
-def test_notebook_runs(path, kernel, tmp_path):
-    import jupytext
+def _run(notebook, manager, timeout: float = 600) -> None:
+    """Execute ``notebook`` in the kernel of ``manager`` (a cell past ``timeout`` seconds is
+    interrupted), leaving the kernel running."""
     import nbclient
-    import nbformat
 
-    notebook = jupytext.read(path)
-    assert sum(cell.cell_type == "markdown" for cell in notebook.cells) >= 3
-    notebook.cells.insert(0, nbformat.v4.new_code_cell(FRESH_START.format(folder=str(tmp_path))))
-    client = nbclient.NotebookClient(notebook, km=kernel, timeout=600)
+    client = nbclient.NotebookClient(notebook, km=manager, timeout=timeout,
+                                     interrupt_on_timeout=True)
     try:
         client.execute()
     finally:
         if client.kc is not None:
             client.kc.stop_channels()
+
+
+class SharedKernel:
+    """A python3 kernel started with SINDYSHIP_FAST=1 and the snapshot taken."""
+
+    def __init__(self):
+        from jupyter_client.manager import KernelManager
+
+        self.manager = KernelManager(kernel_name="python3")
+        self.manager.start_kernel(env={**os.environ, "SINDYSHIP_FAST": "1",
+                                       "MPLBACKEND": "Agg"})
+        self._snapshot()
+
+    def _snapshot(self) -> None:
+        import nbformat
+
+        _run(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(SNAPSHOT)]),
+             self.manager)
+
+    def run(self, notebook, folder: Path, timeout: float = 600) -> None:
+        """``notebook`` from a fresh start in ``folder``; the kernel restarts if it fails."""
+        import nbformat
+
+        notebook.cells.insert(0, nbformat.v4.new_code_cell(FRESH_START.format(
+            folder=str(folder))))
+        try:
+            _run(notebook, self.manager, timeout)
+        except BaseException:
+            self.manager.restart_kernel(now=True)
+            self._snapshot()
+            raise
+
+    def shutdown(self) -> None:
+        self.manager.shutdown_kernel(now=True)
+
+
+@pytest.fixture(scope="module")
+def kernel():
+    """One kernel for the notebooks of this module, shut down after them."""
+    pytest.importorskip("jupytext")
+    pytest.importorskip("nbclient")
+    shared = SharedKernel()
+    try:
+        yield shared
+    finally:
+        shared.shutdown()
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_notebook_runs(path, kernel, tmp_path):
+    import jupytext
+
+    notebook = jupytext.read(path)
+    assert sum(cell.cell_type == "markdown" for cell in notebook.cells) >= 3
+    kernel.run(notebook, tmp_path)
     errors = [o for cell in notebook.cells if cell.cell_type == "code"
               for o in cell.get("outputs", []) if o.get("output_type") == "error"]
     assert not errors
 
 
-def test_a_notebook_that_uses_a_name_an_earlier_one_made_fails(kernel, tmp_path):
-    """The fresh start clears what an earlier notebook defined: sharing the kernel hides no
-    missing import."""
+def test_a_fresh_start_forgets_what_an_earlier_notebook_left(kernel, tmp_path):
+    """Names, environment variables, warning filters and generated modules of one notebook
+    are gone for the next; a failing notebook leaves a working kernel."""
     import nbclient
     import nbformat
 
-    first = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("import numpy as np")])
-    second = nbformat.v4.new_notebook(cells=[
-        nbformat.v4.new_code_cell(FRESH_START.format(folder=str(tmp_path))),
-        nbformat.v4.new_code_cell("np.zeros(3)")])
-    for notebook in (first, second):
-        client = nbclient.NotebookClient(notebook, km=kernel, timeout=60)
-        try:
-            if notebook is first:
-                client.execute()
-            else:
-                with pytest.raises(nbclient.exceptions.CellExecutionError, match="NameError"):
-                    client.execute()
-        finally:
-            if client.kc is not None:
-                client.kc.stop_channels()
+    made, later_folder = tmp_path / "made", tmp_path / "later"
+    made.mkdir()
+    later_folder.mkdir()
+    (made / "generated_here.py").write_text("VALUE = 1\n")
+    earlier = ["import numpy as np", "import os; os.environ['LEFT_BEHIND'] = '1'",
+               "import warnings; warnings.simplefilter('error')",
+               f"import sys; sys.path.insert(0, {str(made)!r}); import generated_here"]
+    kernel.run(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in earlier]),
+               made)
+    later = ["np.zeros(3)", "import os; assert 'LEFT_BEHIND' not in os.environ",
+             "import warnings; warnings.warn('only a warning')", "import generated_here"]
+    for cell, error in zip(later, ("NameError", None, None, "ModuleNotFoundError"),
+                           strict=True):
+        notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(cell)])
+        if error is None:
+            kernel.run(notebook, later_folder)
+        else:
+            with pytest.raises(nbclient.exceptions.CellExecutionError, match=error):
+                kernel.run(notebook, later_folder)

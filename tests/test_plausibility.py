@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -29,8 +28,6 @@ from sindyship.trials import (
     trim,
     underway_window,
 )
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def refusal(frame: pd.DataFrame, **options) -> str:
