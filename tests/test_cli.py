@@ -38,10 +38,11 @@ def test_the_parsers_optimizer_names_are_the_registrys():
 
 
 def test_help_and_simulate_answer_without_scikit_learn(tmp_path):
-    """The parser of a verb builds that verb's options alone: ``--help``, ``simulate`` and
-    reading a record import neither scikit-learn, pysindy, sympy nor scipy.integrate (seconds
-    of every command), and every verb's full help still lists the same options as the parser
-    of every verb."""
+    """The parser of a verb builds that verb's options alone: ``--help``, ``simulate``,
+    reading a record and a ``fit`` refused for its ship file import neither scikit-learn,
+    pysindy, sympy nor scipy.integrate (seconds of every command), and every verb's full help
+    still lists the same options as the parser of every verb."""
+    (tmp_path / "ship.toml").write_text("[particulars]\nL = -1\n")
     script = (
         "import sys\n"
         "from sindyship.cli import build_parser, _verb_of, main\n"
@@ -51,11 +52,14 @@ def test_help_and_simulate_answer_without_scikit_learn(tmp_path):
         "               '100', '--out', sys.argv[1]])\n"
         "from sindyship.measurements import read_csv\n"
         "read_csv(sys.argv[1])  # every check of a record runs\n"
+        "refused = main(['fit', sys.argv[1], '--ship', sys.argv[2], '--out', sys.argv[3]])\n"
         "heavy = ('sklearn', 'pysindy', 'sympy', 'scipy.integrate')\n"
-        "print(status, sorted(m for m in heavy if m in sys.modules))\n")
-    out = subprocess.run([sys.executable, "-c", script, str(tmp_path / "zz.csv")],
+        "print(status, refused, sorted(m for m in heavy if m in sys.modules))\n")
+    out = subprocess.run([sys.executable, "-c", script, str(tmp_path / "zz.csv"),
+                          str(tmp_path / "ship.toml"), str(tmp_path / "m.json")],
                          capture_output=True, text=True, check=True).stdout
-    assert out.strip().split("\n")[-1] == "0 []"
+    assert out.strip().split("\n")[-1] == "0 2 []"
+    assert not (tmp_path / "m.json").exists()
     assert (tmp_path / "zz.csv").exists()
     from sindyship.cli import VERBS, build_parser
 

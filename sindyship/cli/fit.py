@@ -110,16 +110,12 @@ def fit_inputs(args) -> list[str]:
             *split_names(args.effects)]
 
 
-def _defaults(args) -> None:
-    """The refinement's default, which depends on the optimizer (on for the prior fit).  The
-    library's default depends on the ship's speed form: :func:`resolved_library` once the
-    ship is loaded."""
-    if args.refine is None:
-        from ..refine import MAX_EVALUATIONS
-
-        args.refine = MAX_EVALUATIONS if args.optimizer == "prior" else 0
+def _check_refine_options(args) -> None:
+    """Refuse refinement options while the refinement is off (``--refine 0``, or by default
+    for any optimizer but the prior fit's)."""
+    refining = args.refine if args.refine is not None else args.optimizer == "prior"
     for option, value in (("--segment", args.segment), ("--refine-weight", args.refine_weight)):
-        if value is not None and not args.refine:
+        if value is not None and not refining:
             from ..errors import SindyshipInputError
 
             raise SindyshipInputError(f"{option} sets the refinement, which is off (--refine 0 "
@@ -129,16 +125,22 @@ def _defaults(args) -> None:
 
 def run(args) -> int:
     from .._io import check_output
-    from ..identify import fit
     from ..records import expand_paths
 
     args.data = expand_paths(args.data)
-    _defaults(args)
+    _check_refine_options(args)
     params = optimizer_params(args)
     check_output(args.out, inputs=fit_inputs(args), label=f"--out {args.out}",
                  suffixes=(".json",))
     check_inputs(fit_inputs(args))
     ship = load_cli_ship(args.ship)
+    # the fitting modules (scikit-learn among them) once the arguments, files and ship pass:
+    # a refusal comes in a fraction of a second
+    from ..identify import fit
+    from ..refine import MAX_EVALUATIONS
+
+    if args.refine is None:  # on for the prior fit
+        args.refine = MAX_EVALUATIONS if args.optimizer == "prior" else 0
     speed = speed_form(args, ship)
     args.library = resolved_library(args, speed)
     if args.stream or args.scheduler:
