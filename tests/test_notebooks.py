@@ -35,23 +35,25 @@ sys.modules[start.__name__] = start
 #: Run in the shared kernel before each notebook, in a folder of its own.
 FRESH_START = """\
 %reset -f
-import os, sys, warnings
-start = sys.modules["_notebook_test_start"]
-os.environ.clear()
-os.environ.update(start.environ)
-sys.path[:] = start.path
-warnings.resetwarnings()
-warnings.filters[:] = start.filters
-for name in set(sys.modules) - start.modules:
-    if not (getattr(sys.modules[name], "__file__", None) or start.installed[0]).startswith(
-            start.installed):
-        del sys.modules[name]
-if "matplotlib.pyplot" in sys.modules:
-    sys.modules["matplotlib.pyplot"].close("all")
-    sys.modules["matplotlib"].rc_file_defaults()
-os.chdir({folder!r})
-assert os.environ["SINDYSHIP_FAST"] == "1" and os.environ["MPLBACKEND"] == "Agg"
-del os, sys, warnings, start
+def _fresh_start(folder):
+    import os, sys, warnings
+    start = sys.modules["_notebook_test_start"]
+    os.environ.clear()
+    os.environ.update(start.environ)
+    sys.path[:] = start.path
+    warnings.resetwarnings()
+    warnings.filters[:] = start.filters
+    for name in set(sys.modules) - start.modules:
+        where = getattr(sys.modules[name], "__file__", None) or start.installed[0]
+        if not where.startswith(start.installed):
+            del sys.modules[name]
+    if "matplotlib.pyplot" in sys.modules:
+        sys.modules["matplotlib.pyplot"].close("all")
+        sys.modules["matplotlib"].rc_file_defaults()
+    os.chdir(folder)
+    assert os.environ["SINDYSHIP_FAST"] == "1" and os.environ["MPLBACKEND"] == "Agg"
+_fresh_start({folder!r})
+del _fresh_start
 """
 
 
@@ -142,7 +144,8 @@ def test_a_fresh_start_forgets_what_an_earlier_notebook_left(kernel, tmp_path):
                f"import sys; sys.path.insert(0, {str(made)!r}); import generated_here"]
     kernel.run(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in earlier]),
                made)
-    later = ["assert 'np' not in dir()", "import os; assert 'LEFT_BEHIND' not in os.environ",
+    later = ["assert {'np', 'name', 'os', 'sys', 'start'}.isdisjoint(dir())",
+             "import os; assert 'LEFT_BEHIND' not in os.environ",
              "import warnings; warnings.warn('only a warning')",
              "import sys; assert 'generated_here' not in sys.modules and "
              f"{str(made)!r} not in sys.path"]
