@@ -470,9 +470,10 @@ def test_cmd_export_writes_latex_and_python(model, tmp_path, capsys):
     assert summary["active_terms"] == {"X": 15, "Y": 22, "N": 22}
     assert r"\begin{align}" in tex.read_text() and r"\toprule" in tex.read_text()
     assert "-0.00226510" not in tex.read_text() and "-0.0022651" in tex.read_text()
+    # the two files and nothing else (before importing sim.py writes its byte code there)
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["eqs.tex", "sim.py"]
     sim = load_module(py.read_text(), py)
     assert sim.COEFFICIENTS["N_uv"] == model.coefficients["N"]["du v"]
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["eqs.tex", "sim.py"]
     assert export_verb.run(_args(str(saved))) == 0
     printed = capsys.readouterr().out.splitlines()
     assert [line for line in printed if line.startswith("X: ")][0].startswith(
