@@ -37,7 +37,7 @@ def test_the_parsers_optimizer_names_are_the_registrys():
     assert sorted(OPTIMIZER_NAMES) == sorted(OPTIMIZERS)
 
 
-def test_help_and_simulate_answer_without_scikit_learn(tmp_path):
+def test_help_simulate_a_read_record_and_a_refused_fit_import_no_scikit_learn(tmp_path):
     """The parser of a verb builds that verb's options alone: ``--help``, ``simulate``,
     reading a record and a ``fit`` refused for its ship file import neither scikit-learn,
     pysindy, sympy nor scipy.integrate (seconds of every command), and every verb's full help
