@@ -71,7 +71,8 @@ def _expanded(words: list[str]) -> list[str]:
     """Words with their ``*`` patterns expanded as bash does (sorted; kept when none match)."""
     out = []
     for word in words:
-        out.extend(sorted(glob.glob(word)) if "*" in word and glob.glob(word) else [word])
+        matches = sorted(glob.glob(word)) if "*" in word else []
+        out.extend(matches or [word])
     return out
 
 
