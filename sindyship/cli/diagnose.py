@@ -35,7 +35,7 @@ SUMMARY = "show where a fitted model fails and which effect is missing"
 
 
 def add_parser(sub) -> None:
-    from ..diagnose import MEANINGFUL_SHARE
+    from ..diagnosis_thresholds import MEANINGFUL_SHARE
 
     p = sub.add_parser(
         "diagnose",
@@ -88,8 +88,6 @@ def _write_folder(out: Path, result, iterative, text: str, document: dict, progr
 def run(args) -> int:
     """Run ``sindyship diagnose``; text report on stdout, or one JSON document with --json."""
     from .._io import check_output, output_folder
-    from ..diagnose import diagnose, diagnose_iteratively
-    from ..identify import check_term_values, resolve_library
     from ..library import load_effect, names_a_file
     from ..records import expand_paths
     from ._common import load_cli_ship
@@ -105,6 +103,11 @@ def run(args) -> int:
                                      ship=ship, skip_checks=args.skip_check,
                                      time_range=args.time_range)
     check_simulation_cost(ship, max(record.duration for record in records + test))
+    # the diagnosis (scikit-learn with it) once the arguments, files and ship pass: a refusal
+    # comes in a fraction of a second
+    from ..diagnose import diagnose, diagnose_iteratively
+    from ..identify import check_term_values, resolve_library
+
     library = resolve_library(args.library, split_names(args.effects), speed_form(args, ship))
     # the terms of the user's own effect files, checked on the records before the long work
     # (an effect whose channels the records lack is reported untestable by the diagnosis)

@@ -24,7 +24,7 @@ SUMMARY = "discover a missing effect that no catalogue lists"
 
 
 def add_parser(sub) -> None:
-    from ..diagnose import MEANINGFUL_SHARE
+    from ..diagnosis_thresholds import MEANINGFUL_SHARE
 
     p = sub.add_parser(
         "discover",
@@ -55,7 +55,6 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     """Run ``sindyship discover``; text report on stdout, or one JSON document with --json."""
     from .._io import check_output, write_text_atomic
-    from ..diagnose import discover
     from ..records import expand_paths
     from ._common import load_cli_ship
 
@@ -69,6 +68,9 @@ def run(args) -> int:
                            time_range=args.time_range)
     with on_cluster(args.scheduler, args.n_jobs) as n_jobs:
         progress(f"sindyship discover: {len(records)} records, library {args.library}")
+        # the search (scikit-learn with it) once the arguments, files and ship pass: a refusal
+        # comes in a fraction of a second
+        from ..diagnose import discover
         from ..identify import resolve_library
 
         found = discover(records, ship, library=resolve_library(args.library, (),

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import pandas as pd
 
 from .._io import clean_json
+from ..diagnosis_thresholds import CONFIRMING_RATIO
 from ..evaluation import compare_flights, error_summary
 from ..identify import Design, design, fit, resolve_library
 from ..library import (
@@ -18,9 +19,9 @@ from ..library import (
 )
 from ..model import AbkowitzModel
 from ..optimizers import one_blas_thread
+from ..reports import SETS
 from ..ships import Ship
 from ..trajectory import Trajectory
-from ._constants import CONFIRMING_RATIO, SETS
 from ._flights import _fly_many
 
 

@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 
 from ..evaluation import error_summary
 from ..model import AbkowitzModel
+from ..reports import SETS
 from ..trajectory import Trajectory
-from ._constants import SETS
 from ._flights import fly_model
 
 

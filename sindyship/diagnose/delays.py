@@ -9,10 +9,10 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..diagnosis_thresholds import BOOTSTRAP
 from ..library import DOFS, SPEED_FACTOR, TermLibrary, record_variables
 from ..optimizers import GroupedProblem
 from ..ships import Ship
-from ._constants import BOOTSTRAP
 
 __all__ = ["DELAY_MAX", "DELAY_RANGE", "DELAY_STEP", "delay_interval", "search_delay"]
 

@@ -10,6 +10,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._io import clean_json
+from ..diagnosis_thresholds import (
+    COLLINEAR_VIF,
+    FLIGHT_OVERRIDE_RATIO,
+    MEANINGFUL_SHARE,
+    NOISE_CAP,
+    NOISE_VISIBLE,
+    UNEXPLAINED_SHARE,
+)
 from ..errors import SindyshipInputError
 from ..identify import Design, design, resolve_library
 from ..library import (
@@ -19,20 +27,12 @@ from ..library import (
 )
 from ..model import AbkowitzModel
 from ..optimizers import one_blas_thread
+from ..reports import DOF_NAMES
 from ..ships import Ship
 from ..smoothing import SmoothingSetting, resolve_smoothing, smooth_records
 from ..stability import Stability, straight_run_stability
 from ..trajectory import Trajectory
 from ..uncertainty import library_conditioning
-from ._constants import (
-    COLLINEAR_VIF,
-    DOF_NAMES,
-    FLIGHT_OVERRIDE_RATIO,
-    MEANINGFUL_SHARE,
-    NOISE_CAP,
-    NOISE_VISIBLE,
-    UNEXPLAINED_SHARE,
-)
 from ._flights import _fly_many
 from .before_after import BeforeAfter, _change_rows, _fit
 from .compare import ManoeuvreComparison, compare

@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._io import clean_json
+from ..diagnosis_thresholds import MEANINGFUL_SHARE
 from ..identify import design, resolve_library
 from ..library import DOFS, Effect, TermLibrary
 from ..optimizers import ForwardSelection, GroupedProblem, one_blas_thread
@@ -54,7 +55,6 @@ from ..ships import Ship
 from ..smoothing import resolve_smoothing, smooth_records
 from ..terms import SHAPE_KINDS
 from ..trajectory import Trajectory
-from ._constants import MEANINGFUL_SHARE
 from ._words import _hint, _physics, _title, _toml_string
 from .candidates import Family, families, family_columns, unnamed_channels
 from .contest import FlightContest, flight_contest

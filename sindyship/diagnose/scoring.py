@@ -8,14 +8,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._io import clean_json
+from ..diagnosis_thresholds import BOOTSTRAP, NOISE_CAP, SIGNIFICANCE
 from ..library import (
     DOFS,
     Effect,
 )
 from ..optimizers import GroupedProblem
+from ..reports import DOF_NAMES
 from ..terms import describe_variable
 from ..trajectory import Trajectory
-from ._constants import BOOTSTRAP, DOF_NAMES, NOISE_CAP, SIGNIFICANCE
 from .before_after import BeforeAfter
 from .residuals import STATE_BINS, Residuals, _bin_index, _bin_labels
 

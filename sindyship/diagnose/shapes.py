@@ -36,9 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..diagnosis_thresholds import BOOTSTRAP
 from ..library import DOFS
 from ..terms import Term, parse_shape, shape_name, shape_values
-from ._constants import BOOTSTRAP
 from .candidates import Family, family_columns
 
 #: The library terms each kind of shape multiplies, per equation ("1": the shape alone).

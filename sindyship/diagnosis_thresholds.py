@@ -1,8 +1,11 @@
-"""Thresholds and names shared by the diagnosis modules."""
+"""Thresholds of the diagnosis (:mod:`sindyship.diagnose`), shared with its command line.
+
+A module of numbers alone, outside the diagnosis package, so that the parsers of
+``sindyship diagnose`` and ``sindyship discover`` show the defaults without importing the
+diagnosis (and scikit-learn with it): a refused command answers at once.
+"""
 
 from __future__ import annotations
-
-from ..reports import DOF_NAMES, SETS
 
 __all__ = [
     "BOOTSTRAP",
@@ -12,9 +15,7 @@ __all__ = [
     "COLLINEAR_VIF",
     "CONFIRMING_RATIO",
     "FLIGHT_OVERRIDE_RATIO",
-    "DOF_NAMES",
     "MEANINGFUL_SHARE",
-    "SETS",
     "UNEXPLAINED_SHARE",
 ]
 
