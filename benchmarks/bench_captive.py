@@ -24,7 +24,18 @@ yardstick, never a workflow.
 On the zig-zags, ``ls refined`` and ``prior 1e-05 refined`` are those fits refined by the
 error of their training flights (:func:`sindyship.refine.refine`, the zig-zags flown closed
 loop; at most ``reproduce.REFINE_EVALUATIONS`` flights): whether a refinement keeps the
-prior's forces while it fixes its flights.
+prior's forces while it fixes its flights.  Two more fits there say what limits the turns:
+
+- ``prior 1e-05 + rudder inflow`` (and ``... refined``): the library with the even sway and
+  yaw terms ``abs(v)`` and ``abs(r)`` of a rudder whose inflow is straightened differently on
+  the two sides (the KCS's gamma_R is 0.492 and 0.338; the Abkowitz series is odd in v and
+  r and cannot express it);
+- ``prior 1e-05 bound``: the prior fit on the zig-zags *and the held-out records*, a bound on
+  what the library expresses, never a workflow.
+
+A turning circle of the protocol lasts 3200 s, ten turns and more, so its mean distance
+grows with the error of its steady yaw rate: every row reports that error (the mean r' over
+the last quarter of each held-out turn, flown against recorded, in per cent).
 
 Prints the tables and saves ``benchmarks/results/captive.json``.  Run with
 ``python benchmarks/bench_captive.py`` (about a minute).
@@ -36,6 +47,8 @@ import json
 import time
 from pathlib import Path
 
+import numpy as np
+
 from sindyship._io import clean_json, write_text_atomic
 from sindyship.evaluation import distance_errors
 from sindyship.flights import fly_like_batch
@@ -46,6 +59,7 @@ from sindyship.identify import (
     resolve_library,
     straight_run_stable,
 )
+from sindyship.library import Effect
 from sindyship.manoeuvres import fly, protocol_manoeuvres
 from sindyship.mmg import MMGModel
 from sindyship.optimizers import PriorRidge
@@ -66,6 +80,13 @@ OUT = Path(__file__).parent / "results" / "captive.json"
 STRENGTHS = (1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
 #: The strengths of the fits with the MMG's Taylor coefficients as the prior (the yardstick).
 TAYLOR_STRENGTHS = (1e-5, 1e-4)
+#: A rudder whose inflow is straightened differently on the two sides: even terms in v and r.
+RUDDER_INFLOW = Effect("rudder_inflow", "Side-dependent rudder inflow",
+                       "The flow straightening gamma_R differs with the sign of the drift angle "
+                       "at the rudder, so the sway force and yaw moment have a part even in v "
+                       "and r.", (), {"Y": ["abs(v)", "abs(r)"], "N": ["abs(v)", "abs(r)"]})
+#: The share of a held-out turn, from its end, over which its steady yaw rate is taken.
+STEADY_SHARE = 0.25
 
 
 def taylor_prior_fit(ship, library, problems, strength: float):
@@ -89,6 +110,18 @@ def taylor_prior_fit(ship, library, problems, strength: float):
     return straight_run_stable(fitted_with(strength), fitted_with)
 
 
+def steady_yaw_rate_error(flown, record) -> float | None:
+    """Per cent by which a flown turning circle's steady yaw rate (the mean over its last
+    :data:`STEADY_SHARE`) misses the recorded one; None for another manoeuvre or a diverged
+    flight."""
+    if record.meta.get("manoeuvre") != "turning-circle" or \
+            flown.meta.get("diverged_at") is not None:
+        return None
+    start = int((1.0 - STEADY_SHARE) * len(record.t))
+    return 100.0 * (float(np.mean(flown["r"][start:])) / float(np.mean(record["r"][start:]))
+                    - 1.0)
+
+
 def evaluate(model, test, ship) -> dict:
     """Captive agreement per test, held-out flights and stability of one model."""
     flown = fly_like_batch(model.dynamics(), test)
@@ -96,6 +129,9 @@ def evaluate(model, test, ship) -> dict:
         "captive": captive_agreement({"model": model}, ship)["model"],
         "held_out": {r.name: distance_errors(f, r, ship.L) for f, r in zip(flown, test,
                                                                             strict=True)},
+        "steady_yaw_rate_error_pct": {r.name: steady_yaw_rate_error(f, r)
+                                      for f, r in zip(flown, test, strict=True)
+                                      if r.meta.get("manoeuvre") == "turning-circle"},
         "straight_run": model.info.get("straight_run"),
         "straight_run_stable": straight_run_stability(model).stable,
         "strength": model.optimizer["params"].get("strength"),
@@ -131,8 +167,17 @@ def run() -> dict:
         for strength in TAYLOR_STRENGTHS:
             rows[f"prior {strength:.0e} taylor"] = evaluate(
                 taylor_prior_fit(ship, library, problems, strength), test, ship)
-        if name == "zigzags":  # each fit refined by the error of its training flights
-            for key in ("ls", f"prior {default:.0e}"):
+        if name == "zigzags":
+            prior = f"prior {default:.0e}"
+            fitted[f"{prior} + rudder inflow"] = fit(records, ship,
+                                                   library=library.extended(RUDDER_INFLOW),
+                                                   optimizer="prior")
+            rows[f"{prior} + rudder inflow"] = evaluate(fitted[f"{prior} + rudder inflow"],
+                                                        test, ship)
+            rows[f"{prior} bound"] = evaluate(fit(records + test, ship, library=library,
+                                                optimizer="prior"), test, ship)
+            # each fit refined by the error of its training flights
+            for key in ("ls", prior, f"{prior} + rudder inflow"):
                 refined = refine(fitted[key], records, max_evaluations=REFINE_EVALUATIONS)
                 rows[f"{key} refined"] = {**evaluate(refined, test, ship),
                                           "refinement": refined.info["refined"]}
@@ -148,14 +193,16 @@ def format_table(result: dict) -> str:
         lines.append(f"Identified on {name} ({', '.join(data['training'])}); captive "
                      "correlation X Y N per test; held-out mean distance [L]")
         head = "  ".join(f"{t:>16s}" for t in result["tests"])
-        lines.append(f"{'fit':22s}{head}   tc15_port tc15_stbd  zz10_10")
+        lines.append(f"{'fit':36s}{head}   tc15_port tc15_stbd  zz10_10  steady r' [%]")
         for fit_name, row in data["fits"].items():
             cells = "  ".join(" ".join(f"{row['captive'][t][f]['correlation']:+.2f}"
                                        for f in "XYN") + " " for t in result["tests"])
             flights = "  ".join(
                 f"{'diverged':>9s}" if e["diverged_at_s"] is not None
                 else f"{e['mean_distance_L']:9.3f}" for e in row["held_out"].values())
-            lines.append(f"{fit_name:22s}{cells}  {flights}")
+            steady = " ".join("-" if e is None else f"{e:+.2f}"
+                              for e in row["steady_yaw_rate_error_pct"].values())
+            lines.append(f"{fit_name:36s}{cells}  {flights}  {steady}")
         lines.append("")
     return "\n".join(lines)
 
