@@ -306,8 +306,7 @@ def _servo_rate(delta, command, servo):
     """The servo's rudder rate [rad/s] (paper eq. 12-13): ``servo`` = (T [s], rate limit
     [rad/s], largest angle [rad])."""
     time_constant, rate_max, delta_max = servo
-    target = min(max(command, -delta_max), delta_max)
-    return min(max((target - delta) / time_constant, -rate_max), rate_max)
+    return _servo_slope(delta, min(max(command, -delta_max), delta_max), time_constant, rate_max)
 
 
 def _servo_slope(value, target, time_constant, rate_max):
