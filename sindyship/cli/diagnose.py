@@ -35,7 +35,7 @@ SUMMARY = "show where a fitted model fails and which effect is missing"
 
 
 def add_parser(sub) -> None:
-    from ..diagnosis_thresholds import MEANINGFUL_SHARE
+    from .._diagnosis_thresholds import MEANINGFUL_SHARE
 
     p = sub.add_parser(
         "diagnose",
@@ -103,9 +103,6 @@ def run(args) -> int:
                                      ship=ship, skip_checks=args.skip_check,
                                      time_range=args.time_range)
     check_simulation_cost(ship, max(record.duration for record in records + test))
-    # the diagnosis (scikit-learn with it) once the arguments, files and ship pass: a refusal
-    # comes in a fraction of a second
-    from ..diagnose import diagnose, diagnose_iteratively
     from ..identify import check_term_values, resolve_library
 
     library = resolve_library(args.library, split_names(args.effects), speed_form(args, ship))
@@ -116,6 +113,10 @@ def run(args) -> int:
     if testable:
         check_term_values(library.extended(*testable), records + test, ship,
                           rudder_signal=args.rudder_signal)
+    # the diagnosis (scikit-learn with it) once the files, ship, library and effect files
+    # pass: their refusals come in a fraction of a second
+    from ..diagnose import diagnose, diagnose_iteratively
+
     if args.optimizer == "prior":
         report_prior_coverage(ship, library)
     options = {

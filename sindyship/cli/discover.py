@@ -24,7 +24,7 @@ SUMMARY = "discover a missing effect that no catalogue lists"
 
 
 def add_parser(sub) -> None:
-    from ..diagnosis_thresholds import MEANINGFUL_SHARE
+    from .._diagnosis_thresholds import MEANINGFUL_SHARE
 
     p = sub.add_parser(
         "discover",
@@ -66,15 +66,16 @@ def run(args) -> int:
     ship = load_cli_ship(args.ship)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
+    from ..identify import resolve_library
+
+    library = resolve_library(args.library, (), speed_form(args, ship))
+    # the search (scikit-learn with it) once the files, ship and library pass: their refusals
+    # come in a fraction of a second, before any cluster starts
+    from ..diagnose import discover
+
     with on_cluster(args.scheduler, args.n_jobs) as n_jobs:
         progress(f"sindyship discover: {len(records)} records, library {args.library}")
-        # the search (scikit-learn with it) once the arguments, files and ship pass: a refusal
-        # comes in a fraction of a second
-        from ..diagnose import discover
-        from ..identify import resolve_library
-
-        found = discover(records, ship, library=resolve_library(args.library, (),
-                                                                speed_form(args, ship)),
+        found = discover(records, ship, library=library,
                          effects=split_names(args.effects), rudder_signal=args.rudder_signal,
                          derivative=args.derivative, window=args.window,
                          smoothing=None if args.smoothing == "none" else args.smoothing,

@@ -134,27 +134,29 @@ def run(args) -> int:
                  suffixes=(".json",))
     check_inputs(fit_inputs(args))
     ship = load_cli_ship(args.ship)
-    # the fitting modules (scikit-learn among them) once the arguments, files and ship pass:
-    # a refusal comes in a fraction of a second
-    from ..identify import fit
+    from ..identify import fit, resolve_library
+
+    speed = speed_form(args, ship)
+    args.library = resolved_library(args, speed)
+    effects = split_names(args.effects)
+    library = resolve_library(args.library, effects, speed)
+    # the refinement's modules (scikit-learn among them) once the arguments, files, ship,
+    # library and effects pass: their refusals come in a fraction of a second
     from ..refine import MAX_EVALUATIONS
 
     if args.refine is None:  # on for the prior fit
         args.refine = MAX_EVALUATIONS if args.optimizer == "prior" else 0
-    speed = speed_form(args, ship)
-    args.library = resolved_library(args, speed)
     if args.stream or args.scheduler:
         return _run_streamed(args, ship, params, speed)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
-    effects = split_names(args.effects)
     smoothing = _smoothing(args, records, ship, effects, params, speed)
     if smoothing is not None:
         from ..smoothing import smooth_records
 
         progress(f"smoothing: {smoothing.as_dict()}")
         records = smooth_records(records, smoothing)
-    model = fit(records, ship, library=args.library, effects=effects, optimizer=args.optimizer,
+    model = fit(records, ship, library=library, optimizer=args.optimizer,
                 params=params, rudder_signal=args.rudder_signal, derivative=args.derivative,
                 window=args.window, speed=speed)
     if smoothing is not None:

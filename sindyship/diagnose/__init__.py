@@ -61,7 +61,7 @@ True
 
 from __future__ import annotations
 
-from ..diagnosis_thresholds import CONFIRMING_RATIO, MEANINGFUL_SHARE
+from .._diagnosis_thresholds import CONFIRMING_RATIO, MEANINGFUL_SHARE
 from ._flights import fly_model
 from .before_after import BeforeAfter, before_after
 from .compare import ManoeuvreComparison, compare

@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
+from .._diagnosis_thresholds import CONFIRMING_RATIO
 from .._io import clean_json
-from ..diagnosis_thresholds import CONFIRMING_RATIO
 from ..evaluation import compare_flights, error_summary
 from ..identify import Design, design, fit, resolve_library
 from ..library import (

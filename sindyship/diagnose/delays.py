@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..diagnosis_thresholds import BOOTSTRAP
+from .._diagnosis_thresholds import BOOTSTRAP
 from ..library import DOFS, SPEED_FACTOR, TermLibrary, record_variables
 from ..optimizers import GroupedProblem
 from ..ships import Ship

@@ -9,8 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._io import clean_json
-from ..diagnosis_thresholds import (
+from .._diagnosis_thresholds import (
     COLLINEAR_VIF,
     FLIGHT_OVERRIDE_RATIO,
     MEANINGFUL_SHARE,
@@ -18,6 +17,7 @@ from ..diagnosis_thresholds import (
     NOISE_VISIBLE,
     UNEXPLAINED_SHARE,
 )
+from .._io import clean_json
 from ..errors import SindyshipInputError
 from ..identify import Design, design, resolve_library
 from ..library import (

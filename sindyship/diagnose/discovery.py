@@ -45,8 +45,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._diagnosis_thresholds import MEANINGFUL_SHARE
 from .._io import clean_json
-from ..diagnosis_thresholds import MEANINGFUL_SHARE
 from ..identify import design, resolve_library
 from ..library import DOFS, Effect, TermLibrary
 from ..optimizers import ForwardSelection, GroupedProblem, one_blas_thread

@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._diagnosis_thresholds import BOOTSTRAP, NOISE_CAP, SIGNIFICANCE
 from .._io import clean_json
-from ..diagnosis_thresholds import BOOTSTRAP, NOISE_CAP, SIGNIFICANCE
 from ..library import (
     DOFS,
     Effect,

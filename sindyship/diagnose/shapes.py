@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..diagnosis_thresholds import BOOTSTRAP
+from .._diagnosis_thresholds import BOOTSTRAP
 from ..library import DOFS
 from ..terms import Term, parse_shape, shape_name, shape_values
 from .candidates import Family, family_columns
