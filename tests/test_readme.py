@@ -36,8 +36,8 @@ def test_the_readme_blocks_are_what_the_saved_numbers_render_to():
 
 
 def test_the_saved_numbers_of_the_benchmarks_are_the_benchmarks_own():
-    """The README's speed and campaign figures come from what the benchmarks saved, so a rerun
-    of a benchmark without ``make_readme.py`` fails here."""
+    """The README's speed, campaign and zig-zag captive figures come from what the benchmarks
+    saved, so a rerun of a benchmark without ``make_readme.py`` fails here."""
     script = _script()
     for key, saved in (("speed", script._saved_speed), ("campaign", script._saved_campaign),
                        ("captive_bench", script._saved_captive_bench)):
