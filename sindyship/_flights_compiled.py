@@ -40,7 +40,7 @@ from ._flight_tables import (
     model_tables,
 )
 from ._forces_compiled import COMPILED
-from .simulation import RecordedZigZag, SimulationResult, ZigZagCommand, diverged
+from .simulation import SimulationResult, ZigZagCommand, diverged
 
 try:  # optional: pip install "sindyship[fast]"
     import numba
@@ -519,7 +519,8 @@ def fly(parts, integ, commands, t, state0, h_max, check_divergence, on_step=None
     out_cmd = np.full((n_out, n_members), np.nan)
     out[:, 0, :] = y
     out_cmd[0] = [c.value(t[0], y[:, j]) for j, c in enumerate(commands)]
-    loop = (np.array([getattr(c, "_sign", 1) for c in commands], dtype=np.int64),  # as reset
+    loop = (np.array([c.sign if isinstance(c, ZigZagCommand) else 1 for c in commands],
+                     dtype=np.int64),  # as reset
             np.zeros(n_members, dtype=np.int64), y[5].copy(), model_of)
     diverged_at = np.full(n_members, np.nan)
     active = np.ones(n_members, dtype=bool)
@@ -540,9 +541,7 @@ def fly(parts, integ, commands, t, state0, h_max, check_divergence, on_step=None
                 on_step(flown)
     for j, cmd in enumerate(commands):  # the zig-zags' last leg, as the kernel leaves them
         if isinstance(cmd, ZigZagCommand):
-            cmd._sign = int(loop[0][j])
-        if isinstance(cmd, RecordedZigZag):
-            cmd._leg = int(loop[1][j])
+            cmd.end_on(int(loop[0][j]), int(loop[1][j]))
     return [SimulationResult(t=t.copy(), states=out[:, :, j], delta_c=out_cmd[:, j],
                              diverged_at=None if np.isnan(diverged_at[j])
                              else float(diverged_at[j])) for j in range(n_members)]

@@ -70,14 +70,22 @@ def _commands(record: Trajectory):
             PrescribedRudder(record.t, record["delta"])]
 
 
+def _zigzag_legs(commands) -> list[tuple[int, float]]:
+    """Each zig-zag command's side and rudder angle: the leg it is on."""
+    return [(c.sign, c.value(0.0, None)) for c in commands if isinstance(c, ZigZagCommand)]
+
+
 def _both(dynamics, commands, t, state0, step=None, check=True):
-    """The kernel's flights and the compiled loop's, of the same batch."""
+    """The kernel's flights and the compiled loop's, of the same batch; the loop leaves every
+    zig-zag command on the leg the kernel left it on."""
     h = default_step(dynamics.ship) if step is None else step
     reference = integrate(integrator_for(dynamics, commands), commands, t, state0, h, check,
                           dynamics.ship.L, dynamics.ship.U0)
+    legs = _zigzag_legs(commands)
     compiled = dynamics.fly_compiled(integrator_for(dynamics, commands), commands, t, state0,
                                      h, check, None)
     assert compiled is not None  # the loop flew them
+    assert _zigzag_legs(commands) == legs
     return reference, compiled
 
 

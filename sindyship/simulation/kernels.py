@@ -114,6 +114,16 @@ class ZigZagCommand(RudderCommand):
     def on_event(self):
         self._sign = -self._sign
 
+    @property
+    def sign(self) -> int:
+        """+1 while the rudder is to starboard, -1 while it is to port."""
+        return self._sign
+
+    def end_on(self, sign: int, reversals: int) -> None:
+        """Leave the command on the leg a flight flown outside it ended on (the compiled
+        loop's): the rudder to ``sign`` after ``reversals`` reversals."""
+        self._sign = sign
+
 
 class FeedbackCommand(RudderCommand):
     """A command from a function ``f(t, state) -> angle [rad]``, held over each integration step."""

@@ -39,3 +39,7 @@ class RecordedZigZag(ZigZagCommand):
     def on_event(self):
         super().on_event()
         self._leg += 1
+
+    def end_on(self, sign: int, reversals: int) -> None:
+        super().end_on(sign, reversals)
+        self._leg = reversals
