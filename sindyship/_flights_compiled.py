@@ -40,7 +40,7 @@ from ._flight_tables import (
     model_tables,
 )
 from ._forces_compiled import COMPILED
-from .simulation import SimulationResult, ZigZagCommand, diverged
+from .simulation import RecordedZigZag, SimulationResult, ZigZagCommand, diverged
 
 try:  # optional: pip install "sindyship[fast]"
     import numba
@@ -541,7 +541,9 @@ def fly(parts, integ, commands, t, state0, h_max, check_divergence, on_step=None
                 on_step(flown)
     for j, cmd in enumerate(commands):  # the zig-zags' last leg, as the kernel leaves them
         if isinstance(cmd, ZigZagCommand):
-            cmd.end_on(int(loop[0][j]), int(loop[1][j]))
+            cmd.sign = int(loop[0][j])
+        if isinstance(cmd, RecordedZigZag):
+            cmd.leg = int(loop[1][j])
     return [SimulationResult(t=t.copy(), states=out[:, :, j], delta_c=out_cmd[:, j],
                              diverged_at=None if np.isnan(diverged_at[j])
                              else float(diverged_at[j])) for j in range(n_members)]

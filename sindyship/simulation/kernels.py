@@ -98,31 +98,21 @@ class ZigZagCommand(RudderCommand):
         self.rudder = rudder
         self.check = check
         self.first_sign = first_sign
-        self._sign = 1
+        self.sign = 1  # the leg flown: +1 while the rudder is to starboard, -1 to port
         self._psi0 = 0.0
 
     def reset(self, state0):
-        self._sign = 1 if self.first_sign >= 0 else -1
+        self.sign = 1 if self.first_sign >= 0 else -1
         self._psi0 = float(state0[5])
 
     def value(self, t, state):
-        return self._sign * self.rudder
+        return self.sign * self.rudder
 
     def event(self, state):
-        return self._sign * (state[5] - self._psi0) - self.check
+        return self.sign * (state[5] - self._psi0) - self.check
 
     def on_event(self):
-        self._sign = -self._sign
-
-    @property
-    def sign(self) -> int:
-        """+1 while the rudder is to starboard, -1 while it is to port."""
-        return self._sign
-
-    def end_on(self, sign: int, reversals: int) -> None:
-        """Leave the command on the leg a flight flown outside it ended on (the compiled
-        loop's): the rudder to ``sign`` after ``reversals`` reversals."""
-        self._sign = sign
+        self.sign = -self.sign
 
 
 class FeedbackCommand(RudderCommand):

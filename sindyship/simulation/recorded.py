@@ -25,21 +25,18 @@ class RecordedZigZag(ZigZagCommand):
                  levels: tuple[float, ...] = ()):
         super().__init__(rudder, check, first_sign)
         self.levels = tuple(levels)
-        self._leg = 0
+        self.leg = 0  # the leg flown: the reversals so far
 
     def reset(self, state0):
         super().reset(state0)
-        self._leg = 0
+        self.leg = 0
 
     def value(self, t, state):
         if not self.levels:
             return super().value(t, state)
-        return self._sign * self.levels[min(self._leg, len(self.levels) - 1)]
+        return self.sign * self.levels[min(self.leg, len(self.levels) - 1)]
 
     def on_event(self):
         super().on_event()
-        self._leg += 1
+        self.leg += 1
 
-    def end_on(self, sign: int, reversals: int) -> None:
-        super().end_on(sign, reversals)
-        self._leg = reversals
