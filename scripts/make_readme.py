@@ -577,21 +577,20 @@ def _campaign(n: dict) -> str:
             + f". Held out ({' / '.join(names)}), the default fit flies {flights('default')} "
             "ship lengths without an effect")
     if named:
-        alone = [f"{flights('default + ' + e)} with `{e}` alone" for e in named
-                 if f"default + {e}" in work]
-        steps = []
-        for k in range(2, len(named)):  # the named effects added one by one
-            key = "default + " + " + ".join(named[:k])
-            if key in work:
-                steps.append(f"{flights(key)} with {listed(named[:k])}")
+        def added(effects) -> str:  # the campaign's key of the default fit with effects
+            return " + ".join(["default", *effects])
+
+        alone = [f"{flights(added([e]))} with `{e}` alone" for e in named if added([e]) in work]
+        steps = [f"{flights(added(named[:k]))} with {listed(named[:k])}"  # one by one
+                 for k in range(2, len(named)) if added(named[:k]) in work]
         recommended = work[result["recommended"]]
         text += (", " + ", ".join(alone) + ("; added in the order named, " + ", ".join(steps)
                                            if steps else "")
                  + f", and {flights(result['recommended'])} with all of them (geometric mean "
                  f"{recommended['geometric_mean_L']:.3f} L).")
         order = [("default", "without an effect")] + [
-            ("default + " + " + ".join(named[:k]), f"with {listed(named[:k])}")
-            for k in range(1, len(named) + 1) if "default + " + " + ".join(named[:k]) in work]
+            (added(named[:k]), f"with {listed(named[:k])}")
+            for k in range(1, len(named) + 1) if added(named[:k]) in work]
         text += (" In the order named the geometric mean goes "
                  + ", ".join(f"{work[key]['geometric_mean_L']:.3f} L {words}"
                              for key, words in order) + ".")
