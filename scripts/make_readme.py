@@ -235,8 +235,8 @@ def _table10(n: dict) -> str:
         if row["effects"]:
             label += " + " + " + ".join(f"`{e}`" for e in row["effects"]) + " (diagnosed)"
         if row.get("refined"):
-            label = ("the default fit: " + label + ", refined by its training flights "
-                     "(recommended)")
+            label = (label + ", refined by its training flights: the default `fit` with the "
+                     "diagnosed effect (recommended)")
         paper = {} if row["effects"] else n["paper_table_10"].get(row["method"], {})
         cells = []
         for name in TEST_NAMES:
@@ -446,7 +446,8 @@ def _captive(n: dict) -> str:
             diagnosed: captive[diagnosed]}
     for key in captive:
         if key.endswith("+refined"):
-            rows[f"{key[:-len('+refined')]}, refined (the default fit)"] = captive[key]
+            rows[f"{key[:-len('+refined')]}, refined (the default `fit` with the diagnosed "
+                 "effect)"] = captive[key]
     lines = ["| model | " + " | ".join(CAPTIVE_LABELS.values()) + " |",
              "|---|" + "---|" * len(CAPTIVE_LABELS)]
     lines += [f"| {label} | " + " | ".join(_correlations(row)) + " |"
@@ -465,20 +466,28 @@ def _captive(n: dict) -> str:
         def flights(row):
             return " / ".join(f"{e['mean_distance_L']:.3f}" for e in row["held_out"].values())
 
-        lines += ["", "Identified on the three zig-zags alone (`benchmarks/bench_captive.py`), "
-                  f"the lowest Y or N correlation over static drift, pure yaw and drift and yaw "
-                  f"is {low(ls):+.2f} for least squares and {low(prior):+.2f} for `prior`; "
-                  f"their held-out flights are {flights(ls)} and {flights(prior)} ship lengths. "
-                  "With the MMG's own Taylor coefficients in place of the estimates (the same "
-                  "fit otherwise; a yardstick that uses the simulator's coefficients) it flies "
-                  f"{flights(zz[TAYLOR_FITS[0]])} at the same strength and "
-                  f"{flights(zz[TAYLOR_FITS[1]])} at 1e-4 (lowest X, Y or N correlation "
-                  f"{min(low(zz[k], 'XYN') for k in TAYLOR_FITS):+.2f}): the estimates from "
-                  "main dimensions are not accurate enough for the turns by themselves. "
+        taylor = [zz[k] for k in TAYLOR_FITS]
+        ls_kept = ls_refined.get("refinement", {}).get("largest_change") is not None
+        lines += ["", "Identified on the three zig-zags alone (`benchmarks/bench_captive.py`; "
+                  "held-out mean distances tc15_port / tc15_stbd / zz10_10 in ship lengths, and "
+                  "the lowest correlation over static drift, pure yaw and drift and yaw), least "
+                  f"squares flies {flights(ls)} with a lowest Y or N correlation of "
+                  f"{low(ls):+.2f}, and the `prior` fit {flights(prior)} with {low(prior):+.2f} "
+                  f"in Y and N ({low(prior, 'XYN'):+.2f} with X). With the MMG's own Taylor "
+                  "coefficients as the prior's means (the same fit otherwise; a yardstick that "
+                  "uses the simulator's coefficients) it flies "
+                  f"{flights(taylor[0])} at the default prior strength, "
+                  f"{bench['default_strength']:.0e}".replace("e-0", "e-")
+                  + f", and {flights(taylor[1])} at 1e-4 (lowest "
+                  f"X, Y or N correlation {low(taylor[0], 'XYN'):+.2f} and "
+                  f"{low(taylor[1], 'XYN'):+.2f}): exact means leave the turns far off too, so "
+                  "the zig-zags, not the estimates from main dimensions, limit them. "
                   + _refined_on_zigzags(prior_refined, flights(prior_refined),
                                         low(prior_refined, "XYN"))
-                  + f" Least squares refined the same way flies {flights(ls_refined)} (lowest "
-                  f"Y or N correlation {low(ls_refined):+.2f})."
+                  + " Least squares refined the same way "
+                  + ("keeps the refinement and" if ls_kept else "is refused and")
+                  + f" flies {flights(ls_refined)} (lowest Y or N correlation "
+                  f"{low(ls_refined):+.2f})."
                   + _what_limits_the_turns(zz, prior, f"prior {bench['default_strength']:.0e}",
                                            bench["held_out_turns"], flights, low)]
     return "\n".join(lines)
@@ -501,18 +510,21 @@ def _what_limits_the_turns(zz: dict, prior: dict, key: str, turns: dict, flights
                 if error is not None]
     return (f" A held-out turning circle lasts 3200 s, {min(turns.values()):.1f} to "
             f"{max(turns.values()):.1f} turns, so its mean distance grows with the error of its "
-            "steady yaw rate (the mean yaw rate over its last quarter): "
+            "steady yaw rate (the flown over the recorded mean yaw rate of its last quarter, "
+            "minus one: negative where the model turns too slowly): "
             f"{steady(prior)} for the `prior` fit; over these fits the mean distance is "
-            f"{min(per_cent):.1f} to {max(per_cent):.1f} L per per cent of that error. Fitted on "
-            "the zig-zags and the held-out records themselves (a reference, not a workflow), "
-            f"the `prior` fit flies {flights(reference)} ({steady(reference)}; lowest X, Y or N "
-            f"correlation {low(reference, 'XYN'):+.2f}): the three zig-zags, which never hold a "
-            "steady turn, leave the yaw rate a few per cent free. With the even sway and yaw "
-            "terms `abs(v)` and `abs(r)` of the catalogue's `asymmetry` alone, those of a "
-            "rudder whose inflow is straightened differently on the two sides, as the KCS's is "
-            "(gamma_R 0.492 turning to starboard, 0.338 to port; the Abkowitz series is odd in "
-            f"v and r), the `prior` fit flies {flights(inflow)} ({steady(inflow)}), and refined "
-            f"by its zig-zag flights {flights(refined)} ({steady(refined)}; lowest X, Y or N "
+            f"{min(per_cent):.1f} to {max(per_cent):.1f} L per per cent of that error. The same "
+            "`prior` fit made on the zig-zags and the held-out records together (a check of "
+            f"what the library can express, not a workflow) flies {flights(reference)} "
+            f"({steady(reference)}; lowest X, Y or N correlation "
+            f"{low(reference, 'XYN'):+.2f}): the three zig-zags, which never hold a steady "
+            "turn, leave the yaw rate a few per cent free. With two terms more in the sway force "
+            "and the yaw moment, `abs(v)` and `abs(r)` from the catalogue's `asymmetry` (the "
+            "even terms of a rudder whose inflow is straightened differently on the two sides, "
+            "as the KCS's is: its gamma_R is 0.492 or 0.338 by the sign of the drift angle at "
+            "the rudder, which the Abkowitz series, odd in v and r, cannot express), the "
+            f"`prior` fit flies {flights(inflow)} ({steady(inflow)}), and refined by its "
+            f"zig-zag flights {flights(refined)} ({steady(refined)}; lowest X, Y or N "
             f"correlation {low(refined, 'XYN'):+.2f}).")
 
 
@@ -545,8 +557,8 @@ def _pysindy(n: dict) -> str:
              if "sindyship_prior" in work else "")
     return (f"Held-out mean distance ({' / '.join(names)}): pysindy {errors('pysindy')}, "
             f"sindyship least squares {errors('sindyship_ls')}, sindyship least squares "
-            f"diagnosed {errors('sindyship_diagnosed')}{prior}, and the default fit (the "
-            f"prior with the first diagnosed effect, refined by its training flights) "
+            f"diagnosed {errors('sindyship_diagnosed')}{prior}, and the default `fit` with "
+            f"the first diagnosed effect (the prior, refined by its training flights) "
             f"{errors('sindyship_refined')} ship lengths: the recommended workflow is better "
             f"than pysindy on {len(wins)} of {len(names)} ({', '.join(wins)}).")
 

@@ -150,6 +150,21 @@ def test_table_10_rows_are_pinned(method, kcs, protocol_runs):
         assert errors[name]["completed"]
 
 
+def test_the_default_fit_on_the_paper_records_keeps_the_prior_row(kcs, protocol_runs):
+    """The first hour: on the paper's records the default fit's last check refuses its
+    refinement (refined on half of the records, it flies the other half worse), so
+    ``evaluate`` shows the table's ``prior`` row."""
+    from sindyship.identify import fit, recommended_library
+    from sindyship.refine import refine
+
+    model = fit(protocol_runs["train"], kcs, optimizer="prior",
+                library=recommended_library("design"))
+    refined = refine(model, protocol_runs["train"])
+    report = refined.info["refined"]
+    assert report["refused_validation"] and report["validation"]["ratio"] > 1.0
+    assert refined.coefficients == model.coefficients
+
+
 def test_the_diagnosed_rows_are_pinned(kcs, protocol_runs):
     from sindyship.evaluation import evaluate
     from sindyship.identify import fit
