@@ -71,7 +71,8 @@ from .stability import straight_run_stability
 from .targets import DOFS
 from .trajectory import Trajectory
 
-__all__ = ["DIVERGED_RESIDUAL", "PRIOR_WEIGHT", "SEGMENT_TIMES", "default_segments", "refine"]
+__all__ = ["DIVERGED_RESIDUAL", "PRIOR_WEIGHT", "SEGMENT_TIMES", "default_segments",
+           "force_change", "refine"]
 
 #: The residual of every channel at a sample after a segment diverged (non-dimensional: ten
 #: ship lengths of position, ten times the design speed).
@@ -319,6 +320,7 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
         "largest_change": None if largest is None else {
             "coefficient": f"{keys[largest][0]}[{keys[largest][1]}]",
             "relative": float(p[largest])},
+        "force_change": None if largest is None else force_change(model, candidate, records),
         "straight_run_stable": stable,
         "refused_unstable": refused_unstable,
         "refused_turning": turns,
@@ -528,20 +530,42 @@ def _fly_chunk(payload, segments, weights, slots, sensitivities):
                         sensitivities=sensitivities)
 
 
+def _design(model, records) -> dict:
+    """The regression problems of eq. 16 on ``records``, made as the model's fit made them."""
+    from .identify import design
+
+    return design(records, model.ship, model.library, rudder_signal=model.rudder_signal,
+                  derivative=model.info.get("derivative", "five-point"),
+                  window=model.info.get("window_s") or 21.0)
+
+
+def force_change(fitted: AbkowitzModel, refined: AbkowitzModel, records) -> dict:
+    """How far the refinement moved each equation's force: the root mean square over the
+    records of the force the coefficients' changes add, over that of the measured force (the
+    target of eq. 16), e.g. ``{"X": 0.012, "Y": 0.034, "N": 0.05}``.  Unlike a coefficient's
+    relative change, it stays small where a small term, or collinear terms against each
+    other, move far."""
+    out = {}
+    for dof, problem in _design(fitted, records).items():
+        change = np.array([refined.coefficients[dof][t] - fitted.coefficients[dof][t]
+                           for t in problem.terms])
+        added = problem.features @ change
+        out[dof] = float(np.sqrt(np.mean(added ** 2))
+                         / max(np.sqrt(np.mean(problem.target ** 2)), 1e-300))
+    return out
+
+
 def _penalty_rows(model, records) -> dict:
     """Per degree of freedom, the fit's own objective as rows: the force error of eq. 16 and,
     for a ``prior`` fit, its prior; ``(lhs, rhs, ||y||, [(key index, column)], fixed
     coefficients, the objective's part no row reaches over ||y||^2)``."""
-    from .identify import design
     from .optimizers import PriorRidge
 
     info = model.info
     prior = model.optimizer.get("name") == "prior" and "prior" in info
     strength = info.get("straight_run", {}).get(
         "strength", model.optimizer["params"].get("strength")) if prior else 0.0
-    problems = design(records, model.ship, model.library, rudder_signal=model.rudder_signal,
-                      derivative=info.get("derivative", "five-point"),
-                      window=info.get("window_s") or 21.0)
+    problems = _design(model, records)
     keys = active_keys(model)
     out = {}
     for dof in DOFS:

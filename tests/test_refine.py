@@ -262,6 +262,15 @@ def test_refinement_recovers_a_spoiled_coefficient(kcs):
     assert report["method"] == "multiple shooting" and report["segments"] == 4 * 3
     assert report["flight_rms_after"] < 1e-3 * report["flight_rms_before"]
     assert abs(refined.coefficients["N"]["r"] / truth.coefficients["N"]["r"] - 1.0) < 0.005
+    # the forces moved: the yaw moment by the spoiled term's force, the others hardly
+    from sindyship.identify import design
+
+    yaw = design(records, kcs, spoiled.library)["N"]
+    column = yaw.features[:, list(yaw.terms).index("r")]
+    spoil = 0.3 * abs(truth.coefficients["N"]["r"]) * np.sqrt(np.mean(column ** 2)) \
+        / np.sqrt(np.mean(yaw.target ** 2))
+    assert report["force_change"]["N"] == pytest.approx(spoil, rel=0.05)
+    assert max(report["force_change"]["X"], report["force_change"]["Y"]) < 0.1 * spoil
     # only non-zero coefficients move; the library and the optimizer stay
     assert refined.library is spoiled.library
     assert refined.optimizer == spoiled.optimizer

@@ -199,12 +199,14 @@ def _refined(model, records, args, n_jobs=1):
                  "their flights pulled terms they do not pin down (add turning circles to the "
                  "records, or fly the fitted model).")
     elif done["cost_after"] < done["cost_before"]:
-        change = done["largest_change"]
+        change, moved = done["largest_change"], done["force_change"]
         progress(f"refined: flight error (rms over the compared samples) "
                  f"{done['flight_rms_before']:.4g} -> {done['flight_rms_after']:.4g} in "
                  f"{done['evaluations']} evaluations and {done['jacobians']} Jacobians "
-                 f"({done['stopped']}); {change['coefficient']} moved most "
-                 f"({change['relative']:+.1%}).")
+                 f"({done['stopped']}); the forces moved by "
+                 + ", ".join(f"{share:.1%} ({dof})" for dof, share in moved.items())
+                 + f" of their rms over the records ({change['coefficient']} moved most for "
+                 f"its size, {change['relative']:+.1%}).")
     else:
         progress(f"not refined: no step lowered the error ({done['cost_before']:.4g}); the "
                  "fitted coefficients are kept.")
