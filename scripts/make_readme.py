@@ -293,7 +293,7 @@ def _linear(n: dict) -> str:
     after = ", ".join(f"{row[k]:.0f} with {k[3:].replace('+', ' and ')}" for k in keys)
     refined = next((k for k in row if k.endswith("+refined")), None)
     default = ("" if refined is None else
-               f" The default fit (the prior with {refined[6:-8].replace('+', ' and ')}, "
+               f" The default `fit` with {refined[6:-8].replace('+', ' and ')} (the prior, "
                f"refined by the training flights) has {row[refined]:.0f}, the `prior` fit "
                f"alone {row['prior']:.0f}.")
     return (f"N'_v (x 1e-5) is {row['MMG_Taylor']:.0f} in the MMG's own Taylor expansion, "
@@ -467,27 +467,27 @@ def _captive(n: dict) -> str:
             return " / ".join(f"{e['mean_distance_L']:.3f}" for e in row["held_out"].values())
 
         taylor = [zz[k] for k in TAYLOR_FITS]
+        strength = f"{bench['default_strength']:.0e}".replace("e-0", "e-")
         ls_kept = ls_refined.get("refinement", {}).get("largest_change") is not None
         lines += ["", "Identified on the three zig-zags alone (`benchmarks/bench_captive.py`; "
                   "held-out mean distances tc15_port / tc15_stbd / zz10_10 in ship lengths, and "
                   "the lowest correlation over static drift, pure yaw and drift and yaw), least "
-                  f"squares flies {flights(ls)} with a lowest Y or N correlation of "
-                  f"{low(ls):+.2f}, and the `prior` fit {flights(prior)} with {low(prior):+.2f} "
-                  f"in Y and N ({low(prior, 'XYN'):+.2f} with X). With the MMG's own Taylor "
-                  "coefficients as the prior's means (the same fit otherwise; a yardstick that "
-                  "uses the simulator's coefficients) it flies "
-                  f"{flights(taylor[0])} at the default prior strength, "
-                  f"{bench['default_strength']:.0e}".replace("e-0", "e-")
-                  + f", and {flights(taylor[1])} at 1e-4 (lowest "
-                  f"X, Y or N correlation {low(taylor[0], 'XYN'):+.2f} and "
+                  f"squares (on the paper's library `abkowitz`) flies {flights(ls)} with a lowest "
+                  f"Y or N correlation of {low(ls):+.2f}, and the `prior` fit (on "
+                  f"`abkowitz-vr`) {flights(prior)} with {low(prior):+.2f} in Y and N "
+                  f"({low(prior, 'XYN'):+.2f} with X). With the MMG's own Taylor coefficients "
+                  "as the prior's means (the same fit otherwise; a yardstick that uses the "
+                  f"simulator's coefficients) it flies {flights(taylor[0])} at the default "
+                  f"prior strength, {strength}, and {flights(taylor[1])} at 1e-4 (lowest X, Y or "
+                  f"N correlation {low(taylor[0], 'XYN'):+.2f} and "
                   f"{low(taylor[1], 'XYN'):+.2f}): exact means leave the turns far off too, so "
-                  "the zig-zags, not the estimates from main dimensions, limit them. "
+                  "better estimates from main dimensions alone do not fix them. "
                   + _refined_on_zigzags(prior_refined, flights(prior_refined),
                                         low(prior_refined, "XYN"))
                   + " Least squares refined the same way "
-                  + ("keeps the refinement and" if ls_kept else "is refused and")
-                  + f" flies {flights(ls_refined)} (lowest Y or N correlation "
-                  f"{low(ls_refined):+.2f})."
+                  + ("keeps the refinement and" if ls_kept else "keeps its fitted coefficients and")
+                  + f" flies {flights(ls_refined)} (fitted: {flights(ls)}; lowest Y or N "
+                  f"correlation {low(ls_refined):+.2f})."
                   + _what_limits_the_turns(zz, prior, f"prior {bench['default_strength']:.0e}",
                                            bench["held_out_turns"], flights, low)]
     return "\n".join(lines)
@@ -510,16 +510,16 @@ def _what_limits_the_turns(zz: dict, prior: dict, key: str, turns: dict, flights
                 if error is not None]
     return (f" A held-out turning circle lasts 3200 s, {min(turns.values()):.1f} to "
             f"{max(turns.values()):.1f} turns, so its mean distance grows with the error of its "
-            "steady yaw rate (the flown over the recorded mean yaw rate of its last quarter, "
-            "minus one: negative where the model turns too slowly): "
+            "steady yaw rate (flown / recorded - 1 of the mean yaw rate over its last "
+            "quarter; negative where the model turns too slowly): "
             f"{steady(prior)} for the `prior` fit; over these fits the mean distance is "
             f"{min(per_cent):.1f} to {max(per_cent):.1f} L per per cent of that error. The same "
             "`prior` fit made on the zig-zags and the held-out records together (a check of "
             f"what the library can express, not a workflow) flies {flights(reference)} "
             f"({steady(reference)}; lowest X, Y or N correlation "
             f"{low(reference, 'XYN'):+.2f}): the three zig-zags, which never hold a steady "
-            "turn, leave the yaw rate a few per cent free. With two terms more in the sway force "
-            "and the yaw moment, `abs(v)` and `abs(r)` from the catalogue's `asymmetry` (the "
+            "turn, leave the yaw rate a few per cent free. With two terms more in each of the sway "
+            "force and the yaw moment, `abs(v)` and `abs(r)` from the catalogue's `asymmetry` (the "
             "even terms of a rudder whose inflow is straightened differently on the two sides, "
             "as the KCS's is: its gamma_R is 0.492 or 0.338 by the sign of the drift angle at "
             "the rudder, which the Abkowitz series, odd in v and r, cannot express), the "

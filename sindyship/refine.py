@@ -223,7 +223,8 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
         cost (half the sum of squared residuals, flights and penalty) before and after, the
         flight error alone (root mean square over the compared samples) before and after, the
         evaluations and Jacobians used, why the search stopped and whether it converged, the
-        coefficient that moved most, whether the refined model is stable in straight running
+        coefficient that moved most for its size, how far each equation's force moved
+        (:func:`force_change`), whether the refined model is stable in straight running
         (:func:`sindyship.stability.straight_run_stability`) and whether a refinement was
         refused for making a stable ``prior`` fit unstable, or an unstable one more unstable
         (a disturbance doubling more than :data:`INSTABILITY_MARGIN` times as fast;
@@ -542,16 +543,21 @@ def _design(model, records) -> dict:
 def force_change(fitted: AbkowitzModel, refined: AbkowitzModel, records) -> dict:
     """How far the refinement moved each equation's force: the root mean square over the
     records of the force the coefficients' changes add, over that of the measured force (the
-    target of eq. 16), e.g. ``{"X": 0.012, "Y": 0.034, "N": 0.05}``.  Unlike a coefficient's
-    relative change, it stays small where a small term, or collinear terms against each
-    other, move far."""
+    target of eq. 16), e.g. ``{"X": 0.012, "Y": 0.034, "N": 0.05}``; None for an equation
+    whose records hold almost no force (under a thousandth of the rms of the fit's largest
+    term, as on a straight run, where the terms balance).  Unlike a coefficient's relative
+    change, it stays small where a small term, or collinear terms against each other, move
+    far."""
+    def rms(values) -> float:
+        return float(np.sqrt(np.mean(np.square(values), axis=0)).max())
+
     out = {}
     for dof, problem in _design(fitted, records).items():
-        change = np.array([refined.coefficients[dof][t] - fitted.coefficients[dof][t]
-                           for t in problem.terms])
-        added = problem.features @ change
-        out[dof] = float(np.sqrt(np.mean(added ** 2))
-                         / max(np.sqrt(np.mean(problem.target ** 2)), 1e-300))
+        before = np.array([fitted.coefficients[dof][t] for t in problem.terms])
+        change = np.array([refined.coefficients[dof][t] for t in problem.terms]) - before
+        measured = rms(problem.target)
+        out[dof] = (rms(problem.features @ change) / measured
+                    if measured > 1e-3 * rms(problem.features * before) else None)
     return out
 
 

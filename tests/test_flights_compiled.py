@@ -70,9 +70,11 @@ def _commands(record: Trajectory):
             PrescribedRudder(record.t, record["delta"])]
 
 
-def _zigzag_legs(commands) -> list[tuple[int, float]]:
-    """Each zig-zag command's side and rudder angle: the leg it is on."""
-    return [(c.sign, c.value(0.0, None)) for c in commands if isinstance(c, ZigZagCommand)]
+def _zigzag_legs(commands) -> list[tuple]:
+    """Each zig-zag command's side, reversals so far (a recorded zig-zag's) and rudder angle:
+    the leg it is on."""
+    return [(c.sign, getattr(c, "leg", None), c.value(0.0, None)) for c in commands
+            if isinstance(c, ZigZagCommand)]
 
 
 def _both(dynamics, commands, t, state0, step=None, check=True):

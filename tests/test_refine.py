@@ -277,6 +277,23 @@ def test_refinement_recovers_a_spoiled_coefficient(kcs):
     assert json.loads(json.dumps(refined.to_dict()))["info"]["refined"]["cost_after"] >= 0
 
 
+def test_the_force_change_is_a_share_of_the_measured_force_and_none_without_one(
+        runs, fitted, kcs):
+    """Every coefficient 1 % larger moves each force by about 1 % of the measured one (the
+    fit's error apart); on a straight run, with no sway force or yaw moment to measure, the
+    share of those is None instead of a division by almost nothing."""
+    from sindyship.refine import force_change
+
+    larger = _with(fitted, {(dof, term): 1.01 * value
+                            for dof, terms in fitted.coefficients.items()
+                            for term, value in terms.items()})
+    shares = force_change(fitted, larger, runs)
+    assert all(0.008 < shares[dof] < 0.012 for dof in "XYN"), shares
+    straight = fly(MMGModel(kcs), [Manoeuvre("straight", rudder=0, duration=200)])
+    on_straight = force_change(fitted, larger, straight)
+    assert on_straight["Y"] is None and on_straight["N"] is None
+
+
 def test_a_model_whose_flights_diverge_still_gets_a_gradient(runs, fitted, kcs):
     """Whole flights of a yaw-unstable model diverge; every segment starts from a measured
     state and holds its last state in range once it diverges, so the error still falls."""

@@ -204,7 +204,8 @@ def _refined(model, records, args, n_jobs=1):
                  f"{done['flight_rms_before']:.4g} -> {done['flight_rms_after']:.4g} in "
                  f"{done['evaluations']} evaluations and {done['jacobians']} Jacobians "
                  f"({done['stopped']}); the forces moved by "
-                 + ", ".join(f"{share:.1%} ({dof})" for dof, share in moved.items())
+                 + ", ".join(("n/a" if share is None else f"{share:.1%}") + f" ({dof})"
+                             for dof, share in moved.items())
                  + f" of their rms over the records ({change['coefficient']} moved most for "
                  f"its size, {change['relative']:+.1%}).")
     else:
