@@ -119,12 +119,15 @@ def rudder_inflow() -> Effect:
                    for dof in ("Y", "N")})
 
 
+def is_turning_circle(record) -> bool:
+    return record.meta.get("manoeuvre") == "turning-circle"
+
+
 def steady_yaw_rate_error(flown, record) -> float | None:
     """Per cent by which a flown turning circle's steady yaw rate r (its mean over the last
     :data:`STEADY_SHARE` of the record) misses the recorded one; None for another manoeuvre
     or a diverged flight."""
-    if record.meta.get("manoeuvre") != "turning-circle" or \
-            flown.meta.get("diverged_at") is not None:
+    if not is_turning_circle(record) or flown.meta.get("diverged_at") is not None:
         return None
     start = int((1.0 - STEADY_SHARE) * len(record.t))
     return 100.0 * (float(np.mean(flown["r"][start:])) / float(np.mean(record["r"][start:]))
@@ -140,7 +143,7 @@ def evaluate(model, test, ship) -> dict:
                                                                             strict=True)},
         "steady_yaw_rate_error_pct": {r.name: steady_yaw_rate_error(f, r)
                                       for f, r in zip(flown, test, strict=True)
-                                      if r.meta.get("manoeuvre") == "turning-circle"},
+                                      if is_turning_circle(r)},
         "straight_run": model.info.get("straight_run"),
         "straight_run_stable": straight_run_stability(model).stable,
         "strength": model.optimizer["params"].get("strength"),
@@ -184,7 +187,7 @@ def run() -> dict:
             rows[f"{prior} with the held-out records"] = evaluate(
                 fit(records + test, ship, library=library, optimizer="prior"), test, ship)
             out["held_out_turns"] = {r.name: float(abs(r["psi"][-1] - r["psi"][0]) / (2 * np.pi))
-                                     for r in test if r.meta.get("manoeuvre") == "turning-circle"}
+                                     for r in test if is_turning_circle(r)}
             # each fit refined by the error of its training flights
             for key in ("ls", prior, inflow):
                 refined = refine(fitted[key], records, max_evaluations=REFINE_EVALUATIONS)

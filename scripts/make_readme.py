@@ -488,13 +488,12 @@ def _captive(n: dict) -> str:
                   + ("keeps the refinement and" if ls_kept else "keeps its fitted coefficients and")
                   + f" flies {flights(ls_refined)} (fitted: {flights(ls)}; lowest Y or N "
                   f"correlation {low(ls_refined):+.2f})."
-                  + _what_limits_the_turns(zz, prior, f"prior {bench['default_strength']:.0e}",
+                  + _what_limits_the_turns(zz, f"prior {bench['default_strength']:.0e}",
                                            bench["held_out_turns"], flights, low)]
     return "\n".join(lines)
 
 
-def _what_limits_the_turns(zz: dict, prior: dict, key: str, turns: dict, flights,
-                           low) -> str:
+def _what_limits_the_turns(zz: dict, key: str, turns: dict, flights, low) -> str:
     """Why the zig-zags alone fly the held-out turns as they do: the steady yaw rate, the
     reference fitted on the turns too, and the rudder's side-dependent inflow."""
     def steady(row):
@@ -512,7 +511,7 @@ def _what_limits_the_turns(zz: dict, prior: dict, key: str, turns: dict, flights
             f"{max(turns.values()):.1f} turns, so its mean distance grows with the error of its "
             "steady yaw rate (flown / recorded - 1 of the mean yaw rate over its last "
             "quarter; negative where the model turns too slowly): "
-            f"{steady(prior)} for the `prior` fit; over these fits the mean distance is "
+            f"{steady(zz[key])} for the `prior` fit; over these fits the mean distance is "
             f"{min(per_cent):.1f} to {max(per_cent):.1f} L per per cent of that error. The same "
             "`prior` fit made on the zig-zags and the held-out records together (a check of "
             f"what the library can express, not a workflow) flies {flights(reference)} "

@@ -56,6 +56,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .errors import SindyshipInputError
+from .identify import design
 from .levenberg_marquardt import levenberg_marquardt
 from .model import AbkowitzModel
 from .optimizers import one_blas_thread
@@ -274,7 +275,8 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
     """The refinement itself (:func:`refine` without its validation); ``progress`` begins
     the line each accepted step writes on stderr (None: silent)."""
     stages = _stages(model.ship, records, segment_s)
-    penalty = _penalty_rows(model, records) if prior_weight > 0 else None
+    problems = _design(model, records)  # the penalty's and the report's design
+    penalty = _penalty_rows(model, problems) if prior_weight > 0 else None
     p, done, evaluations, jacobians, problem = _search_stages(
         model, records, stages, penalty, max_evaluations, prior_weight, progress, n_jobs)
     last = done[-1]
@@ -321,7 +323,8 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
         "largest_change": None if largest is None else {
             "coefficient": f"{keys[largest][0]}[{keys[largest][1]}]",
             "relative": float(p[largest])},
-        "force_change": None if largest is None else force_change(model, candidate, records),
+        "force_change": None if largest is None else force_change(model, candidate, records,
+                                                                  problems=problems),
         "straight_run_stable": stable,
         "refused_unstable": refused_unstable,
         "refused_turning": turns,
@@ -533,26 +536,24 @@ def _fly_chunk(payload, segments, weights, slots, sensitivities):
 
 def _design(model, records) -> dict:
     """The regression problems of eq. 16 on ``records``, made as the model's fit made them."""
-    from .identify import design
-
     return design(records, model.ship, model.library, rudder_signal=model.rudder_signal,
                   derivative=model.info.get("derivative", "five-point"),
                   window=model.info.get("window_s") or 21.0)
 
 
-def force_change(fitted: AbkowitzModel, refined: AbkowitzModel, records) -> dict:
-    """How far the refinement moved each equation's force: the root mean square over the
-    records of the force the coefficients' changes add, over that of the measured force (the
-    target of eq. 16), e.g. ``{"X": 0.012, "Y": 0.034, "N": 0.05}``; None for an equation
-    whose records hold almost no force (under a thousandth of the rms of the fit's largest
-    term, as on a straight run, where the terms balance).  Unlike a coefficient's relative
-    change, it stays small where a small term, or collinear terms against each other, move
-    far."""
+def force_change(fitted: AbkowitzModel, refined: AbkowitzModel, records, *,
+                 problems: dict | None = None) -> dict:
+    """How far the refinement moved each equation's force: the rms over the records (their
+    design, ``problems``, when at hand) of the force the coefficients' changes add, over the
+    measured force's (eq. 16's target), e.g. ``{"X": 0.012, "Y": 0.034, "N": 0.05}``; None
+    where the records hold almost no force (under a thousandth of the rms of the fit's
+    largest term, as on a straight run).  Unlike a coefficient's relative change, it stays
+    small where a small term, or collinear terms against each other, move far."""
     def rms(values) -> float:
         return float(np.sqrt(np.mean(np.square(values), axis=0)).max())
 
     out = {}
-    for dof, problem in _design(fitted, records).items():
+    for dof, problem in (problems or _design(fitted, records)).items():
         before = np.array([fitted.coefficients[dof][t] for t in problem.terms])
         change = np.array([refined.coefficients[dof][t] for t in problem.terms]) - before
         measured = rms(problem.target)
@@ -561,17 +562,16 @@ def force_change(fitted: AbkowitzModel, refined: AbkowitzModel, records) -> dict
     return out
 
 
-def _penalty_rows(model, records) -> dict:
-    """Per degree of freedom, the fit's own objective as rows: the force error of eq. 16 and,
-    for a ``prior`` fit, its prior; ``(lhs, rhs, ||y||, [(key index, column)], fixed
-    coefficients, the objective's part no row reaches over ||y||^2)``."""
+def _penalty_rows(model, problems) -> dict:
+    """Per degree of freedom, the fit's own objective as rows on its design ``problems``: the
+    force error of eq. 16 and, for a ``prior`` fit, its prior; ``(lhs, rhs, ||y||, [(key
+    index, column)], fixed coefficients, the objective's part no row reaches over ||y||^2)``."""
     from .optimizers import PriorRidge
 
     info = model.info
     prior = model.optimizer.get("name") == "prior" and "prior" in info
     strength = info.get("straight_run", {}).get(
         "strength", model.optimizer["params"].get("strength")) if prior else 0.0
-    problems = _design(model, records)
     keys = active_keys(model)
     out = {}
     for dof in DOFS:

@@ -168,8 +168,8 @@ def run(args) -> int:
     progress(f"wrote {args.out}: {model!r}")
     state = model.info.get("straight_run")  # a raised prior strength is the fit's strength
     fitted_params = params if state is None else {**params, "strength": state["strength"]}
-    report = None if args.no_identifiability else _identifiability(args, records, ship, effects,
-                                                                   fitted_params, speed)
+    report = None if args.no_identifiability else _identifiability(args, records, ship, library,
+                                                                   fitted_params)
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
               "library": model.library.name, "speed": model.library.speed,
@@ -282,17 +282,16 @@ def report_prior_fit(model) -> None:
                  f"identifiability report names{larger}).")
 
 
-def _identifiability(args, records, ship, effects, params, speed):
-    """Terms the records cannot separate, on stderr (the remedies need the ship's MMG)."""
+def _identifiability(args, records, ship, library, params):
+    """Terms the records cannot separate, on stderr (the remedies need the ship's MMG), for
+    the fit's library (its effects included, in its speed form)."""
     if len(records) < 2:
         return None
     from ..identifiability import identifiability
-    from ..identify import resolve_library
 
     # the members draw their own seeds (uncertainty.ensemble); the strength is the fit's
     members = {k: v for k, v in params.items() if k != "random_state"}
-    report = identifiability(records, ship, library=resolve_library(args.library, effects,
-                                                                    speed), effects=(),
+    report = identifiability(records, ship, library=library, effects=(),
                              optimizer=args.optimizer, params=members,
                              rudder_signal=args.rudder_signal,
                              remedies=ship.has_mmg)
