@@ -19,12 +19,17 @@ from .ships import Ship, load_ship
 from .trajectory import Trajectory
 
 __all__ = ["as_records", "as_ship", "check_distinct_names", "check_motion", "check_scale",
-           "positive_number"]
+           "check_two_records", "positive_number"]
 
 #: Channels a record needs finite in every sample to be fitted or flown against.
 MOTION_CHANNELS = ("t", "u", "v", "r", "x", "y", "psi")
 #: A record whose speed peaks above this many design speeds belongs to another ship (or scale).
 MAX_SPEED_RATIO = 3.0
+#: Why a verb that leaves one manoeuvre out needs two training records or more.
+LEAVE_ONE_OUT = {
+    "diagnose": "effects are scored by leave-one-manoeuvre-out cross-validation",
+    "discover": "findings are judged leaving one manoeuvre out",
+}
 
 
 def as_ship(ship, name: str = "ship") -> Ship:
@@ -98,6 +103,22 @@ def check_distinct_names(records) -> None:
     names = [r.name for r in records]
     if len(set(names)) != len(names):
         raise SindyshipInputError("two records share a name; give each file a distinct name.")
+
+
+def check_two_records(records, verb: str) -> None:
+    """At least two training records for ``verb`` (a key of :data:`LEAVE_ONE_OUT`), which
+    leaves one manoeuvre out.
+
+    Examples
+    --------
+    >>> check_two_records(["zz20"], "discover")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: discover needs at least two training records: ...
+    """
+    if len(records) < 2:
+        raise SindyshipInputError(
+            f"{verb} needs at least two training records: {LEAVE_ONE_OUT[verb]}.")
 
 
 def check_motion(records, name: str = "records") -> None:

@@ -40,9 +40,10 @@ def test_the_parsers_optimizer_names_are_the_registrys():
 def test_help_simulate_a_read_record_and_refused_fits_import_no_scikit_learn(tmp_path):
     """The parser of a verb builds that verb's options alone: ``--help``, ``simulate``,
     reading a record and a ``fit``, ``diagnose`` or ``discover`` refused for its ship file
-    or library import neither scikit-learn, pysindy, sympy nor scipy.integrate (seconds of every
-    command), and every verb's full help still lists the same options as the parser of every
-    verb."""
+    or library, and a ``diagnose`` or ``discover`` refused for one training record or an
+    unknown effect, import neither scikit-learn, pysindy, sympy nor scipy.integrate (seconds
+    of every command), and every verb's full help still lists the same options as the parser
+    of every verb."""
     (tmp_path / "ship.toml").write_text("[particulars]\nL = -1\n")
     script = (
         "import sys\n"
@@ -56,14 +57,25 @@ def test_help_simulate_a_read_record_and_refused_fits_import_no_scikit_learn(tmp
         "refused = [main([verb, sys.argv[1], *bad, '--out', sys.argv[3] + end])\n"
         "           for bad in (['--ship', sys.argv[2]], ['--library', 'no_such_library'])\n"
         "           for verb, end in (('fit', '.json'), ('diagnose', ''), ('discover', '.toml'))]\n"
+        "refused += [main([verb, sys.argv[1], '--out', sys.argv[3] + end])\n"
+        "            for verb, end in (('diagnose', ''), ('discover', '.toml'))]\n"
+        "import shutil\n"
+        "two = [sys.argv[1], shutil.copy(sys.argv[1], sys.argv[4])]\n"
+        "refused += [main(['diagnose', *two, '--candidates', 'no_such_effect', '--out',\n"
+        "                  sys.argv[3]]),\n"
+        "            main(['discover', *two, '--effects', 'no_such_effect', '--out',\n"
+        "                  sys.argv[3] + '.toml'])]\n"
         "heavy = ('sklearn', 'pysindy', 'sympy', 'scipy.integrate')\n"
         "print(status, refused, sorted(m for m in heavy if m in sys.modules))\n")
     out = subprocess.run([sys.executable, "-c", script, str(tmp_path / "zz.csv"),
-                          str(tmp_path / "ship.toml"), str(tmp_path / "m")],
+                          str(tmp_path / "ship.toml"), str(tmp_path / "m"),
+                          str(tmp_path / "zz2.csv")],
                          capture_output=True, text=True, check=True)
-    assert out.stdout.strip().split("\n")[-1] == "0 [2, 2, 2, 2, 2, 2] []"
+    assert out.stdout.strip().split("\n")[-1] == "0 [2, 2, 2, 2, 2, 2, 2, 2, 2, 2] []"
     assert out.stderr.count("ship.toml") == 3  # refused for the ship file
     assert out.stderr.count("no_such_library") == 3  # and for the library
+    assert out.stderr.count("needs at least two training records") == 2  # one record
+    assert out.stderr.count('no built-in effect named "no_such_effect"') == 2
     assert not [p.name for p in tmp_path.iterdir() if p.name.startswith("m")]
     assert (tmp_path / "zz.csv").exists()
     from sindyship.cli import VERBS, build_parser

@@ -456,7 +456,8 @@ def _scheduler_and_channel_cases() -> list[dict]:
                               ("tcp://127.0.0.1:1", "cannot reach")):
         for verb, argv, files in (("fit", FIT + ["--stream", "--out", "m.json"], DATA),
                                   ("diagnose", DIAG, DIAG_FILES),
-                                  ("discover", ["discover", "data.csv"], DATA)):
+                                  ("discover", ["discover", "data.csv", "other.csv"],
+                                   DIAG_FILES)):
             cases.append(case(f"scheduler: {verb}", argv + ["--scheduler", address], 2,
                               fragment, files))
     heel = ('name = "heel"\ntitle = "heel"\nphysics = "heel"\nchannels = ["heel"]\n'

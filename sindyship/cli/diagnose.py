@@ -88,6 +88,7 @@ def _write_folder(out: Path, result, iterative, text: str, document: dict, progr
 def run(args) -> int:
     """Run ``sindyship diagnose``; text report on stdout, or one JSON document with --json."""
     from .._io import check_output, output_folder
+    from ..arguments import check_two_records
     from ..library import load_effect, names_a_file
     from ..records import expand_paths
     from ._common import load_cli_ship
@@ -106,9 +107,12 @@ def run(args) -> int:
     from ..identify import check_term_values, resolve_library
 
     library = resolve_library(args.library, split_names(args.effects), speed_form(args, ship))
-    # the terms of the user's own effect files, checked on the records before the long work
-    # (an effect whose channels the records lack is reported untestable by the diagnosis)
-    own = [load_effect(name) for name in split_names(args.candidates) if names_a_file(name)]
+    check_two_records(records, "diagnose")
+    # every candidate named, and the terms of the user's own effect files checked on the
+    # records, before the long work (an effect whose channels the records lack is reported
+    # untestable by the diagnosis)
+    candidates = {name: load_effect(name) for name in split_names(args.candidates)}
+    own = [effect for name, effect in candidates.items() if names_a_file(name)]
     testable = [e for e in own if all(r.has(c) for c in e.channels for r in records + test)]
     if testable:
         check_term_values(library.extended(*testable), records + test, ship,

@@ -55,6 +55,8 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     """Run ``sindyship discover``; text report on stdout, or one JSON document with --json."""
     from .._io import check_output, write_text_atomic
+    from ..arguments import check_two_records
+    from ..library import load_effect
     from ..records import expand_paths
     from ._common import load_cli_ship
 
@@ -69,6 +71,8 @@ def run(args) -> int:
     from ..identify import resolve_library
 
     library = resolve_library(args.library, (), speed_form(args, ship))
+    check_two_records(records, "discover")
+    effects = [load_effect(name) for name in split_names(args.effects)]
     # the search (scikit-learn with it) once the files, ship and library pass: their refusals
     # come in a fraction of a second, before any cluster starts
     from ..diagnose import discover
@@ -76,7 +80,7 @@ def run(args) -> int:
     with on_cluster(args.scheduler, args.n_jobs) as n_jobs:
         progress(f"sindyship discover: {len(records)} records, library {args.library}")
         found = discover(records, ship, library=library,
-                         effects=split_names(args.effects), rudder_signal=args.rudder_signal,
+                         effects=effects, rudder_signal=args.rudder_signal,
                          derivative=args.derivative, window=args.window,
                          smoothing=None if args.smoothing == "none" else args.smoothing,
                          threshold=args.threshold, max_rounds=args.rounds, n_jobs=n_jobs)

@@ -443,15 +443,11 @@ def _check_arguments(records: Sequence[Trajectory], test: Sequence[Trajectory],
                      threshold: float) -> None:
     """Refuse fewer than two training records, a threshold outside (0, 1) and records that
     share a name."""
-    if len(records) < 2:
-        raise SindyshipInputError(
-            "diagnose needs at least two training records: effects are scored by "
-            "leave-one-manoeuvre-out cross-validation."
-        )
+    from ..arguments import check_distinct_names, check_two_records
+
+    check_two_records(records, "diagnose")
     if not 0.0 < threshold < 1.0:
         raise SindyshipInputError(f"the threshold must lie between 0 and 1, not {threshold}.")
-    from ..arguments import check_distinct_names
-
     check_distinct_names([*records, *test])
 
 

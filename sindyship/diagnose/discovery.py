@@ -375,17 +375,12 @@ def discover(
     >>> found.best.family, round(found.best.delays["delta"])
     ('delay:delta', 4)
     """
-    from ..arguments import check_distinct_names
-    from ..errors import SindyshipInputError
+    from ..arguments import check_distinct_names, check_two_records
     from ..library import load_effect
 
     start = time.perf_counter()
     records = list(records)
-    if len(records) < 2:
-        raise SindyshipInputError(
-            "discover needs at least two training records: findings are judged leaving one "
-            "manoeuvre out."
-        )
+    check_two_records(records, "discover")
     check_distinct_names(records)
     base = resolve_library(library)
     added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
