@@ -35,13 +35,19 @@ prior's forces while it fixes its flights.  Two more fits there say what limits 
   records*, a reference for what the library's forces fitted on the turns fly, never a
   workflow.
 
+Two more say how close the zig-zags alone come to the turns with those terms: ``... refined
+whole`` (refined by whole closed-loop zig-zag flights, as ``evaluate`` flies them, instead of
+the default shooting segments) and ``prior 1e-05 instantaneous + asymmetry abs(v) abs(r)``
+(and ``... refined``: the library's forces scaled with the instantaneous speed, ``fit --speed
+instantaneous``).
+
 A turning circle of the protocol lasts 3200 s, about eight turns (``held_out_turns``), so its
 mean distance grows with the error of its steady yaw rate: every row reports that error (the
 mean yaw rate over the last quarter of each held-out turn, flown against recorded, in per
 cent).
 
 Prints the tables and saves ``benchmarks/results/captive.json``.  Run with
-``python benchmarks/bench_captive.py`` (about ten seconds once numba has compiled).
+``python benchmarks/bench_captive.py`` (about fifteen seconds once numba has compiled).
 """
 
 from __future__ import annotations
@@ -186,13 +192,21 @@ def run() -> dict:
             rows[inflow] = evaluate(fitted[inflow], test, ship)
             rows[f"{prior} with the held-out records"] = evaluate(
                 fit(records + test, ship, library=library, optimizer="prior"), test, ship)
+            instantaneous = f"prior {default:.0e} instantaneous + asymmetry abs(v) abs(r)"
+            fitted[instantaneous] = fit(records, ship, library=library.extended(rudder_inflow()),
+                                        optimizer="prior", speed="instantaneous")
+            rows[instantaneous] = evaluate(fitted[instantaneous], test, ship)
             out["held_out_turns"] = {r.name: float(abs(r["psi"][-1] - r["psi"][0]) / (2 * np.pi))
                                      for r in test if is_turning_circle(r)}
             # each fit refined by the error of its training flights
-            for key in ("ls", prior, inflow):
+            for key in ("ls", prior, inflow, instantaneous):
                 refined = refine(fitted[key], records, max_evaluations=REFINE_EVALUATIONS)
                 rows[f"{key} refined"] = {**evaluate(refined, test, ship),
                                           "refinement": refined.info["refined"]}
+            refined = refine(fitted[inflow], records, max_evaluations=REFINE_EVALUATIONS,
+                             segment_s="whole")
+            rows[f"{inflow} refined whole"] = {**evaluate(refined, test, ship),
+                                               "refinement": refined.info["refined"]}
         out["sets"][name] = {"training": [r.name for r in records], "fits": rows}
     out["seconds"] = time.perf_counter() - start
     return out
@@ -205,7 +219,7 @@ def format_table(result: dict) -> str:
         lines.append(f"Identified on {name} ({', '.join(data['training'])}); captive "
                      "correlation X Y N per test; held-out mean distance [L]")
         head = "  ".join(f"{t:>16s}" for t in result["tests"])
-        lines.append(f"{'fit':46s}{head}   tc15_port tc15_stbd  zz10_10  steady r [%]")
+        lines.append(f"{'fit':64s}{head}   tc15_port tc15_stbd  zz10_10  steady r [%]")
         for fit_name, row in data["fits"].items():
             cells = "  ".join(" ".join(f"{row['captive'][t][f]['correlation']:+.2f}"
                                        for f in "XYN") + " " for t in result["tests"])
@@ -214,7 +228,7 @@ def format_table(result: dict) -> str:
                 else f"{e['mean_distance_L']:9.3f}" for e in row["held_out"].values())
             steady = " ".join("-" if e is None else f"{e:+.2f}"
                               for e in row["steady_yaw_rate_error_pct"].values())
-            lines.append(f"{fit_name:46s}{cells}  {flights}  {steady}")
+            lines.append(f"{fit_name:64s}{cells}  {flights}  {steady}")
         lines.append("")
     return "\n".join(lines)
 

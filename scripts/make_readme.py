@@ -39,6 +39,7 @@ TAYLOR_FITS = ("prior 1e-05 taylor", "prior 1e-04 taylor")
 #: The zig-zag fits of benchmarks/bench_captive.py with the even terms of ``asymmetry`` for the
 #: rudder's side-dependent inflow, and fitted on the held-out records too (the reference).
 INFLOW_FIT, REFERENCE_FIT = "+ asymmetry abs(v) abs(r)", "with the held-out records"
+INSTANTANEOUS_FIT = "instantaneous + asymmetry abs(v) abs(r)"
 CAPTIVE_LABELS = {"static-drift": "static drift", "rudder": "rudder", "pure-yaw": "pure yaw",
                   "drift-yaw": "drift and yaw"}
 
@@ -165,8 +166,9 @@ def _saved_captive_bench() -> dict | None:
     """The zig-zag fits of benchmarks/results/captive.json (least squares, the default
     prior, the yardstick: the prior with the MMG's own Taylor coefficients, least squares and
     the prior refined by their flights, the prior with the terms of ``asymmetry`` for the
-    rudder's side-dependent inflow, alone and refined, and the reference: the prior fitted on
-    the held-out records too), and the number of turns of each held-out turning circle."""
+    rudder's side-dependent inflow, alone and refined by segments or whole flights, and with
+    the instantaneous speed, and the reference: the prior fitted on the held-out records too),
+    and the number of turns of each held-out turning circle."""
     path = RESULTS / "captive.json"
     if not path.exists():
         return None
@@ -175,7 +177,8 @@ def _saved_captive_bench() -> dict | None:
     fits = result["sets"]["zigzags"]["fits"]
     keys = ("ls", default, *TAYLOR_FITS, "ls refined", f"{default} refined",
             f"{default} {INFLOW_FIT}", f"{default} {INFLOW_FIT} refined",
-            f"{default} {REFERENCE_FIT}")
+            f"{default} {INFLOW_FIT} refined whole", f"{default} {INSTANTANEOUS_FIT}",
+            f"{default} {INSTANTANEOUS_FIT} refined", f"{default} {REFERENCE_FIT}")
     return {"default_strength": result["default_strength"],
             "held_out_turns": result["held_out_turns"],
             "sets": {"zigzags": {"fits": {k: fits[k] for k in keys}}}}
@@ -524,7 +527,25 @@ def _what_limits_the_turns(zz: dict, key: str, turns: dict, flights, low) -> str
             "the rudder, which the Abkowitz series, odd in v and r, cannot express), the "
             f"`prior` fit flies {flights(inflow)} ({steady(inflow)}), and refined by its "
             f"zig-zag flights {flights(refined)} ({steady(refined)}; lowest X, Y or N "
-            f"correlation {low(refined, 'XYN'):+.2f}).")
+            f"correlation {low(refined, 'XYN'):+.2f}). "
+            + _closest_to_the_turns(zz, key, flights, low))
+
+
+def _closest_to_the_turns(zz: dict, key: str, flights, low) -> str:
+    """How close the zig-zags alone come to the turns with the rudder-inflow terms: refined by
+    whole flights, and with the forces scaled by the instantaneous speed."""
+    whole = zz[f"{key} {INFLOW_FIT} refined whole"]
+    fitted, refined = zz[f"{key} {INSTANTANEOUS_FIT}"], zz[f"{key} {INSTANTANEOUS_FIT} refined"]
+    kept = [row["held_out"]["tc15_stbd"]["mean_distance_L"] for name, row in zz.items()
+            if REFERENCE_FIT not in name and low(row, "XYN") >= 0.95]
+    return ("Refined by whole closed-loop zig-zag flights instead of shooting segments, that fit "
+            f"flies {flights(whole)} (lowest X, Y or N correlation {low(whole, 'XYN'):+.2f}); "
+            "with its forces scaled by the instantaneous speed (`--speed instantaneous`) it "
+            f"flies {flights(fitted)} fitted and {flights(refined)} refined, while the surge "
+            "force's lowest correlation falls to "
+            f"{min(low(fitted, 'X'), low(refined, 'X')):+.2f}. Of all these zig-zag fits, those "
+            "whose lowest X, Y or N correlation is 0.95 or more fly the starboard turn "
+            f"{min(kept):.3f} L off at best.")
 
 
 def _refined_on_zigzags(row: dict, flown: str, lowest: float) -> str:
