@@ -30,6 +30,22 @@ def test_kvlcc2_turns_from_the_yasukawa_yoshimura_condition():
     assert figures["tc35_stbd"]["tactical_diameter_L"] == pytest.approx(2.76, abs=0.02)
 
 
+def test_a_froude_scaled_ship_flies_the_same_turn_in_ship_lengths():
+    """Froude scaling keeps every non-dimensional force, so the scaled ship turns as the
+    model does, in ship lengths; the rudder area (m^2) scales with the square of the scale."""
+    model = load_ship("kvlcc2")
+    full = model.scaled(45.7)
+    assert full.rudder.A_R == pytest.approx(model.rudder.A_R * 45.7**2)
+    figures = []
+    for ship in (model, full):
+        dt = 0.1 * ship.L / model.L * (model.U0 / ship.U0)
+        (run,) = fly(MMGModel(ship), [Manoeuvre("turning-circle", rudder=35,
+                                                duration=3000 * dt, dt=dt)])
+        figures.append(turning_figures(run, ship.L))
+    for key in ("advance_L", "tactical_diameter_L"):
+        assert figures[1][key] == pytest.approx(figures[0][key], rel=1e-6), key
+
+
 @pytest.mark.marin
 @pytest.mark.skipif(default_marin_dir() is None, reason="the MARIN measurements are not here")
 def test_kvlcc2_turns_beside_marin_measurements():

@@ -268,8 +268,9 @@ class Ship:
     def scaled(self, scale: float) -> Ship:
         """The same ship Froude-scaled by ``scale`` (lengths x scale, speeds x sqrt(scale)).
 
-        Non-dimensional coefficients are unchanged; revolutions scale by 1 / sqrt(scale) and
-        the rudder rate limit by 1 / sqrt(scale).
+        Non-dimensional coefficients are unchanged; the rudder area scales by scale^2, and
+        revolutions and the rudder rate limit by 1 / sqrt(scale), so the scaled ship flies the
+        same manoeuvres in ship lengths and L / U0.
         """
         p = self.particulars
         s = float(scale)
@@ -285,7 +286,8 @@ class Ship:
         )
         propeller = replace(self.propeller, D_P=self.propeller.D_P * s,
                             n_P=self.propeller.n_P / math.sqrt(s))
-        rudder = self.rudder
+        rudder = replace(self.rudder, A_R=self.rudder.A_R * s**2)
         servo = replace(self.servo, rate_max=self.servo.rate_max / math.sqrt(s))
-        return replace(self, name=f"{self.name}-x{s:g}", particulars=particulars,
+        return replace(self, name=f"{self.name}-x{s:g}",
+                       title=f"{self.title}, Froude-scaled by {s:g}", particulars=particulars,
                        propeller=propeller, rudder=rudder, servo=servo)
