@@ -12,7 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .flights import flown_as, flown_part, fly_like_batch
+from .flights import flight_start, flown_as, flown_part, fly_like_batch
 from .trajectory import Trajectory
 
 
@@ -140,7 +140,8 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
 
     A zig-zag or a turn is flown and scored from its rudder execute
     (:func:`sindyship.flights.flight_start`).  Each entry is :func:`distance_errors` plus
-    :func:`flown_as` (``start_s`` and ``start_reason`` say where the flight started and why).
+    :func:`flown_as` (``start_s`` and ``start_reason`` say where the flight started and why),
+    and for a turn ``turn``: its figures flown and recorded (:func:`turn_figures`).
     """
     from .arguments import as_records, check_motion
     from .model import AbkowitzModel
@@ -157,4 +158,38 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
     out = {}
     for rec, short, f in zip(records, cut, flown, strict=True):
         out[rec.name] = {**distance_errors(f, short, model.ship.L), **flown_as(rec)}
+        if flight_start(rec).kind == "turn":
+            out[rec.name]["turn"] = turn_figures(f, short, model.ship.L)
     return out
+
+
+#: The figures of a turning circle :func:`evaluate` reports (IMO MSC.137(76) and speed loss).
+TURN_FIGURES = ("advance_L", "tactical_diameter_L", "speed_loss")
+
+
+def turn_figures(flown: Trajectory, recorded: Trajectory, L: float) -> dict:
+    """A turn's advance and tactical diameter [L] and speed loss (1 - steady U / approach U),
+    flown and recorded, both from the flight's first sample, the rudder execute
+    (:func:`sindyship.manoeuvres.turning_figures`); None where the flight diverged or the
+    turn never reached the heading change a figure needs.
+
+    Examples
+    --------
+    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> from sindyship.mmg import MMGModel
+    >>> from sindyship.ships import load_ship
+    >>> ship = load_ship("kcs")
+    >>> (run,) = fly(MMGModel(ship), [Manoeuvre("turning-circle", rudder=35, duration=900)])
+    >>> figures = turn_figures(run, run, ship.L)
+    >>> figures["flown"] == figures["recorded"], round(figures["recorded"]["advance_L"], 2)
+    (True, 3.56)
+    """
+    from .manoeuvres import turning_figures
+
+    def figures(run: Trajectory) -> dict | None:
+        if run.meta.get("diverged_at") is not None:
+            return None
+        values = turning_figures(run, L, execute=0)
+        return {k: float(values[k]) if math.isfinite(values[k]) else None for k in TURN_FIGURES}
+
+    return {"flown": figures(flown), "recorded": figures(recorded)}

@@ -60,6 +60,13 @@ evidence, checked by the tests:
   single right-handed propeller.  A positive rudder angle turning to port is also the
   ITTC/SNAME sign (positive rudder = trailing edge to port).
 
+Records for the command line
+----------------------------
+``python3 -m sindyship.marin OUT`` writes the six records as measurement CSVs at full scale,
+resampled onto a 1 s grid (``tc_35.csv``, ...), and the full-scale ship they belong to
+(:func:`full_scale_ship`, ``kvlcc2-full-scale.toml``) into the folder ``OUT``
+(:func:`write_records`), for ``sindyship fit ... --ship OUT/kvlcc2-full-scale.toml``.
+
 Left as found: the ship rolls (up to 0.9 deg), which a 3-DOF model leaves out; in the turning
 circles the roll also swings by about 0.3 deg once per circle, and the velocity-position
 mismatch grows once per circle in mirror-image directions for the two turns.
@@ -74,8 +81,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from sindyship._io import write_text_atomic
 from sindyship.errors import SindyshipInputError
-from sindyship.measurements import trajectory_from_frame
+from sindyship.measurements import trajectory_from_frame, write_csv
+from sindyship.ships import Ship, load_ship, ship_to_toml
 from sindyship.trajectory import Trajectory
 
 __all__ = [
@@ -86,8 +95,10 @@ __all__ = [
     "MARIN_SCALE",
     "default_marin_dir",
     "execute_index",
+    "full_scale_ship",
     "read_marin",
     "to_model_scale",
+    "write_records",
 ]
 
 #: Short names of the six records and their file names.
@@ -379,3 +390,90 @@ def _check_recorded_time(
             f"{MARIN_DT} s grid is at {rebuilt[i]:.4g} s, so rows are missing; use the "
             "complete file."
         )
+
+
+#: The file :func:`write_records` writes the full-scale ship to, beside the records.
+FULL_SCALE_SHIP_FILE = "kvlcc2-full-scale.toml"
+
+
+def full_scale_ship() -> Ship:
+    """The ship of the records: the built-in KVLCC2 model (L = 7 m) Froude-scaled by
+    :data:`MARIN_SCALE` (L = 319.9 m, :meth:`sindyship.ships.Ship.scaled`).
+
+    Examples
+    --------
+    >>> ship = full_scale_ship()
+    >>> round(ship.L, 1), round(ship.U0, 2)
+    (319.9, 7.97)
+    """
+    return load_ship("kvlcc2").scaled(MARIN_SCALE)
+
+
+def write_records(out: str | os.PathLike[str], folder: str | os.PathLike[str] | None = None,
+                  *, resample: float = 1.0) -> list[Path]:
+    """Write the six records as measurement CSVs and their ship as a ship file.
+
+    Parameters
+    ----------
+    out : str or os.PathLike
+        The folder to write into (made if missing): ``tc_35.csv`` ... (``MARIN_FILES``'s
+        short names; full scale, resampled onto a ``resample`` s grid) and
+        :data:`FULL_SCALE_SHIP_FILE` (:func:`full_scale_ship`).
+    folder : str or os.PathLike, optional
+        The folder of the MARIN files; default :func:`default_marin_dir`.
+    resample : float
+        The sample interval of the CSVs [s] (the files are sampled every 0.1353 s).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, the ship file last.
+    """
+    source = default_marin_dir() if folder is None else Path(folder)
+    if source is None:
+        raise SindyshipInputError(
+            "the MARIN files were not found; give their folder with --data DIR or set "
+            f"{_ENVIRONMENT}.")
+    target = Path(out)
+    if target.exists() and not target.is_dir():
+        raise SindyshipInputError(f"{target}: exists and is not a folder; name a folder to "
+                                  "write the records into.")
+    written = []
+    for short, name in MARIN_FILES.items():
+        record = read_marin(source / name)
+        regular = trajectory_from_frame(record.data, short, source=str(source / name),
+                                        resample=resample)
+        written.append(write_csv(regular, target / f"{short}.csv"))
+    ship = target / FULL_SCALE_SHIP_FILE
+    write_text_atomic(ship, ship_to_toml(full_scale_ship()))
+    return [*written, ship]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python3 -m sindyship.marin OUT [--data DIR] [--resample S]`` (:func:`write_records`);
+    exit 0, or 2 with one line on stderr for bad input."""
+    import argparse
+    import sys
+
+    parser = argparse.ArgumentParser(
+        prog="python3 -m sindyship.marin",
+        description="Write the MARIN KVLCC2 records as measurement CSVs (full scale) and "
+                    f"their full-scale ship file ({FULL_SCALE_SHIP_FILE}) into OUT.")
+    parser.add_argument("out", help="folder to write into")
+    parser.add_argument("--data", default=None, help="folder of the MARIN_FREE_KVLCC2_*_m.dat "
+                        f"files (default: ${_ENVIRONMENT})")
+    parser.add_argument("--resample", type=float, default=1.0,
+                        help="sample interval of the CSVs [s] (default 1)")
+    args = parser.parse_args(argv)
+    try:
+        written = write_records(args.out, args.data, resample=args.resample)
+    except SindyshipInputError as error:
+        print(f"python3 -m sindyship.marin: error: {error}", file=sys.stderr)
+        return 2
+    print(f"wrote {len(written) - 1} records and {written[-1].name} to {args.out}/",
+          file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

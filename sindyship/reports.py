@@ -104,10 +104,14 @@ def _confirmation_text(change) -> str:
             text += f" (diverged flights {before} -> {after})"
         parts.append(text)
     verdict = {True: "confirmed", False: "not confirmed", None: "flown"}[change.confirmed]
+    judged = "" if change.confirmed is None else " (judged on the training flights)"
+    disagree = {True: "; the held-out flights agree", None: "",
+                False: "; the held-out flights do not agree"}[change.held_out_supports]
     return (
-        f"{verdict} by refitting and re-flying: "
+        f"{verdict} by refitting and re-flying{judged}: "
         + ", ".join(parts)
         + " (geometric mean of after/before mean distance over the windows both flights cover)"
+        + disagree
     )
 
 
@@ -241,6 +245,20 @@ def _closer(score) -> str:
     return f"{1.0 / ratio:.2g} times" if ratio > 0 else "much"
 
 
+def _held_out_caution(score) -> str:
+    """What the held-out flights say against an effect the training flights confirm."""
+    change = score.confirmation
+    if change is None or change.held_out_supports is not False:
+        return ""
+    before, after = change.divergences("held-out")
+    diverged = f", diverged flights {before} -> {after}" if before or after else ""
+    ratio = change.ratio("held-out")
+    error = f"held-out error x {ratio:.2f}" if math.isfinite(ratio) else "held-out error n/a"
+    return (f" But the held-out flights do not agree ({error}{diverged}): on the training "
+            "manoeuvres its terms may stand in for something else, so judge it on manoeuvres "
+            "like the held-out ones before keeping it.")
+
+
 def _verdict_lines(diagnosis) -> list[str]:
     lines = [textwrap.fill(f"Caution: {warning}.", width=96, subsequent_indent="  ")
              for warning in diagnosis.warnings]
@@ -263,7 +281,7 @@ def _verdict_lines(diagnosis) -> list[str]:
         text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... --ship "
                 f"{_ship_argument(diagnosis.ship)} --effects "
                 f"{','.join([*diagnosis.library.effects, top.effect.name])}{chosen}; then "
-                "diagnose again with the same --effects.")
+                "diagnose again with the same --effects." + _held_out_caution(top))
     elif verdict == "add-discovered":
         found = " and ".join(f.family for f in diagnosis.discovery.accepted)
         text = (f"Verdict: no catalogued effect is meaningful, but {found} was discovered "
@@ -308,7 +326,7 @@ def diagnosis_report(diagnosis) -> str:
     lines += _residual_lines(diagnosis)
     lines += _ranking_lines(diagnosis)
     if diagnosis.discovery is not None:
-        lines += ["", discovery_report(diagnosis.discovery), ""]
+        lines += ["", diagnosis.discovery.report(), ""]
     if getattr(diagnosis, "speed", None) is not None:
         lines += [textwrap.fill(diagnosis.speed.text(), width=96, subsequent_indent="  "), ""]
     lines += _verdict_lines(diagnosis)
@@ -338,15 +356,16 @@ def iteration_report(iterative) -> str:
 
 
 def _flown_as_text(err: dict) -> str:
+    """How a record was flown, and from which time (its rudder execute, or its first row)."""
     kind = err.get("flown_as")
+    how = {"replay-commanded": "replaying its commanded rudder through the servo",
+           "replay-actual": "replaying its recorded rudder angle"}.get(kind, "")
     if kind == "zigzag":
-        return (f"flown closed loop as a {err['amplitude_deg']:g}/{err['check_deg']:g} "
-                "zig-zag")
-    if kind == "replay-commanded":
-        return "replaying its commanded rudder through the servo"
-    if kind == "replay-actual":
-        return "replaying its recorded rudder angle"
-    return ""
+        how = (f"flown closed loop as a {err['amplitude_deg']:g}/{err['check_deg']:g} "
+               "zig-zag")
+    if how and err.get("start_s") is not None:
+        how += f" from t = {err['start_s']:.6g} s"
+    return how
 
 
 def evaluation_report(errors: dict) -> str:
@@ -360,7 +379,24 @@ def evaluation_report(errors: dict) -> str:
         if err["diverged_at_s"] is not None:
             cell = (f"FAILED: diverged at {err['diverged_at_s']:.0f} s; before it {cell}")
         lines.append(f"{name}: {cell}" + (f" ({how})" if how else ""))
+        if err.get("turn") is not None:
+            lines.append(_turn_line(err["turn"]))
     return "\n".join(lines)
+
+
+def _turn_line(turn: dict) -> str:
+    """A turn's figures flown, with the recorded ones in brackets."""
+    flown, recorded = turn["flown"] or {}, turn["recorded"] or {}
+
+    def value(figures, key, unit):
+        number = figures.get(key)
+        return "n/a" if number is None else f"{number:.2f}{unit}"
+
+    cells = [f"{label} {value(flown, key, unit)} (recorded {value(recorded, key, unit)})"
+             for label, key, unit in (("advance", "advance_L", " L"),
+                                      ("tactical diameter", "tactical_diameter_L", " L"),
+                                      ("speed loss", "speed_loss", ""))]
+    return "  turn flown: " + ", ".join(cells)
 
 
 def reproduce_report(output: dict) -> str:
@@ -460,26 +496,6 @@ def forces_report(result) -> str:
     return "\n".join(lines)
 
 
-def _finding_lines(k: int, finding) -> list[str]:
-    mark = "meaningful" if finding.meaningful else "not meaningful"
-    what = (", ".join(f"{c} read {d:+.2f} s later" + (
-                f" (95 % interval {finding.intervals[c][0]:+.2f} to "
-                f"{finding.intervals[c][1]:+.2f} s when the manoeuvres are resampled)"
-                if c in getattr(finding, "intervals", {}) else "")
-                      for c, d in finding.delays.items())
-            if finding.delays else
-            "; ".join(f"{dof}: {', '.join(ts)}" for dof, ts in finding.terms.items() if ts))
-    line = shape_words(finding.variables, getattr(finding, "intervals", {}))
-    if line:
-        what = f"{line}. {what}"
-    shares = ", ".join(f"{dof} {finding.signal_by_dof[dof]:.0%}"
-                       + ("" if finding.significant[dof] else " (not significant)")
-                       for dof in DOF_NAMES)
-    return [f"  {k}. {finding.family}: explains {finding.explained_signal:.1%} of the error "
-            f"above the noise floor ({mark}; {shares})",
-            _fill(f"{what}. Usually: {finding.hint}.", indent="     ", subsequent="     ")]
-
-
 def shape_words(variables, intervals) -> str:
     """The shape of the position among ``variables`` in words, with the 95 % intervals of its
     line's bearing and distance when given (empty when there is none).
@@ -506,80 +522,3 @@ to 2.1 L)'
     return (f"Shape: {describe_shape(shape)}"
             + (f" (95 % intervals when the manoeuvres are resampled: {', '.join(ranges)})"
                if ranges else ""))
-
-
-def discovery_report(discovery, effect_file: str | None = None) -> str:
-    """Text report of :func:`sindyship.diagnose.discover`: the findings and what they mean;
-    ``effect_file`` is where the discovery was written, if it was."""
-    smoothing = ("" if discovery.smoothing is None else
-                 f", records smoothed with {discovery.smoothing['method']} over "
-                 f"{discovery.smoothing.get('window_s')} s")
-    lines = [f"Not in the catalogue: searched the residual of {discovery.library.name} on "
-             f"{len(discovery.records)} records ({discovery.seconds:.1f} s{smoothing})."]
-    named = ", ".join(f"{name} ({share:.0%})" for name, share in discovery.catalogue.items())
-    if discovery.catalogue and discovery.contests:
-        lines.append(_fill(
-            f"Catalogued effects meaningful here: {named}. A family below can stand in for "
-            "them and they for it, so the best finding competes with each in flights: each "
-            "fitted leaving one manoeuvre out, flying the manoeuvre left out.",
-            indent="", subsequent=""))
-    elif discovery.catalogue:
-        lines.append(_fill(f"Catalogued effects meaningful here: {named}.", indent="",
-                           subsequent=""))
-    if any(c.catalogued == "none" for c in discovery.contests):
-        lines.append(_fill(
-            "A line of a shape is chosen among hundreds, so a shape's finding must also fly "
-            "the manoeuvres left out better than the library alone.", indent="",
-            subsequent=""))
-    for contest in discovery.contests:
-        lines.append(_fill(contest.sentence(), indent="", subsequent=""))
-    if discovery.unnamed_channels:
-        listed = ", ".join(repr(c) for c in discovery.unnamed_channels)
-        lines.append(_fill(
-            f"Not searched: the columns {listed}, whose names no term can use; rename them "
-            "with lower-case letters, digits and single underscores (heel, wave_height) to "
-            "search them.", indent="", subsequent=""))
-    lines += [_fill(note, indent="", subsequent="") for note in getattr(discovery, "notes", [])]
-    floor = ", ".join(f"{dof} {share:.0%}" for dof, share in discovery.noise_floor.items())
-    lines.append(f"Noise floor (share of the leave-one-manoeuvre-out error): {floor}.")
-    if not discovery.findings:
-        lines.append("No candidate explains any of the error.")
-    for k, finding in enumerate(discovery.findings[:5], start=1):
-        lines += _finding_lines(k, finding)
-    for r, found in enumerate(discovery.rounds[1:], start=2):
-        added = ", ".join(f.family for f in discovery.accepted[: r - 1])
-        best = next((f for f in found if f.meaningful), found[0] if found else None)
-        if best is None:
-            lines.append(f"Round {r}, with {added} added: no candidate explains any error.")
-            continue
-        lines.append(f"Round {r}, with {added} added, the "
-                     + ("discovery:" if best.meaningful else "best candidate:"))
-        lines += _finding_lines(1, best)
-    lines.append(_discovery_verdict(discovery, effect_file))
-    return "\n".join(lines)
-
-
-def _discovery_verdict(discovery, effect_file: str | None) -> str:
-    """The last line of :func:`discovery_report`: what was discovered, or why nothing was."""
-    if discovery.contests and not discovery.accepted:
-        last = discovery.contests[-1]
-        why = ("flies better than" if last.winner == "catalogued" else
-               "flies as well as")
-        if last.catalogued == "none":
-            return _fill(f"Nothing was discovered: the library alone {why} the best finding "
-                         f"({last.finding}), which is then a chance fit of the residual.",
-                         indent="", subsequent="")
-        return _fill(f"Nothing was discovered: the catalogued {last.catalogued} {why} the "
-                     "best finding; add it (--effects) and search again.", indent="",
-                     subsequent="")
-    if discovery.catalogue and not discovery.accepted:
-        return "Nothing was discovered: add the catalogued effects above and search again."
-    if not discovery.accepted:
-        return _fill(
-            f"No finding is meaningful (explaining {discovery.threshold:.0%} of the error above "
-            "the noise floor, with a gain significant in at least two of X, Y and N): no "
-            "missing effect was discovered.", indent="", subsequent="")
-    found = " and ".join(f.family for f in discovery.accepted)
-    target = effect_file or "effect.toml"
-    written = f"Written to {effect_file}" if effect_file else "Write it with --out effect.toml"
-    return f"Discovered: {found}. {written}; refit with --effects {target} to see the error fall."

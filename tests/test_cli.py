@@ -138,6 +138,41 @@ def test_fit_then_evaluate_json(records, tmp_path):
     assert set(errors) == {"zz20", "tc35"}
     assert errors["tc35"]["mean_distance_L"] < 0.05  # a training record flies back closely
     assert errors["zz20"]["diverged_at_s"] is None
+    # a turn's figures, flown and recorded: a training record's agree closely
+    turn = errors["tc35"]["turn"]
+    assert set(turn["flown"]) == {"advance_L", "tactical_diameter_L", "speed_loss"}
+    for key, recorded in turn["recorded"].items():
+        assert turn["flown"][key] == pytest.approx(recorded, abs=0.05), key
+    assert 2.5 < turn["recorded"]["tactical_diameter_L"] < 4.0
+    assert "turn" not in errors["zz20"]
+    # the text says how and from where each record was flown
+    code, out, err = run_sindyship("evaluate", model, records["zz20"])
+    assert code == 0, err
+    assert out.strip().splitlines()[-1] == (
+        f"zz20: mean {errors['zz20']['mean_distance_L']:.4f} L, max "
+        f"{errors['zz20']['max_distance_L']:.4f} L (flown closed loop as a 20/20 zig-zag "
+        f"from t = {errors['zz20']['start_s']:.6g} s)")
+
+
+def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
+    from sindyship.reports import evaluation_report
+
+    errors = {"tc_35": {"mean_distance_L": 0.25, "max_distance_L": 1.5, "diverged_at_s": None,
+                        "flown_as": "replay-commanded", "start_s": 214.2,
+                        "turn": {"flown": {"advance_L": 3.012, "tactical_diameter_L": 3.284,
+                                           "speed_loss": 0.555},
+                                 "recorded": {"advance_L": 3.02, "tactical_diameter_L": None,
+                                              "speed_loss": 0.64}}},
+              "zz_20": {"mean_distance_L": 3.0, "max_distance_L": 9.0, "diverged_at_s": 401.4,
+                        "flown_as": "zigzag", "amplitude_deg": 20.0, "check_deg": 20.0,
+                        "start_s": 7.04}}
+    assert evaluation_report(errors).splitlines() == [
+        "tc_35: mean 0.2500 L, max 1.5000 L (replaying its commanded rudder through the servo "
+        "from t = 214.2 s)",
+        "  turn flown: advance 3.01 L (recorded 3.02 L), tactical diameter 3.28 L (recorded "
+        "n/a), speed loss 0.56 (recorded 0.64)",
+        "zz_20: FAILED: diverged at 401 s; before it mean 3.0000 L, max 9.0000 L (flown closed "
+        "loop as a 20/20 zig-zag from t = 7.04 s)"]
 
 
 GOOD_HEADER = "t,u,v,r,x,y,psi,delta"

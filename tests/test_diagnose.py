@@ -452,6 +452,50 @@ def test_a_before_after_whose_after_diverges_is_judged_worse(kcs):
     assert row["after"]["completed"] is False and row["after"]["flown_s"] == pytest.approx(100.0)
     change = BeforeAfter("abkowitz", "abkowitz+x", ("x",), [row])
     assert change.confirmed is False
+    assert change.held_out_supports is None  # no held-out flights
+
+
+def test_held_out_flights_that_contradict_a_confirmed_effect_are_said_so(kcs):
+    """Confirmation judges the training flights alone (never selecting on the test set); when
+    the held-out flights then diverge with the effect, the confirmation line and the verdict
+    say that they do not agree."""
+    from types import SimpleNamespace
+
+    from sindyship.diagnose import BeforeAfter
+    from sindyship.evaluation import compare_flights, error_summary
+    from sindyship.reports import _confirmation_text, _held_out_caution
+
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=35, duration=600)])
+
+    def row(kind, before_off, after_off, after_diverges=None):
+        flights = []
+        for off, diverged in ((before_off, None), (after_off, after_diverges)):
+            data = run.data.copy()
+            data["x"] = data["x"] + off * kcs.L
+            flights.append(Trajectory(data, name=run.name, meta={"diverged_at": diverged}))
+        return {"manoeuvre": f"{kind}-{run.name}", "set": kind,
+                "before": error_summary(flights[0], run, kcs.L),
+                "after": error_summary(flights[1], run, kcs.L),
+                "common": compare_flights(*flights, run, kcs.L)}
+
+    training = row("training", 0.2, 0.1)  # twice as close with the effect
+    for held_out, supports in ((row("held-out", 0.2, 0.1), True),
+                               (row("held-out", 0.1, 0.3), False),
+                               (row("held-out", 0.2, 0.1, after_diverges=300.0), False)):
+        change = BeforeAfter("abkowitz", "abkowitz+x", ("x",), [training, held_out])
+        assert change.confirmed is True
+        assert change.held_out_supports is supports
+        assert change.to_json()["held_out_supports"] is supports
+        line = _confirmation_text(change)
+        assert line.startswith("confirmed by refitting and re-flying (judged on the training "
+                               "flights): training error x 0.50, held-out error x ")
+        assert line.endswith("the held-out flights agree" if supports
+                             else "the held-out flights do not agree")
+        caution = _held_out_caution(SimpleNamespace(confirmation=change))
+        assert (caution == "") is supports
+    assert "held-out error x 3.00" in _held_out_caution(SimpleNamespace(confirmation=BeforeAfter(
+        "abkowitz", "abkowitz+x", ("x",), [training, row("held-out", 0.1, 0.3)])))
+    assert "diverged flights 0 -> 1" in caution
 
 
 def test_a_flight_diverging_at_its_first_sample_has_no_mean(kcs):

@@ -150,6 +150,18 @@ def test_execute_index_and_no_execute():
     assert "straight" in str(caught.value)
 
 
+def test_writing_the_records_refuses_a_missing_folder_or_an_output_file(tmp_path, capsys):
+    from sindyship.marin import main
+
+    assert main([str(tmp_path / "out"), "--data", str(tmp_path / "nowhere")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "file not found; check the path" in err
+    (tmp_path / "file").write_text("x")
+    assert main([str(tmp_path / "file"), "--data", str(tmp_path)]) == 2
+    assert "is not a folder" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
 def test_model_scale_is_froude_scaled(tmp_path):
     record = read_marin(write(tmp_path, marin_text(straight_rows(3))))
     model = to_model_scale(record)

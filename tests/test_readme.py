@@ -260,6 +260,38 @@ def test_the_marin_numbers_are_pinned():
     assert polynomial["figures"] < 0.10 and polynomial["speed_loss"] < 0.20
 
 
+def test_the_marin_block_flies_the_turns_the_readme_states(tmp_path, monkeypatch):
+    """The MARIN section's commands, with the data folder in place of the README's path
+    (skipped without it): the turns ``evaluate`` flies are the README's default fit's, and
+    the recorded figures its measured ones (both from the rudder execute; the CSVs are on a
+    1 s grid, so the execute, and with it the recorded figures, move by a sample)."""
+    from sindyship.marin import default_marin_dir
+    from sindyship.marin import main as write_marin
+
+    folder = default_marin_dir()
+    if folder is None or NUMBERS["marin"] is None:
+        pytest.skip("the MARIN measurements (../shared/data) are not here")
+    section = README.split("### Real measurements: the KVLCC2 at MARIN", 1)[1]
+    (block,) = re.findall(r"```bash\n(.*?)```", section.split("<!-- BEGIN marin", 1)[0], re.S)
+    lines = block.strip().splitlines()
+    assert lines[0] == "python3 -m sindyship.marin marin --data /path/to/kvlcc2"
+    monkeypatch.chdir(tmp_path)
+    assert write_marin(["marin", "--data", str(folder)]) == 0
+    for line in lines[1:]:
+        code, out, err = run_sindyship(*_expanded(line.split()[1:]), "--json")
+        assert code == 0, f"{line}\n{err[-2000:]}"
+    turns = json.loads(out)["errors"]
+    stated = NUMBERS["marin"]["default_fit"]["default"]["turns"]
+    measured = NUMBERS["marin"]["measured_turns"]
+    for name, side in (("tc_35", "port"), ("tc_-35", "stbd")):
+        assert turns[name]["completed"], name
+        figures = turns[name]["turn"]
+        for key in ("advance_L", "tactical_diameter_L", "speed_loss"):
+            flown, recorded = figures["flown"][key], figures["recorded"][key]
+            assert flown == pytest.approx(stated[name][key], abs=0.03), (name, key)
+            assert recorded == pytest.approx(measured[side][key], abs=0.05), (name, key)
+
+
 def test_the_noise_ratios_are_pinned(kcs, protocol_runs):
     """1 % noise (seed 1), 21 s Savitzky-Golay smoothing, least squares: the held-out error
     over the clean one, as scripts/regenerate_golden.py computes it (tests/golden/kcs.json)."""

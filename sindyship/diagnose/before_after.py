@@ -130,6 +130,26 @@ class BeforeAfter:
             return True
         return bool(self.ratio("training") <= CONFIRMING_RATIO)
 
+    @property
+    def held_out_supports(self) -> bool | None:
+        """Whether the held-out flights agree with adding the effects: False when one of them
+        diverges with the effects where it did not without (or earlier), or when, with no
+        divergence cured, their geometric-mean distance over the common windows grows; None
+        without held-out flights or a distance to compare.  It never enters :attr:`confirmed`
+        (that would select the model on the test set); the report and the verdict say when
+        the two disagree.
+        """
+        rows = [row for row in self.rows if row["set"] == "held-out"]
+        if not rows:
+            return None
+        worse = {_worse_by_divergence(row) for row in rows}
+        if "after" in worse:
+            return False
+        if "before" in worse:
+            return True
+        ratio = self.ratio("held-out")
+        return bool(ratio <= 1.0) if math.isfinite(ratio) else None
+
 
     def report(self) -> str:
         """A plain-text table of the errors before and after
@@ -145,6 +165,7 @@ class BeforeAfter:
                 "after": self.after,
                 "added": list(self.added),
                 "confirmed": self.confirmed,
+                "held_out_supports": self.held_out_supports,
                 "ratio": {kind: self.ratio(kind) for kind in SETS},
                 "errors": {
                     row["manoeuvre"]: {

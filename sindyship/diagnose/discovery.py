@@ -236,8 +236,8 @@ class Discovery:
         return "\n".join(lines) + "\n"
 
     def report(self, effect_file: str | None = None) -> str:
-        """The findings as text (:func:`sindyship.reports.discovery_report`)."""
-        from ..reports import discovery_report
+        """The findings as text (:func:`sindyship.diagnose.discovery_report.discovery_report`)."""
+        from .discovery_report import discovery_report
 
         return discovery_report(self, effect_file)
 

@@ -232,12 +232,13 @@ def _column(trajectory: Trajectory, variable, rudder, requester: str, record: st
             return trajectory.rudder
         raise SindyshipInputError(
             f'{requester} needs the rudder angle ("delta" or "delta_c"), which '
-            f"{record} does not have."
+            f"{record} does not have; add the column to the record."
         )
     if trajectory.has(variable.column):
         return trajectory[variable.column]
     raise SindyshipInputError(
-        f'{requester} needs the channel "{variable.column}", which {record} does not have.'
+        f'{requester} needs the channel "{variable.column}", which {record} does not have; '
+        "add the column to the record."
     )
 
 

@@ -25,6 +25,7 @@ from ._reading import (
     ship_digest,
     ship_from_dict,
     ship_to_dict,
+    ship_to_toml,
 )
 
 __all__ = [
@@ -42,4 +43,5 @@ __all__ = [
     "ship_digest",
     "ship_from_dict",
     "ship_to_dict",
+    "ship_to_toml",
 ]

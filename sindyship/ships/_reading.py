@@ -443,6 +443,39 @@ def ship_to_dict(ship: Ship) -> dict:
     return out
 
 
+def ship_to_toml(ship: Ship) -> str:
+    """The ship as the text of a ship TOML file (:func:`ship_to_dict`'s layout), which
+    :func:`load_ship` reads back to an equal ship: a ship made in Python (a Froude-scaled
+    built-in one) for ``--ship``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> full = load_ship("kvlcc2").scaled(45.7)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "full.toml"
+    ...     _ = path.write_text(ship_to_toml(full))
+    ...     load_ship(path) == full
+    True
+    """
+    def value(item) -> str:
+        if isinstance(item, bool):
+            return "true" if item else "false"
+        if isinstance(item, str):
+            return json.dumps(item)  # a TOML basic string: JSON's escapes are TOML's
+        if isinstance(item, list | tuple):
+            return "[" + ", ".join(value(v) for v in item) + "]"
+        return repr(item)  # int, or float: repr reads back to the same number
+
+    data = ship_to_dict(ship)
+    lines = [f"{key} = {value(item)}" for key, item in data.items() if not isinstance(item, dict)]
+    for section, table in data.items():
+        if isinstance(table, dict) and table:
+            lines += ["", f"[{section}]", *(f"{key} = {value(item)}"
+                                            for key, item in table.items())]
+    return "\n".join(lines) + "\n"
+
+
 def ship_digest(ship: Ship) -> str:
     """SHA-256 of the ship's definition (:func:`ship_to_dict`, keys sorted): two ships with one
     name but other particulars have different digests."""
