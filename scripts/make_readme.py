@@ -324,7 +324,10 @@ def _marin_text(n: dict) -> str:
                 "worse")
 
     return (
-        f"Identified on the four MARIN zig-zags (21 s Savitzky-Golay derivatives) and tested on "
+        "Identified by least squares on the paper's library in the design speed form "
+        "(`sindyship diagnose marin/zz_*.csv --test marin/tc_35.csv marin/tc_-35.csv --ship "
+        "marin/kvlcc2-full-scale.toml --derivative savgol --window 21 --speed design "
+        "--confirm 0`) on the four MARIN zig-zags (21 s Savitzky-Golay derivatives) and tested on "
         f"the 35 deg turns, `{top}` explains {100 * rank[top]['explained']:.1f} % of the "
         f"force error ({100 * rank[top]['signal']:.1f} % of the part above the noise floor) "
         f"and `{second}` {100 * rank[second]['explained']:.1f} %; "

@@ -290,6 +290,14 @@ def test_the_marin_block_flies_the_turns_the_readme_states(tmp_path, monkeypatch
             flown, recorded = figures["flown"][key], figures["recorded"][key]
             assert flown == pytest.approx(stated[name][key], abs=0.03), (name, key)
             assert recorded == pytest.approx(measured[side][key], abs=0.05), (name, key)
+    # the diagnosis the section's paragraph states, by the command it names
+    (command,) = re.findall(r"`sindyship (diagnose marin/[^`]*)`", section)
+    code, out, err = run_sindyship(*_expanded(command.split()), "--json")
+    assert code == 0, err
+    ranking = {row["effect"]: row for row in json.loads(out)["ranking"]}
+    for effect, saved in NUMBERS["marin"]["ranking"].items():
+        assert ranking[effect]["explained"] == pytest.approx(saved["explained"], abs=1e-6)
+        assert ranking[effect]["explained_signal"] == pytest.approx(saved["signal"], abs=1e-6)
 
 
 def test_the_noise_ratios_are_pinned(kcs, protocol_runs):
