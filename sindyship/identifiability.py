@@ -130,10 +130,17 @@ class CollinearGroup:
         captive = next((r for r in self.remedies if r["captive"]), None)
         advice = []
         if free is not None:
-            advice.append(f"adding {free['test']} lowers it {free['factor']:.2g}-fold")
+            advice.append(f"adding {free['test']} " + _lowers(free["factor"]))
         if captive is not None:
-            advice.append(f"{captive['test']} {captive['factor']:.2g}-fold")
+            advice.append(f"{captive['test']} " + _lowers(captive["factor"]).removeprefix(
+                "lowers it "))
         return line + (f"; {', '.join(advice)}." if advice else ".")
+
+
+def _lowers(factor: float | None) -> str:
+    """How far a remedy lowers the largest VIF; None: from no finite VIF (the terms were
+    exactly collinear) to a finite one."""
+    return "lowers it to a finite VIF" if factor is None else f"lowers it {factor:.2g}-fold"
 
 
 @dataclass(frozen=True)

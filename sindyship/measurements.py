@@ -49,7 +49,7 @@ import pandas as pd
 
 from sindyship._io import write_text_atomic
 from sindyship.errors import SindyshipInputError
-from sindyship.plausibility import check_record, resolve_skip
+from sindyship.plausibility import check_record, resampling_gap_note, resolve_skip
 from sindyship.trajectory import REQUIRED_COLUMNS, RUDDER_COLUMNS, Trajectory
 from sindyship.units import UNITS, Column, parse_headers
 
@@ -253,6 +253,8 @@ def trajectory_from_frame(
     headers = {column.name: (column.header, column.unit) for column in columns}
     si, notes = check_record(si, headers, source=source, ship=ship, skip=skip,
                              row=lambda position: _row(index, position))
+    gap = None if resample is None else resampling_gap_note(si["t"], resample, source)
+    notes = notes if gap is None else [*notes, gap]
     for note in notes:
         warnings.warn(note, PlausibilityNote, stacklevel=2)
     if resample is not None:

@@ -70,6 +70,7 @@ from sindyship.errors import SindyshipInputError
 __all__ = [
     "CHECKS",
     "FRAME_SEGMENTS",
+    "GAP_STEPS",
     "FRAME_TOLERANCE",
     "HEADING_GAIN_TOLERANCE",
     "HEADING_MAX_DRIFT",
@@ -84,6 +85,7 @@ __all__ = [
     "check_record",
     "frame_misfit",
     "heading_gain",
+    "resampling_gap_note",
     "resolve_skip",
 ]
 
@@ -500,3 +502,22 @@ def _scale_fix(ratio: float, context: _Context) -> str:
     if _near(ratio, 1e-3) and context.unit("t") in (None, "s"):
         return "the times look like milliseconds, so write the header as 't [ms]'"
     return "check the units of t, u, v, x and y"
+
+
+#: A stretch without samples longer than this many median steps (and than the resampling
+#: step) is a gap that resampling bridges with a straight line, which the reader is told.
+GAP_STEPS = 5.0
+
+
+def resampling_gap_note(t: np.ndarray, step: float, source: str) -> str | None:
+    """The note that resampling bridges the record's longest gap (None when it has none)."""
+    if t.size < 3:
+        return None
+    steps = np.diff(t)
+    longest = int(np.argmax(steps))
+    median = float(np.median(steps))
+    if steps[longest] <= max(GAP_STEPS * median, step):
+        return None
+    return (f"{source}: no sample between t = {t[longest]:.6g} s and {t[longest + 1]:.6g} s "
+            f"({steps[longest]:.3g} s, {steps[longest] / median:.0f} times the median step); "
+            "resampling interpolates straight across it, so rows are probably missing there.")

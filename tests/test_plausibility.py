@@ -157,6 +157,30 @@ def test_wrapped_heading_is_unwrapped_with_a_note(protocol_runs, tmp_path):
     assert len(record.meta["notes"]) == 1 and "unwrapped" in record.meta["notes"][0]
 
 
+def test_resampling_across_missing_rows_is_noted_once_on_the_command_line(protocol_runs,
+                                                                           tmp_path):
+    """Rows missing from a record: resampling bridges the gap with a straight line and says
+    so (a resampled record with no gap is read without a note); the command line prints each
+    note of the reader once, under the file's name."""
+    turn = protocol_runs["train"][1]
+    gapped = turn.data.drop(index=range(300, 320))
+    path = write_csv(Trajectory(gapped, "tc"), tmp_path / "tc.csv")
+    with pytest.warns(PlausibilityNote, match=r"tc.csv: no sample between t = 299 s and 320 s "
+                      r"\(21 s, 21 times the median step\); resampling interpolates"):
+        record = read_csv(path, resample=1.0)
+    assert record.dt == pytest.approx(1.0) and len(record.meta["notes"]) == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityNote)
+        read_csv(write_csv(turn, tmp_path / "whole.csv"), resample=2.0)
+        read_csv(path, resample=25.0)  # a grid coarser than the gap loses nothing to it
+    code, _, err = run_sindyship("fit", path, tmp_path / "whole.csv", "--ship", "kcs",
+                                 "--resample", "1", "--optimizer", "ls",
+                                 "--out", tmp_path / "m.json")
+    assert code == 0, err
+    (line,) = [line for line in err.splitlines() if "no sample between" in line]
+    assert line.startswith(f"{path}: no sample") and line.count("tc.csv") == 1
+
+
 def test_wrapped_heading_in_degrees_under_a_bare_header_is_refused(protocol_runs):
     turn = protocol_runs["train"][1]
     wrapped = np.degrees(np.angle(np.exp(1j * turn["psi"])))

@@ -117,8 +117,8 @@ def _read_one(path: Path, resample, ship, skip, window, time_range):
 
 def report_reading(path, notes, cut) -> None:
     """A record's plausibility notes and its automatic cut, one line each on stderr."""
-    for note in notes:
-        progress(f"{path}: {note}")
+    for note in notes:  # a note of the reader names its source already
+        progress(note if note.startswith(f"{path}: ") else f"{path}: {note}")
     if cut is not None:
         start, stop, reason = cut
         progress(f"{path}: using {start:g}-{stop:g} s: {reason} (--time-range to choose)")
