@@ -218,14 +218,13 @@ def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
     from .library import available_effects
     from .terms import describe_variable, sources_of
 
-    origin = {}
+    catalogued = {}  # (dof, term) -> the catalogue's effect that adds it
     for name in library.effects:
-        if name not in available_effects():  # an effect file: the message names the library
-            continue
-        effect = load_effect(name)
-        for dof in DOFS:
-            for term in effect.terms[dof]:
-                origin.setdefault((dof, term.text), effect.source or f'effect "{name}"')
+        if name in available_effects():  # an effect file: the message names the library
+            effect = load_effect(name)
+            for dof in DOFS:
+                for term in effect.terms[dof]:
+                    catalogued.setdefault((dof, term.text), effect)
     for record in records:
         for dof in DOFS:
             for term in library.terms[dof]:
@@ -233,8 +232,16 @@ def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
                                       in term.variables for source in sources_of(variable)}):
                     if column in ("rudder", "rudder_rate") or record.has(column):
                         continue
-                    where = origin.get((dof, term.text),
-                                       library.source or f'library "{library.name}"')
+                    effect = catalogued.get((dof, term.text))
+                    if effect is not None:
+                        needs = ", ".join(f'"{c}"' for c in effect.channels)
+                        channels = "channels" if len(effect.channels) > 1 else "channel"
+                        raise SindyshipInputError(
+                            f'the effect "{effect.name}" needs the {channels} {needs} in every '
+                            f'record, and record "{record.name}" has no "{column}"; add the '
+                            f"column to the data or fit without the effect."
+                        )
+                    where = library.source or f'library "{library.name}"'
                     raise SindyshipInputError(
                         f'{where}: the {dof} term "{term.text}" uses the channel "{column}", '
                         f'which record "{record.name}" does not have; add the column to the '

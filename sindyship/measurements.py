@@ -549,7 +549,7 @@ def _check_plausible(
             f"beyond {limit}; {fix}."
         )
 
-    bypass = " (or pass rudder_check=False if the values are right)"
+    bypass = " (or, reading in Python, pass rudder_check=False if the values are right)"
     for name in ("u", "v"):
         if np.max(np.abs(si[name])) > MAX_SPEED:
             refuse(

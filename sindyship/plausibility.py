@@ -76,6 +76,7 @@ __all__ = [
     "HEADING_MAX_DRIFT",
     "HEADING_MIN_SPAN",
     "MAX_DURATION",
+    "MAX_REVOLUTION_RATIO",
     "MAX_SPEED_RATIO",
     "MAX_STEP",
     "MIN_STEP",
@@ -104,6 +105,9 @@ FRAME_SEGMENTS = 32
 FRAME_TOLERANCE = 0.1
 UNIT_MATCH = 0.2
 MAX_SPEED_RATIO = 1.6  # of U0
+#: Most a record's median propeller revolutions may exceed the ship's own (a ratio): rpm read
+#: as rps are 60 times too high.
+MAX_REVOLUTION_RATIO = 5.0
 
 _KNOT = 1852.0 / 3600.0
 
@@ -186,6 +190,8 @@ def check_record(
         _check_frame(data, context)
     if ship is not None and "speed" not in skip:
         _check_speed(data["u"], ship, context)
+        if "n" in data:
+            _check_revolutions(data["n"], ship, context)
     if "forward-speed" not in skip:
         _check_forward_speed(data["u"], context)
     return data, notes
@@ -263,6 +269,26 @@ def _check_speed(u: np.ndarray, ship, context: _Context) -> None:
         f"{ratio:.3g} times the ship's design speed U0 = {ship.U0:.4g} m/s",
         "the values look like knots, so write the headers as 'u [kn]' and 'v [kn]'"
         if knots else "check the unit of u and that the ship (full or model scale) is right",
+    )
+
+
+def _check_revolutions(n: np.ndarray, ship, context: _Context) -> None:
+    """Propeller revolutions far above the ship's own: rpm under a bare ``n`` header (which
+    the reader's absolute limit cannot tell from rps at full scale)."""
+    own = getattr(getattr(ship, "propeller", None), "n_P", None)
+    if not own or not ship.has_mmg:
+        return  # a ship file for identification gives no revolutions to compare with
+    typical = float(np.median(np.abs(n)))
+    ratio = typical / own
+    if ratio <= MAX_REVOLUTION_RATIO:
+        return
+    rpm = context.unit("n") is None and typical / 60.0 / own <= MAX_REVOLUTION_RATIO
+    context.refuse(
+        "speed",
+        f"column '{context.header('n')}' has a median of {typical:.4g}, {ratio:.3g} times the "
+        f"ship's propeller revolutions n = {own:.4g} rps",
+        "the values look like rpm, so write the header as 'n [rpm]'" if rpm else
+        "check the unit of n and that the ship (full or model scale) is right",
     )
 
 

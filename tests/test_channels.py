@@ -169,3 +169,22 @@ def test_shooting_segments_fly_each_records_own_channel(kcs, depth_model, compil
         np.testing.assert_allclose(states[k, : len(rows), 3], alone["x"][rows], atol=0.5)
     gap = np.hypot(*(states[0, -1, 3:5] - states[1, -1, 3:5])) / kcs.L
     assert gap > 0.01  # the two records' channels fly apart
+
+
+def test_an_effect_whose_channel_a_record_lacks_is_refused_by_name(protocol_runs):
+    """A catalogued effect names the channels it needs (the record lacks one), not a term of
+    its file; a term of the library's own names the library."""
+    from sindyship.errors import SindyshipInputError
+    from sindyship.identify import check_channels, resolve_library
+
+    records = protocol_runs["train"][:2]
+    with pytest.raises(SindyshipInputError) as caught:
+        check_channels(resolve_library("abkowitz", ["wind"]), records)
+    assert str(caught.value) == (
+        f'the effect "wind" needs the channels "wind_speed", "wind_dir" in every record, and '
+        f'record "{records[0].name}" has no "wind_dir"; add the column to the data or fit '
+        "without the effect.")
+    own = TermLibrary("mine", "prime-I", "", {"X": ["du"], "Y": ["v", "depth"], "N": ["r"]})
+    with pytest.raises(SindyshipInputError, match='library "mine": the Y term "depth" uses the '
+                       'channel "depth", which record'):
+        check_channels(own, records)

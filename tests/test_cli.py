@@ -154,6 +154,14 @@ def test_fit_then_evaluate_json(records, tmp_path):
         f"from t = {errors['zz20']['start_s']:.6g} s)")
 
 
+def test_evaluate_with_a_record_where_the_model_belongs_says_the_model_comes_first(records):
+    code, out, err = run_sindyship("evaluate", records["zz20"], records["tc35"])
+    assert code == 2 and out == ""
+    assert err == (f"sindyship evaluate: error: {records['zz20']}: is a record, where the saved "
+                   "model belongs; the model comes first: sindyship evaluate MODEL.json "
+                   "DATA.csv...\n")
+
+
 def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
     from sindyship.reports import evaluation_report
 

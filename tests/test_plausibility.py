@@ -181,6 +181,24 @@ def test_resampling_across_missing_rows_is_noted_once_on_the_command_line(protoc
     assert line.startswith(f"{path}: no sample") and line.count("tc.csv") == 1
 
 
+def test_revolutions_in_rpm_under_a_bare_header_are_refused_against_the_ship():
+    """91.5 rpm at full scale is under the reader's absolute limit of 100 rps, but 34 times the
+    full-scale KVLCC2's 2.66 rps; the same values in rps of the 7 m model (10.3) pass."""
+    from sindyship.ships import load_ship
+
+    full = load_ship("kvlcc2").scaled(45.7)
+    t = np.arange(0.0, 200.0, 1.0)
+    frame = pd.DataFrame({"t": t, "u": full.U0, "v": 0.0, "r": 0.0, "x": full.U0 * t,
+                          "y": 0.0, "psi": 0.0, "delta": 0.0, "n": 91.5})
+    message = refusal(frame, ship=full)
+    assert ("the speed check refuses the record: column 'n' has a median of 91.5, 34.5 times "
+            "the ship's propeller revolutions n = 2.655 rps; the values look like rpm, so write "
+            "the header as 'n [rpm]'") in message
+    frame["n"] = 1.525
+    trajectory_from_frame(frame, "ok", ship=full)
+    trajectory_from_frame(frame.assign(n=91.5), "skipped", ship=full, skip_checks=["speed"])
+
+
 def test_wrapped_heading_in_degrees_under_a_bare_header_is_refused(protocol_runs):
     turn = protocol_runs["train"][1]
     wrapped = np.degrees(np.angle(np.exp(1j * turn["psi"])))

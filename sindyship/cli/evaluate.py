@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+from ..errors import SindyshipInputError
 from ._common import (
     add_json,
     add_record_options,
@@ -42,6 +45,10 @@ def run(args) -> int:
     from ..reports import evaluation_report
     from ._common import load_cli_ship
 
+    if Path(args.model).suffix.lower() in (".csv", ".parquet"):
+        raise SindyshipInputError(
+            f"{args.model}: is a record, where the saved model belongs; the model comes "
+            "first: sindyship evaluate MODEL.json DATA.csv...")
     args.data = expand_paths(args.data)
     check_inputs([args.model, *args.data, *ship_file(args.ship)])
     ship = load_cli_ship(args.ship) if args.ship else None
