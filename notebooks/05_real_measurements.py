@@ -16,8 +16,9 @@
 # bring real trouble: three significant figures, a time column that loses resolution, roll that a
 # 3-DOF model ignores. We identify on the zig-zags and test on the turning circles.
 #
-# The data are not part of sindyship; this notebook reads them from `../shared/data` (or the
-# folder in `SINDYSHIP_MARIN_DIR`) and stops early, saying so, when they are absent.
+# The data are not part of sindyship (the README's MARIN section says where they are
+# published); this notebook reads them from the folder in `SINDYSHIP_MARIN_DIR` and stops
+# early, saying so, when they are absent.
 
 # %%
 # %matplotlib inline

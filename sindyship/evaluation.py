@@ -168,10 +168,11 @@ TURN_FIGURES = ("advance_L", "tactical_diameter_L", "speed_loss")
 
 
 def turn_figures(flown: Trajectory, recorded: Trajectory, L: float) -> dict:
-    """A turn's advance and tactical diameter [L] and speed loss (1 - steady U / approach U),
-    flown and recorded, both from the flight's first sample, the rudder execute
+    """A turn's side, advance and tactical diameter [L] and speed loss (1 - steady U /
+    approach U), flown and recorded, both from the flight's first sample, the rudder execute
     (:func:`sindyship.manoeuvres.turning_figures`); None where the flight diverged or the
-    turn never reached the heading change a figure needs.
+    turn never reached the heading change a figure needs.  A flight that turns to the other
+    side than the record has no figures to compare (``"flown"`` holds its side alone).
 
     Examples
     --------
@@ -190,6 +191,11 @@ def turn_figures(flown: Trajectory, recorded: Trajectory, L: float) -> dict:
         if run.meta.get("diverged_at") is not None:
             return None
         values = turning_figures(run, L, execute=0)
-        return {k: float(values[k]) if math.isfinite(values[k]) else None for k in TURN_FIGURES}
+        side = "starboard" if run["psi"][-1] >= run["psi"][0] else "port"
+        return {"side": side, **{k: float(values[k]) if math.isfinite(values[k]) else None
+                                 for k in TURN_FIGURES}}
 
-    return {"flown": figures(flown), "recorded": figures(recorded)}
+    out = {"flown": figures(flown), "recorded": figures(recorded)}
+    if out["flown"] and out["recorded"] and out["flown"]["side"] != out["recorded"]["side"]:
+        out["flown"] = {"side": out["flown"]["side"], **dict.fromkeys(TURN_FIGURES)}
+    return out

@@ -130,17 +130,20 @@ class CollinearGroup:
         captive = next((r for r in self.remedies if r["captive"]), None)
         advice = []
         if free is not None:
-            advice.append(f"adding {free['test']} " + _lowers(free["factor"]))
+            amount = _amount(free)
+            advice.append(f"adding {free['test']} " + ("leaves it infinite" if amount is None
+                                                       else f"lowers it {amount}"))
         if captive is not None:
-            advice.append(f"{captive['test']} " + _lowers(captive["factor"]).removeprefix(
-                "lowers it "))
+            advice.append(f"{captive['test']} {_amount(captive) or 'leave it infinite'}")
         return line + (f"; {', '.join(advice)}." if advice else ".")
 
 
-def _lowers(factor: float | None) -> str:
-    """How far a remedy lowers the largest VIF; None: from no finite VIF (the terms were
-    exactly collinear) to a finite one."""
-    return "lowers it to a finite VIF" if factor is None else f"lowers it {factor:.2g}-fold"
+def _amount(remedy: dict) -> str | None:
+    """How far a remedy lowers the largest VIF ("40-fold", or "to a finite VIF" for terms that
+    were exactly collinear before it); None when they stay exactly collinear."""
+    if remedy["max_vif"] is None:
+        return None
+    return "to a finite VIF" if remedy["factor"] is None else f"{remedy['factor']:.2g}-fold"
 
 
 @dataclass(frozen=True)
@@ -323,7 +326,10 @@ def _group(dof, members, ci, problem, vif, values, shell, tie_bound, remedies):
         new = max(conditioning[dof]["vif"][t] for t in terms)
         found.append({"test": label, "captive": captive, "max_vif": _finite(new),
                       "factor": _finite(max_vif / new) if new > 0 else None})
-    found.sort(key=lambda r: -(r["factor"] or 0.0))
+    # best first: a remedy from exact collinearity to a finite VIF (factor None) beats any
+    # finite factor; one that leaves the VIF infinite comes last
+    found.sort(key=lambda r: (r["max_vif"] is None,
+                              -(math.inf if r["factor"] is None else r["factor"])))
     return CollinearGroup(dof=dof, terms=terms, condition_index=ci, max_vif=max_vif,
                           variables=variables, ties=_ties(values, variables, tie_bound),
                           remedies=found)

@@ -432,18 +432,16 @@ def write_records(out: str | os.PathLike[str], folder: str | os.PathLike[str] | 
     source = default_marin_dir() if folder is None else Path(folder)
     if source is None:
         raise SindyshipInputError(
-            "the MARIN files were not found; give their folder with --data DIR or set "
+            "the MARIN files were not found; name their folder (folder=...) or set "
             f"{_ENVIRONMENT}.")
     target = Path(out)
     if target.exists() and not target.is_dir():
         raise SindyshipInputError(f"{target}: exists and is not a folder; name a folder to "
                                   "write the records into.")
-    written = []
-    for short, name in MARIN_FILES.items():
-        record = read_marin(source / name)
-        regular = trajectory_from_frame(record.data, short, source=str(source / name),
-                                        resample=resample)
-        written.append(write_csv(regular, target / f"{short}.csv"))
+    records = {short: trajectory_from_frame(read_marin(source / name).data, short,
+                                            source=str(source / name), resample=resample)
+               for short, name in MARIN_FILES.items()}  # all read before any is written
+    written = [write_csv(record, target / f"{short}.csv") for short, record in records.items()]
     ship = target / FULL_SCALE_SHIP_FILE
     write_text_atomic(ship, ship_to_toml(full_scale_ship()))
     return [*written, ship]
@@ -465,6 +463,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--resample", type=float, default=1.0,
                         help="sample interval of the CSVs [s] (default 1)")
     args = parser.parse_args(argv)
+    if args.data is None and default_marin_dir() is None:
+        print("python3 -m sindyship.marin: error: the MARIN files were not found; give their "
+              f"folder with --data DIR or set {_ENVIRONMENT}.", file=sys.stderr)
+        return 2
     try:
         written = write_records(args.out, args.data, resample=args.resample)
     except SindyshipInputError as error:

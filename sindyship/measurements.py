@@ -108,10 +108,10 @@ def read_csv(
         their rudder past 57 deg or yaw faster than 29 deg/s.
     ship : Ship or str, optional
         The ship measured (a :class:`~sindyship.ships.Ship`, a built-in name or a TOML path).
-        Enables the plausibility checks scaled by its L and U0 (``sampling``, ``speed``).
+        Enables the checks scaled by its L, U0 and revolutions (``sampling``, ``speed``,
+        ``revolutions``).
     skip_checks : str or iterable of str, optional
-        Plausibility checks not to run, by name (:data:`sindyship.plausibility.CHECKS`:
-        ``motion``, ``sampling``, ``heading``, ``frame``, ``speed``, ``forward-speed``), or
+        Plausibility checks not to run, by name (:data:`sindyship.plausibility.CHECKS`), or
         ``"all"``.  The checks and their thresholds are described in
         :mod:`sindyship.plausibility`; a wrapped heading is unwrapped with a
         :class:`PlausibilityNote` warning and the note kept in ``meta["notes"]``.

@@ -52,6 +52,10 @@ The checks, in the order they run, with their thresholds (module constants) and 
     Refuses a largest u (averaged over 5 samples against noise) above ``MAX_SPEED_RATIO`` =
     1.6 U0: no ship on trials runs 60 % above its design speed (good records reach 1.0 to
     1.1 U0, with noise or a current); knots under a m/s header read 1.94 U0.
+``revolutions`` (only with a ship that has a propeller, and records with ``n``)
+    Refuses a median n above ``MAX_REVOLUTION_RATIO`` = 5 times the ship's propeller
+    revolutions: rpm under a bare header read 60 times too high (91.5 rpm of the full-scale
+    KVLCC2 pass the reader's absolute limit of 100 rps).
 ``forward-speed``
     Refuses u <= 0 at every sample: the models describe a ship going ahead.
 
@@ -91,7 +95,7 @@ __all__ = [
 ]
 
 #: Names of the checks, in the order they run.
-CHECKS = ("motion", "sampling", "heading", "frame", "speed", "forward-speed")
+CHECKS = ("motion", "sampling", "heading", "frame", "speed", "revolutions", "forward-speed")
 
 MOTION_TOLERANCE = 1e-9
 MAX_STEP = 1.0  # L/U0
@@ -190,8 +194,8 @@ def check_record(
         _check_frame(data, context)
     if ship is not None and "speed" not in skip:
         _check_speed(data["u"], ship, context)
-        if "n" in data:
-            _check_revolutions(data["n"], ship, context)
+    if ship is not None and "revolutions" not in skip and "n" in data:
+        _check_revolutions(data["n"], ship, context)
     if "forward-speed" not in skip:
         _check_forward_speed(data["u"], context)
     return data, notes
@@ -284,7 +288,7 @@ def _check_revolutions(n: np.ndarray, ship, context: _Context) -> None:
         return
     rpm = context.unit("n") is None and typical / 60.0 / own <= MAX_REVOLUTION_RATIO
     context.refuse(
-        "speed",
+        "revolutions",
         f"column '{context.header('n')}' has a median of {typical:.4g}, {ratio:.3g} times the "
         f"ship's propeller revolutions n = {own:.4g} rps",
         "the values look like rpm, so write the header as 'n [rpm]'" if rpm else

@@ -211,8 +211,8 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
     validate : bool
         With :data:`VALIDATION_RECORDS` records or more, check that refining carries over to
         flights it was not refined on (:func:`sindyship.refine_checks.carries_over`: fitted and
-        refined on every other record, the model must fly the rest closer than its fit alone
-        does), else keep the fitted coefficients; checked before the refinement on all
+        refined on every other record by name, the model must fly the rest closer than its fit
+        alone does), else keep the fitted coefficients; checked before the refinement on all
         records, which a refused check spares.  Trajectories
         with disturbances the library lacks (gusts, noise, roll) can be matched by terms they
         do not pin down, which then fly other manoeuvres worse.

@@ -85,13 +85,16 @@ def hard_over_diameters(model: AbkowitzModel, records) -> dict:
 
 def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
     """Whether refining carries over to flights it was not refined on (a two-way split of the
-    records): fitted again on every other record, as the model was, and refined on those
+    records taken in the order of their names, so that the verdict does not depend on the
+    order they were given in; records that share a name keep theirs): fitted again on every
+    other record, as the model was, and refined on those
     (``refined_on(fitted, records)``), the model flies the rest (whole, as
     :func:`sindyship.evaluation.evaluate` flies them, on the refinement's grid:
     :func:`flown_whole`) closer than its fit on them alone does (geometric mean of the mean
     distances over the windows both cover below :data:`VALIDATION_RATIO`, and no new
     divergence)."""
-    fitted_on, flown = list(records[0::2]), list(records[1::2])
+    ordered = sorted(records, key=lambda record: record.name)
+    fitted_on, flown = ordered[0::2], ordered[1::2]
     half_fit = fitted_again(model, fitted_on)
     half = refined_on(half_fit, fitted_on)
     ratios, worse = [], []

@@ -116,7 +116,9 @@ def _confirmation_text(change) -> str:
 
 
 
-def _fill(text: str, indent: str = "    ", subsequent: str = "      ") -> str:
+def wrapped_text(text: str, indent: str = "    ", subsequent: str = "      ") -> str:
+    """``text`` wrapped at 96 characters, its first line indented by ``indent`` and the others
+    by ``subsequent``."""
     return textwrap.fill(text, width=96, initial_indent=indent, subsequent_indent=subsequent)
 
 
@@ -177,10 +179,10 @@ def _score_lines(k: int, score) -> list[str]:
         f"{100 * score.explained:.1f} % ({by}){signal}{mark}"
     ]
     if score.meaningful:
-        lines.append(_fill(f"where: {score.regime}"))
+        lines.append(wrapped_text(f"where: {score.regime}"))
         if score.confirmation is not None:
-            lines.append(_fill(_confirmation_text(score.confirmation)))
-        lines.append(_fill(f"physics: {score.effect.physics}"))
+            lines.append(wrapped_text(_confirmation_text(score.confirmation)))
+        lines.append(wrapped_text(f"physics: {score.effect.physics}"))
     return lines
 
 
@@ -198,8 +200,8 @@ def _ranking_lines(diagnosis) -> list[str]:
     if diagnosis.not_testable:
         lines += ["", "Not testable with these data (record the channel named):"]
         for item in diagnosis.not_testable:
-            lines.append(_fill(f"- {item.effect.name} ({item.effect.title}): {item.reason}",
-                               "  ", "    "))
+            lines.append(wrapped_text(
+                f"- {item.effect.name} ({item.effect.title}): {item.reason}", "  ", "    "))
     if diagnosis.in_library:
         lines.append(f"Already in the library: {', '.join(diagnosis.in_library)}.")
     return [*lines, ""]
@@ -396,6 +398,9 @@ def _turn_line(turn: dict) -> str:
              for label, key, unit in (("advance", "advance_L", " L"),
                                       ("tactical diameter", "tactical_diameter_L", " L"),
                                       ("speed loss", "speed_loss", ""))]
+    sides = (flown.get("side"), recorded.get("side"))
+    if None not in sides and sides[0] != sides[1]:
+        return f"  turn flown to {sides[0]}, recorded to {sides[1]}: no figures to compare"
     return "  turn flown: " + ", ".join(cells)
 
 

@@ -140,9 +140,11 @@ def test_fit_then_evaluate_json(records, tmp_path):
     assert errors["zz20"]["diverged_at_s"] is None
     # a turn's figures, flown and recorded: a training record's agree closely
     turn = errors["tc35"]["turn"]
-    assert set(turn["flown"]) == {"advance_L", "tactical_diameter_L", "speed_loss"}
+    assert set(turn["flown"]) == {"side", "advance_L", "tactical_diameter_L", "speed_loss"}
+    assert turn["flown"]["side"] == turn["recorded"]["side"] == "starboard"
     for key, recorded in turn["recorded"].items():
-        assert turn["flown"][key] == pytest.approx(recorded, abs=0.05), key
+        if key != "side":
+            assert turn["flown"][key] == pytest.approx(recorded, abs=0.05), key
     assert 2.5 < turn["recorded"]["tactical_diameter_L"] < 4.0
     assert "turn" not in errors["zz20"]
     # the text says how and from where each record was flown
@@ -157,9 +159,8 @@ def test_fit_then_evaluate_json(records, tmp_path):
 def test_evaluate_with_a_record_where_the_model_belongs_says_the_model_comes_first(records):
     code, out, err = run_sindyship("evaluate", records["zz20"], records["tc35"])
     assert code == 2 and out == ""
-    assert err == (f"sindyship evaluate: error: {records['zz20']}: is a record, where the saved "
-                   "model belongs; the model comes first: sindyship evaluate MODEL.json "
-                   "DATA.csv...\n")
+    assert err == (f"sindyship evaluate: error: {records['zz20']} is a record, not a saved "
+                   "model; give the model first: sindyship evaluate MODEL.json DATA.csv...\n")
 
 
 def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
@@ -171,6 +172,13 @@ def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
                                            "speed_loss": 0.555},
                                  "recorded": {"advance_L": 3.02, "tactical_diameter_L": None,
                                               "speed_loss": 0.64}}},
+              "tc_-35": {"mean_distance_L": 4.0, "max_distance_L": 8.0, "diverged_at_s": None,
+                         "flown_as": "replay-actual", "start_s": 3.0,
+                         "turn": {"flown": {"side": "port", "advance_L": None,
+                                            "tactical_diameter_L": None, "speed_loss": None},
+                                  "recorded": {"side": "starboard", "advance_L": 3.1,
+                                               "tactical_diameter_L": 3.3,
+                                               "speed_loss": 0.6}}},
               "zz_20": {"mean_distance_L": 3.0, "max_distance_L": 9.0, "diverged_at_s": 401.4,
                         "flown_as": "zigzag", "amplitude_deg": 20.0, "check_deg": 20.0,
                         "start_s": 7.04}}
@@ -179,6 +187,8 @@ def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
         "from t = 214.2 s)",
         "  turn flown: advance 3.01 L (recorded 3.02 L), tactical diameter 3.28 L (recorded "
         "n/a), speed loss 0.56 (recorded 0.64)",
+        "tc_-35: mean 4.0000 L, max 8.0000 L (replaying its recorded rudder angle from t = 3 s)",
+        "  turn flown to port, recorded to starboard: no figures to compare",
         "zz_20: FAILED: diverged at 401 s; before it mean 3.0000 L, max 9.0000 L (flown closed "
         "loop as a 20/20 zig-zag from t = 7.04 s)"]
 

@@ -491,11 +491,15 @@ def test_held_out_flights_that_contradict_a_confirmed_effect_are_said_so(kcs):
                                "flights): training error x 0.50, held-out error x ")
         assert line.endswith("the held-out flights agree" if supports
                              else "the held-out flights do not agree")
-        caution = _held_out_caution(SimpleNamespace(confirmation=change))
-        assert (caution == "") is supports
-    assert "held-out error x 3.00" in _held_out_caution(SimpleNamespace(confirmation=BeforeAfter(
-        "abkowitz", "abkowitz+x", ("x",), [training, row("held-out", 0.1, 0.3)])))
-    assert "diverged flights 0 -> 1" in caution
+        assert (_held_out_caution(SimpleNamespace(confirmation=change)) == "") is supports
+    def caution(held_out):
+        change = BeforeAfter("abkowitz", "abkowitz+x", ("x",), [training, held_out])
+        return _held_out_caution(SimpleNamespace(confirmation=change))
+
+    assert caution(row("held-out", 0.1, 0.3)).startswith(
+        " But the held-out flights do not agree (held-out error x 3.00): on the training")
+    assert "(held-out error x 2.00, diverged flights 0 -> 1)" in caution(
+        row("held-out", 0.1, 0.2, after_diverges=300.0))
 
 
 def test_a_flight_diverging_at_its_first_sample_has_no_mean(kcs):

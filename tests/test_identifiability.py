@@ -100,16 +100,23 @@ def test_fit_with_the_prior_says_the_prior_decides_the_collinear_terms(protocol_
 
 def test_a_remedy_from_exact_collinearity_reads_as_making_the_vif_finite():
     """Exactly collinear terms have no finite VIF, so a remedy's factor is None (null in
-    JSON); the text says the remedy makes the VIF finite instead of failing to format it."""
+    JSON): the text says the remedy makes the VIF finite, or that it leaves it infinite when
+    the remedy's own VIF is None too, instead of failing to format it."""
     from sindyship.identifiability import CollinearGroup
 
-    group = CollinearGroup("Y", ("v", "r"), float("inf"), float("inf"), ("v", "r"),
-                           [{"pair": ["v", "r"], "r2": 1.0}],
-                           [{"test": "turning circles", "captive": False, "max_vif": 3.0,
-                             "factor": None},
-                            {"test": "captive pure-yaw tests", "captive": True, "max_vif": 1.2,
-                             "factor": 40.0}])
-    assert group.text() == (
+    def group(free):
+        return CollinearGroup("Y", ("v", "r"), float("inf"), float("inf"), ("v", "r"),
+                              [{"pair": ["v", "r"], "r2": 1.0}],
+                              [free, {"test": "captive pure-yaw tests", "captive": True,
+                                      "max_vif": 1.2, "factor": 40.0}])
+
+    finite = group({"test": "turning circles", "captive": False, "max_vif": 3.0,
+                    "factor": None})
+    assert finite.text() == (
         "Y: v, r cannot be separated (VIF up to inf): v' moves with r' (R^2 1.00); adding "
         "turning circles lowers it to a finite VIF, captive pure-yaw tests 40-fold.")
-    assert group.to_dict()["remedies"][0]["factor"] is None
+    assert finite.to_dict()["remedies"][0]["factor"] is None
+    infinite = group({"test": "turning circles", "captive": False, "max_vif": None,
+                      "factor": None})
+    assert infinite.text().endswith("adding turning circles leaves it infinite, captive "
+                                    "pure-yaw tests 40-fold.")

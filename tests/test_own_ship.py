@@ -130,3 +130,20 @@ def test_the_command_line_names_what_the_ship_assumes(tmp_path, protocol_runs):
     assert code == 0, err
     notes = [line for line in err.splitlines() if line.startswith("note: ship")]
     assert len(notes) == 3 and "Clarke" in notes[0] and "servo" in notes[1]
+
+
+def test_an_identification_ship_scales_and_round_trips_through_its_file(own_ship, tmp_path):
+    """Froude scaling touches the groups the file has (no propeller or rudder here), and
+    ship_to_toml writes a file load_ship reads back to the same ship, a title in any script
+    included."""
+    from sindyship.ships import ship_to_toml
+
+    ship = own_ship(KCS_PARTICULARS.replace('name = "my-kcs"',
+                                            'name = "my-kcs"\ntitle = "Kaiyō 🚢"') + TABLE_6)
+    scaled = ship.scaled(1 / 40.0)
+    assert scaled.propeller is None and scaled.rudder is None
+    assert scaled.L == pytest.approx(5.75) and scaled.U0 == pytest.approx(12.348 / 40**0.5)
+    for each in (ship, scaled):
+        path = tmp_path / f"{each.name}.toml"
+        path.write_text(ship_to_toml(each), encoding="utf-8")
+        assert load_ship(path) == each

@@ -125,7 +125,8 @@ def test_no_motion_and_no_forward_speed_are_refused(zigzag):
 def test_unknown_check_name_is_refused(zigzag):
     with pytest.raises(SindyshipInputError, match="unknown plausibility check 'speeed'"):
         trajectory_from_frame(zigzag.data, skip_checks=["speeed"])
-    assert set(CHECKS) == {"motion", "sampling", "heading", "frame", "speed", "forward-speed"}
+    assert set(CHECKS) == {"motion", "sampling", "heading", "frame", "speed", "revolutions",
+                           "forward-speed"}
 
 
 @pytest.mark.parametrize(
@@ -191,12 +192,13 @@ def test_revolutions_in_rpm_under_a_bare_header_are_refused_against_the_ship():
     frame = pd.DataFrame({"t": t, "u": full.U0, "v": 0.0, "r": 0.0, "x": full.U0 * t,
                           "y": 0.0, "psi": 0.0, "delta": 0.0, "n": 91.5})
     message = refusal(frame, ship=full)
-    assert ("the speed check refuses the record: column 'n' has a median of 91.5, 34.5 times "
+    assert ("the revolutions check refuses the record: column 'n' has a median of 91.5, 34.5 times "
             "the ship's propeller revolutions n = 2.655 rps; the values look like rpm, so write "
             "the header as 'n [rpm]'") in message
     frame["n"] = 1.525
     trajectory_from_frame(frame, "ok", ship=full)
-    trajectory_from_frame(frame.assign(n=91.5), "skipped", ship=full, skip_checks=["speed"])
+    trajectory_from_frame(frame.assign(n=91.5), "skipped", ship=full,
+                          skip_checks=["revolutions"])
 
 
 def test_wrapped_heading_in_degrees_under_a_bare_header_is_refused(protocol_runs):

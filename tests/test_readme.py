@@ -238,7 +238,7 @@ def test_the_marin_numbers_are_pinned():
     from sindyship.marin import default_marin_dir
 
     if default_marin_dir() is None or NUMBERS["marin"] is None:
-        pytest.skip("the MARIN measurements (../shared/data) are not here")
+        pytest.skip("the MARIN measurements are not here (SINDYSHIP_MARIN_DIR)")
     fresh = json.loads(json.dumps(_script()._marin()))
     saved = dict(NUMBERS["marin"])
     assert fresh["top"] == saved["top"] and fresh["confirmed"] == saved["confirmed"]
@@ -270,7 +270,7 @@ def test_the_marin_block_flies_the_turns_the_readme_states(tmp_path, monkeypatch
 
     folder = default_marin_dir()
     if folder is None or NUMBERS["marin"] is None:
-        pytest.skip("the MARIN measurements (../shared/data) are not here")
+        pytest.skip("the MARIN measurements are not here (SINDYSHIP_MARIN_DIR)")
     section = README.split("### Real measurements: the KVLCC2 at MARIN", 1)[1]
     (block,) = re.findall(r"```bash\n(.*?)```", section.split("<!-- BEGIN marin", 1)[0], re.S)
     lines = block.strip().splitlines()

@@ -41,14 +41,14 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from ..evaluation import evaluate
     from ..model import AbkowitzModel
-    from ..records import expand_paths
+    from ..records import PARQUET_SUFFIXES, expand_paths
     from ..reports import evaluation_report
     from ._common import load_cli_ship
 
-    if Path(args.model).suffix.lower() in (".csv", ".parquet"):
+    if Path(args.model).suffix.lower() in (".csv", *PARQUET_SUFFIXES):
         raise SindyshipInputError(
-            f"{args.model}: is a record, where the saved model belongs; the model comes "
-            "first: sindyship evaluate MODEL.json DATA.csv...")
+            f"{args.model} is a record, not a saved model; give the model first: sindyship "
+            "evaluate MODEL.json DATA.csv...")
     args.data = expand_paths(args.data)
     check_inputs([args.model, *args.data, *ship_file(args.ship)])
     ship = load_cli_ship(args.ship) if args.ship else None

@@ -120,15 +120,7 @@ class BeforeAfter:
         flights.  Held-out flights never enter it (they would select the model on the test
         set).
         """
-        rows = [row for row in self.rows if row["set"] == "training"]
-        if not rows:
-            return None
-        worse = {_worse_by_divergence(row) for row in rows}
-        if "after" in worse:
-            return False
-        if "before" in worse:
-            return True
-        return bool(self.ratio("training") <= CONFIRMING_RATIO)
+        return self._judged("training", CONFIRMING_RATIO, no_distance=False)
 
     @property
     def held_out_supports(self) -> bool | None:
@@ -139,7 +131,15 @@ class BeforeAfter:
         (that would select the model on the test set); the report and the verdict say when
         the two disagree.
         """
-        rows = [row for row in self.rows if row["set"] == "held-out"]
+        return self._judged("held-out", 1.0, no_distance=None)
+
+    def _judged(self, kind: str, threshold: float, *, no_distance: bool | None
+                ) -> bool | None:
+        """Whether the set's flights favour the effects: False when one diverges with them
+        where it did not without (or earlier), True when only divergences without them are
+        cured, else whether the geometric-mean ratio is at most ``threshold``
+        (``no_distance`` without a distance to compare; None without flights of the set)."""
+        rows = [row for row in self.rows if row["set"] == kind]
         if not rows:
             return None
         worse = {_worse_by_divergence(row) for row in rows}
@@ -147,9 +147,8 @@ class BeforeAfter:
             return False
         if "before" in worse:
             return True
-        ratio = self.ratio("held-out")
-        return bool(ratio <= 1.0) if math.isfinite(ratio) else None
-
+        ratio = self.ratio(kind)
+        return bool(ratio <= threshold) if math.isfinite(ratio) else no_distance
 
     def report(self) -> str:
         """A plain-text table of the errors before and after

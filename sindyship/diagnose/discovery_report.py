@@ -3,7 +3,7 @@ what they mean, and what was discovered (or why nothing was)."""
 
 from __future__ import annotations
 
-from ..reports import DOF_NAMES, _fill, shape_words
+from ..reports import DOF_NAMES, shape_words, wrapped_text
 
 __all__ = ["discovery_report"]
 
@@ -25,7 +25,7 @@ def _finding_lines(k: int, finding) -> list[str]:
                        for dof in DOF_NAMES)
     return [f"  {k}. {finding.family}: explains {finding.explained_signal:.1%} of the error "
             f"above the noise floor ({mark}; {shares})",
-            _fill(f"{what}. Usually: {finding.hint}.", indent="     ", subsequent="     ")]
+            wrapped_text(f"{what}. Usually: {finding.hint}.", indent="     ", subsequent="     ")]
 
 
 def discovery_report(discovery, effect_file: str | None = None) -> str:
@@ -38,28 +38,29 @@ def discovery_report(discovery, effect_file: str | None = None) -> str:
              f"{len(discovery.records)} records ({discovery.seconds:.1f} s{smoothing})."]
     named = ", ".join(f"{name} ({share:.0%})" for name, share in discovery.catalogue.items())
     if discovery.catalogue and discovery.contests:
-        lines.append(_fill(
+        lines.append(wrapped_text(
             f"Catalogued effects meaningful here: {named}. A family below can stand in for "
             "them and they for it, so the best finding competes with each in flights: each "
             "fitted leaving one manoeuvre out, flying the manoeuvre left out.",
             indent="", subsequent=""))
     elif discovery.catalogue:
-        lines.append(_fill(f"Catalogued effects meaningful here: {named}.", indent="",
-                           subsequent=""))
+        lines.append(wrapped_text(f"Catalogued effects meaningful here: {named}.", indent="",
+                                  subsequent=""))
     if any(c.catalogued == "none" for c in discovery.contests):
-        lines.append(_fill(
+        lines.append(wrapped_text(
             "A line of a shape is chosen among hundreds, so a shape's finding must also fly "
             "the manoeuvres left out better than the library alone.", indent="",
             subsequent=""))
     for contest in discovery.contests:
-        lines.append(_fill(contest.sentence(), indent="", subsequent=""))
+        lines.append(wrapped_text(contest.sentence(), indent="", subsequent=""))
     if discovery.unnamed_channels:
         listed = ", ".join(repr(c) for c in discovery.unnamed_channels)
-        lines.append(_fill(
+        lines.append(wrapped_text(
             f"Not searched: the columns {listed}, whose names no term can use; rename them "
             "with lower-case letters, digits and single underscores (heel, wave_height) to "
             "search them.", indent="", subsequent=""))
-    lines += [_fill(note, indent="", subsequent="") for note in getattr(discovery, "notes", [])]
+    lines += [wrapped_text(note, indent="", subsequent="")
+              for note in getattr(discovery, "notes", [])]
     floor = ", ".join(f"{dof} {share:.0%}" for dof, share in discovery.noise_floor.items())
     lines.append(f"Noise floor (share of the leave-one-manoeuvre-out error): {floor}.")
     if not discovery.findings:
@@ -86,16 +87,17 @@ def _discovery_verdict(discovery, effect_file: str | None) -> str:
         why = ("flies better than" if last.winner == "catalogued" else
                "flies as well as")
         if last.catalogued == "none":
-            return _fill(f"Nothing was discovered: the library alone {why} the best finding "
-                         f"({last.finding}), which is then a chance fit of the residual.",
-                         indent="", subsequent="")
-        return _fill(f"Nothing was discovered: the catalogued {last.catalogued} {why} the "
-                     "best finding; add it (--effects) and search again.", indent="",
-                     subsequent="")
+            return wrapped_text(
+                f"Nothing was discovered: the library alone {why} the best finding "
+                f"({last.finding}), which is then a chance fit of the residual.",
+                indent="", subsequent="")
+        return wrapped_text(
+            f"Nothing was discovered: the catalogued {last.catalogued} {why} the best finding; "
+            "add it (--effects) and search again.", indent="", subsequent="")
     if discovery.catalogue and not discovery.accepted:
         return "Nothing was discovered: add the catalogued effects above and search again."
     if not discovery.accepted:
-        return _fill(
+        return wrapped_text(
             f"No finding is meaningful (explaining {discovery.threshold:.0%} of the error above "
             "the noise floor, with a gain significant in at least two of X, Y and N): no "
             "missing effect was discovered.", indent="", subsequent="")

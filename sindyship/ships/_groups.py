@@ -284,9 +284,10 @@ class Ship:
             x_G=p.x_G * s,
             scale=p.scale / s,
         )
-        propeller = replace(self.propeller, D_P=self.propeller.D_P * s,
-                            n_P=self.propeller.n_P / math.sqrt(s))
-        rudder = replace(self.rudder, A_R=self.rudder.A_R * s**2)
+        propeller = None if self.propeller is None else replace(
+            self.propeller, D_P=self.propeller.D_P * s, n_P=self.propeller.n_P / math.sqrt(s))
+        rudder = None if self.rudder is None else replace(self.rudder,
+                                                          A_R=self.rudder.A_R * s**2)
         servo = replace(self.servo, rate_max=self.servo.rate_max / math.sqrt(s))
         return replace(self, name=f"{self.name}-x{s:g}",
                        title=f"{self.title}, Froude-scaled by {s:g}", particulars=particulars,

@@ -462,7 +462,7 @@ def ship_to_toml(ship: Ship) -> str:
         if isinstance(item, bool):
             return "true" if item else "false"
         if isinstance(item, str):
-            return json.dumps(item)  # a TOML basic string: JSON's escapes are TOML's
+            return json.dumps(item, ensure_ascii=False)  # a TOML basic string
         if isinstance(item, list | tuple):
             return "[" + ", ".join(value(v) for v in item) + "]"
         return repr(item)  # int, or float: repr reads back to the same number
