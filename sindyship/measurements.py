@@ -51,7 +51,7 @@ from sindyship._io import write_text_atomic
 from sindyship.errors import SindyshipInputError
 from sindyship.plausibility import check_record, resampling_gap_note, resolve_skip
 from sindyship.trajectory import REQUIRED_COLUMNS, RUDDER_COLUMNS, Trajectory
-from sindyship.units import UNITS, Column, parse_headers
+from sindyship.units import UNITS, Column, parse_headers, renaming_hint
 
 __all__ = [
     "PlausibilityNote",
@@ -432,7 +432,7 @@ def _check_required(columns: list[Column], frame: pd.DataFrame, source: str) -> 
         wanted.extend(RUDDER_COLUMNS)
     if not missing:
         return
-    hint = ""
+    hint = renaming_hint(wanted, names)
     lower = {name.lower(): name for name in names}
     for name in wanted:
         if name.lower() in lower:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from sindyship.errors import SindyshipInputError
 
-__all__ = ["UNITS", "Column", "parse_headers"]
+__all__ = ["COMMON_NAMES", "UNITS", "Column", "parse_headers", "renaming_hint"]
 
 _DEG = math.pi / 180.0
 
@@ -169,3 +169,32 @@ def _units_for(quantity: str | None) -> str:
 
 def _article(word: str) -> str:
     return "an" if word[0] in "aeiou" else "a"
+
+
+#: Names other logs give the required channels (lower case), by the name sindyship reads.
+COMMON_NAMES = {
+    "t": ("time", "time_s", "timestamp"),
+    "u": ("surge", "surge_speed", "u_body"),
+    "v": ("sway", "sway_speed", "v_body"),
+    "r": ("yaw_rate", "yawrate", "rot"),
+    "x": ("x0", "north", "x_earth"),
+    "y": ("y0", "east", "y_earth"),
+    "psi": ("heading", "hdg", "yaw", "heading_rad"),
+    "delta": ("rudder", "rudder_angle", "rudder_deg"),
+}
+
+
+def renaming_hint(wanted: list[str], present: list[str]) -> str:
+    """The hint to rename a present column that is a common name (:data:`COMMON_NAMES`) of
+    the first missing channel it can be, else "".
+
+    Examples
+    --------
+    >>> renaming_hint(["psi"], ["t", "u", "Heading"])
+    " (is 'Heading' the channel psi? rename the column psi)"
+    """
+    for name in wanted:
+        for column in present:
+            if column.lower() in COMMON_NAMES.get(name, ()):
+                return f" (is '{column}' the channel {name}? rename the column {name})"
+    return ""

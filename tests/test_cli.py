@@ -211,6 +211,9 @@ BAD_CSVS = {
                                                           + GOOD_ROWS[5:]), "resample"),
     "degrees in a radian column": (GOOD_HEADER + "\n" + "\n".join(
         r.rsplit(",", 1)[0] + ",35" for r in GOOD_ROWS), "delta"),
+    "heading under another name": (GOOD_HEADER.replace("psi", "heading") + "\n"
+                                   + "\n".join(GOOD_ROWS),
+                                   "(is 'heading' the channel psi? rename the column psi)"),
     "empty": ("", "empty"),
     "one row": (GOOD_HEADER + "\n" + GOOD_ROWS[0], "row"),
     "unknown unit": (GOOD_HEADER.replace("psi", "psi [furlong]") + "\n" + "\n".join(GOOD_ROWS),
