@@ -302,8 +302,7 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
             "unstable prior fit is not refined to a more unstable model); the fitted "
             "coefficients are kept")
     elif turns is not None:  # it flew hard-over turns it can no longer fly
-        stopped = (f"the refined model {turns}, which the fit it started from flies; the "
-                   "fitted coefficients are kept")
+        stopped = f"the refined model {turns}; the fitted coefficients are kept"
     if refused_unstable or turns is not None:  # the fitted coefficients, as they were
         p, cost_after, flight_after = np.zeros_like(p), cost_before, flight_before
         candidate = _with_changes(model, problem.coefficients(p), info)

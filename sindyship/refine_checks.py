@@ -27,7 +27,7 @@ from .shooting import SHOOTING_STATES, fly_segments, make_segments
 from .trajectory import Trajectory
 
 __all__ = ["TURN_CHECK_FACTOR", "TURN_CHECK_TIMES", "VALIDATION_RATIO", "carries_over",
-           "fitted_again", "flown_whole", "hard_over_diameters", "turns_kept"]
+           "fitted_again", "flown_whole", "hard_over_turns", "turns_kept"]
 
 #: A refinement is kept when, refined on half the records, it flies the others at most this
 #: share of the distance of the fit on that half alone (geometric mean).
@@ -45,23 +45,31 @@ def turns_kept(fitted: AbkowitzModel, refined: AbkowitzModel, records) -> str | 
     does not): records rarely span them (zig-zags stay within their check angles), and a
     refinement that absorbs the records' own disturbances into terms they do not pin down can
     lose them.  Turning circles to both sides at the rudder limit, from a straight run at
-    U0, with the records' mean channels."""
-    before, after = hard_over_diameters(fitted, records), hard_over_diameters(refined, records)
+    U0, with the records' mean channels: each must not diverge, and must keep its tactical
+    diameter and its speed at the end within a factor :data:`TURN_CHECK_FACTOR` of the fitted
+    model's (a displacement ship turning hard over slows to a steady speed; one that keeps
+    slowing towards rest has lost its forces)."""
+    before, after = hard_over_turns(fitted, records), hard_over_turns(refined, records)
     for side in before:
         if before[side] is None:
             continue  # the fit promised nothing there
         if after[side] is None:
-            return f"diverges in a hard-over turn to {side}"
-        ratio = after[side] / before[side]
+            return f"diverges in a hard-over turn to {side}, which the fit it started from flies"
+        ratio = after[side]["tactical_diameter_L"] / before[side]["tactical_diameter_L"]
         if not 1.0 / TURN_CHECK_FACTOR <= ratio <= TURN_CHECK_FACTOR:
             return (f"turns to {side} at the rudder limit in a tactical diameter {ratio:.2g} "
                     "times the fitted model's")
+        speeds = after[side]["final_speed"], before[side]["final_speed"]
+        if speeds[0] < speeds[1] / TURN_CHECK_FACTOR:
+            return (f"slows to {speeds[0]:.2g} U0 in a hard-over turn to {side}, where the "
+                    f"fit it started from keeps {speeds[1]:.2g} U0")
     return None
 
 
-def hard_over_diameters(model: AbkowitzModel, records) -> dict:
-    """Tactical diameters [L] of hard-over turning circles to starboard and port (None where
-    the flight diverged or never turned 180 deg)."""
+def hard_over_turns(model: AbkowitzModel, records) -> dict:
+    """Turning circles to starboard and port at the rudder limit, :data:`TURN_CHECK_TIMES`
+    L/U0 long: their tactical diameter [L] and their speed at the end [U0]; None where the
+    flight diverged or never turned 180 deg."""
     names = model.recorded_channels
     channels = {}
     if names:
@@ -79,7 +87,9 @@ def hard_over_diameters(model: AbkowitzModel, records) -> dict:
         figures = None if flown.meta.get("diverged_at") is not None else \
             turning_figures(flown, ship.L)
         diameter = None if figures is None else figures.get("tactical_diameter_L")
-        out[side] = diameter if diameter is not None and math.isfinite(diameter) else None
+        out[side] = None if diameter is None or not math.isfinite(diameter) else {
+            "tactical_diameter_L": diameter,
+            "final_speed": float(np.hypot(flown["u"][-1], flown["v"][-1]) / ship.U0)}
     return out
 
 

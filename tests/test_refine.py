@@ -550,3 +550,31 @@ def test_a_model_with_a_coefficient_no_saved_model_may_hold_is_not_saved(fitted,
                        r"1e\+295, beyond the 1e\+06 a saved model may hold; check"):
         absurd.save(tmp_path / "m.json")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_refinement_is_refused_when_its_hard_over_turn_diverges_widens_or_keeps_slowing(
+        monkeypatch):
+    """The hard-over turns the fitted model flies: the refined model must not diverge in
+    them, nor turn them in a tactical diameter or end them at a speed more than
+    TURN_CHECK_FACTOR from the fitted model's (the MARIN zig-zags at their own sampling
+    refined into a model that slowed to 0.04 U0 turning hard over, where the fit keeps
+    0.43 U0)."""
+    import sindyship.refine_checks as checks
+
+    fitted = {"starboard": {"tactical_diameter_L": 3.1, "final_speed": 0.43},
+              "port": {"tactical_diameter_L": 3.3, "final_speed": 0.45}}
+
+    def verdict(starboard):
+        turns = {"fitted": fitted, "refined": {**fitted, "starboard": starboard}}
+        monkeypatch.setattr(checks, "hard_over_turns", lambda model, records: turns[model])
+        return checks.turns_kept("fitted", "refined", [])
+
+    assert verdict({"tactical_diameter_L": 2.5, "final_speed": 0.30}) is None
+    assert verdict(None) == ("diverges in a hard-over turn to starboard, which the fit it "
+                             "started from flies")
+    assert verdict({"tactical_diameter_L": 6.5, "final_speed": 0.43}) == (
+        "turns to starboard at the rudder limit in a tactical diameter 2.1 times the fitted "
+        "model's")
+    assert verdict({"tactical_diameter_L": 2.5, "final_speed": 0.037}) == (
+        "slows to 0.037 U0 in a hard-over turn to starboard, where the fit it started from "
+        "keeps 0.43 U0")
