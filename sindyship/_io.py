@@ -271,7 +271,8 @@ def check_output(path: str | os.PathLike, *, inputs: Iterable = (), kind: str = 
         mode = os.lstat(target).st_mode
         if stat.S_ISDIR(mode) and kind == "file":
             raise SindyshipInputError(
-                f"{label}: is a folder; give the name of a file to write (e.g. {text}/out.csv)."
+                f"{label}: is a folder; give the name of a file to write (e.g. "
+                f"{text}/out{suffixes[0] if suffixes else '.csv'})."
             )
         if stat.S_ISREG(mode) and kind == "folder":
             raise SindyshipInputError(

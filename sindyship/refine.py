@@ -258,7 +258,7 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
                                            "segment_s": "whole" if last is None else last})
         kept.info["refined"].update(
             stopped=("refined on half of the records, the model flew the other half "
-                     f"{check['ratio']:.3g} times as far off as fitted ({check['why']}); the "
+                     f"{check['ratio']:.3f} times as far off as fitted ({check['why']}); the "
                      "fitted coefficients are kept"),
             refused_validation=True, validation=check)
         if "straight_run" in model.info:  # the fit's own record, as it was

@@ -737,3 +737,14 @@ def test_a_killed_folder_output_leaves_the_previous_folder_whole(tmp_path):
         proc.wait(timeout=CASE_TIMEOUT)
     assert [p.name for p in previous.iterdir()] == ["results.json"]
     assert (previous / "results.json").read_text() == "old\n"
+
+
+def test_a_folder_given_for_a_file_output_suggests_a_name_of_the_right_kind(tmp_path):
+    from sindyship._io import check_output
+    from sindyship.errors import SindyshipInputError
+
+    for suffixes, example in (((".json",), "out.json"), ((), "out.csv")):
+        with pytest.raises(SindyshipInputError) as caught:
+            check_output(tmp_path, suffixes=suffixes)
+        assert str(caught.value).endswith(f"is a folder; give the name of a file to write (e.g. "
+                                          f"{tmp_path}/{example}).")

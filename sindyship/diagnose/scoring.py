@@ -194,8 +194,8 @@ def _regime(
         detail["heading_coverage_deg"] = covered
         if covered < 180.0:
             parts.append(
-                f"caution: the records cover only {covered:.0f} deg of heading, over "
-                "which sin and cos of psi can stand in for any slow drift"
+                f"caution: the records visit only {covered / 10:.0f} ten-degree sectors of "
+                "heading, over which sin and cos of psi can stand in for any slow drift"
             )
     return "; ".join(parts), detail
 
