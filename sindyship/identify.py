@@ -220,7 +220,7 @@ def check_channels(library: TermLibrary, records: Sequence[Trajectory]) -> None:
 
     catalogued = {}  # (dof, term) -> the catalogue's effect that adds it
     for name in library.effects:
-        if name in available_effects():  # an effect file: the message names the library
+        if name in available_effects():  # an effect file's terms are the library's own
             effect = load_effect(name)
             for dof in DOFS:
                 for term in effect.terms[dof]:
