@@ -158,7 +158,7 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
     out = {}
     for rec, short, f in zip(records, cut, flown, strict=True):
         out[rec.name] = {**distance_errors(f, short, model.ship.L), **flown_as(rec)}
-        if flight_start(rec).kind == "turn":
+        if flight_start(short).kind == "turn":  # read from the part's meta
             out[rec.name]["turn"] = turn_figures(f, short, model.ship.L)
     return out
 

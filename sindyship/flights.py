@@ -261,11 +261,15 @@ def _cut(result: SimulationResult, n: int) -> SimulationResult:
 
 def flown_part(record: Trajectory) -> Trajectory:
     """The record from its flight start on (:func:`flight_start`), the part a flight covers
-    and is scored on; the record itself when it starts there."""
-    start = flight_start(record)
-    if start.time <= record.t[0] + 1e-9:
-        return record
-    part = trim(record, (start.time, float(record.t[-1])))
+    and is scored on (all of it when it starts at its first row); the part keeps its start
+    in ``meta``, so that :func:`flight_start` reads it there instead of recognising the
+    manoeuvre again."""
+    return _part_from(record, flight_start(record))
+
+
+def _part_from(record: Trajectory, start) -> Trajectory:
+    part = record if start.time <= record.t[0] + 1e-9 else \
+        trim(record, (start.time, float(record.t[-1])))
     meta = {**part.meta, "flight_start": {"time": start.time, "kind": start.kind,
                                            "reason": start.reason}}
     return Trajectory(part.data, name=part.name, meta=meta)
@@ -284,7 +288,7 @@ def flown_as(record: Trajectory) -> dict:
         ``start_reason``.
     """
     start = flight_start(record)
-    zigzag = recognised_zigzag(flown_part(record))
+    zigzag = recognised_zigzag(_part_from(record, start))
     if zigzag is not None:
         out = {"flown_as": "zigzag", "amplitude_deg": zigzag[0], "check_deg": zigzag[1]}
     else:

@@ -432,8 +432,8 @@ def write_records(out: str | os.PathLike[str], folder: str | os.PathLike[str] | 
     source = default_marin_dir() if folder is None else Path(folder)
     if source is None:
         raise SindyshipInputError(
-            "the MARIN files were not found; name their folder (folder=...) or set "
-            f"{_ENVIRONMENT}.")
+            "the MARIN files were not found; name their folder (--data DIR on the command "
+            f"line) or set {_ENVIRONMENT}.")
     target = Path(out)
     if target.exists() and not target.is_dir():
         raise SindyshipInputError(f"{target}: exists and is not a folder; name a folder to "
@@ -463,10 +463,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--resample", type=float, default=1.0,
                         help="sample interval of the CSVs [s] (default 1)")
     args = parser.parse_args(argv)
-    if args.data is None and default_marin_dir() is None:
-        print("python3 -m sindyship.marin: error: the MARIN files were not found; give their "
-              f"folder with --data DIR or set {_ENVIRONMENT}.", file=sys.stderr)
-        return 2
     try:
         written = write_records(args.out, args.data, resample=args.resample)
     except SindyshipInputError as error:

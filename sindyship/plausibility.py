@@ -279,9 +279,9 @@ def _check_speed(u: np.ndarray, ship, context: _Context) -> None:
 def _check_revolutions(n: np.ndarray, ship, context: _Context) -> None:
     """Propeller revolutions far above the ship's own: rpm under a bare ``n`` header (which
     the reader's absolute limit cannot tell from rps at full scale)."""
-    own = getattr(getattr(ship, "propeller", None), "n_P", None)
-    if not own or not ship.has_mmg:
+    if not ship.has_mmg:
         return  # a ship file for identification gives no revolutions to compare with
+    own = ship.propeller.n_P
     typical = float(np.median(np.abs(n)))
     ratio = typical / own
     if ratio <= MAX_REVOLUTION_RATIO:
