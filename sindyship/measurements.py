@@ -220,11 +220,9 @@ def trajectory_from_frame(
     columns = parse_headers([str(header) for header in frame.columns], source)
     _check_required(columns, frame, source)
     if len(frame) < 2:
-        raise SindyshipInputError(
-            f"{source}: "
-            + ("has no data rows" if len(frame) == 0 else "has only one data row")
-            + "; a trajectory needs at least two samples, one per row after the header."
-        )
+        raise SindyshipInputError(f"{source}: " + ("has no data rows" if len(frame) == 0 else (
+            "has only one data row")) + "; a trajectory needs at least two samples, one per row "
+            "after the header.")
     if resample is not None:
         _check_step(resample, source)
     skip = resolve_skip(skip_checks)
@@ -510,11 +508,13 @@ def _check_time(
     if bad.size:
         i = bad[0] + 1
         kind = "repeats" if steps[bad[0]] == 0 else "goes back"
+        rounded = np.count_nonzero(steps == 0) > 0.05 * steps.size  # a clock written too coarsely
         raise SindyshipInputError(
             f"{source}: time in column '{header}' {kind} in {_row(index, i)}, where "
-            f"t = {t[i]:.10g} s follows t = {t[i - 1]:.10g} s; sort the rows by time and "
-            "remove duplicate samples."
-        )
+            f"t = {t[i]:.10g} s follows t = {t[i - 1]:.10g} s; " + (
+                f"{np.count_nonzero(steps == 0)} of {steps.size} steps repeat, so the time looks "
+                "rounded: write it with more digits." if rounded else
+                "sort the rows by time and remove duplicate samples."))
     if resample is not None:
         return
     median = float(np.median(steps))

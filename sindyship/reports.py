@@ -7,7 +7,9 @@ calls them).
 from __future__ import annotations
 
 import math
+import shlex
 import textwrap
+from pathlib import Path
 
 from .errors import SindyshipInputError
 from .library import DOFS
@@ -90,6 +92,45 @@ def _ship_argument(ship) -> str:
         return ship.name if load_ship(ship.name) == ship else "SHIP.toml"
     except SindyshipInputError:
         return "SHIP.toml"
+
+
+def _file_or_name(item, default_folder) -> str:
+    """The command-line argument that loads a library or effect: its built-in name, the path
+    of the file it was read from, or a placeholder."""
+    source = getattr(item, "source", None)
+    if source is None:
+        return f"{item.name.upper()}.toml"
+    if Path(source).parent.resolve() == Path(str(default_folder)).resolve():
+        return Path(source).stem
+    return str(source)
+
+
+def _fit_options(diagnosis, ship_argument: str | None, effects) -> str:
+    """The ``fit`` options that repeat the diagnosis's own settings with ``effects`` (effect
+    objects) added: the ship, the library unless it is the diagnosis's default (``fit`` then
+    takes its recommended one), the speed form unless it is the ship's, the derivative, the
+    rudder signal and the optimizer unless it is least squares (``fit`` then takes its
+    recommended ``prior``)."""
+    from .library import builtin_library_dir
+
+    library, settings = diagnosis.library, diagnosis.settings
+    base = _file_or_name(library, builtin_library_dir())
+    options = [f"--ship {shlex.quote(ship_argument or _ship_argument(diagnosis.ship))}"]
+    if base != "abkowitz":
+        options.append(f"--library {shlex.quote(base)}")
+    if library.speed != diagnosis.ship.speed_reference:
+        options.append(f"--speed {library.speed}")
+    if settings.get("derivative") == "savgol":
+        options.append(f"--derivative savgol --window {settings['window']:g}")
+    if settings.get("rudder_signal") == "commanded":
+        options.append("--rudder-signal commanded")
+    if effects:
+        folder = builtin_library_dir() / "effects"
+        options.append("--effects " + shlex.quote(",".join(
+            e if isinstance(e, str) else _file_or_name(e, folder) for e in effects)))
+    if settings.get("optimizer", "ls") != "ls":
+        options.append(f"--optimizer {settings['optimizer']}")
+    return " ".join(options)
 
 
 def _confirmation_text(change) -> str:
@@ -261,7 +302,7 @@ def _held_out_caution(score) -> str:
             "like the held-out ones before keeping it.")
 
 
-def _verdict_lines(diagnosis) -> list[str]:
+def _verdict_lines(diagnosis, ship_argument: str | None = None) -> list[str]:
     lines = [textwrap.fill(f"Caution: {warning}.", width=96, subsequent_indent="  ")
              for warning in diagnosis.warnings]
     verdict = diagnosis.verdict
@@ -275,21 +316,18 @@ def _verdict_lines(diagnosis) -> list[str]:
                 "every force.")
     elif verdict == "add-effect":
         top = diagnosis.top
-        optimizer = diagnosis.settings.get("optimizer", "ls")
-        chosen = "" if optimizer == "ls" else f" --optimizer {optimizer}"
         why = "" if top.meaningful else (
             f" (its share of the force error is below the threshold, but re-flying the training "
             f"records with it brings them {_closer(top)} closer)")
-        text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... --ship "
-                f"{_ship_argument(diagnosis.ship)} --effects "
-                f"{','.join([*diagnosis.library.effects, top.effect.name])}{chosen}; then "
+        options = _fit_options(diagnosis, ship_argument, [*diagnosis.library.effects, top.effect])
+        text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... {options}; then "
                 "diagnose again with the same --effects." + _held_out_caution(top))
     elif verdict == "add-discovered":
         found = " and ".join(f.family for f in diagnosis.discovery.accepted)
+        ship = shlex.quote(ship_argument or _ship_argument(diagnosis.ship))
         text = (f"Verdict: no catalogued effect is meaningful, but {found} was discovered "
-                "beyond the catalogue (above): sindyship discover DATA.csv... --ship "
-                f"{_ship_argument(diagnosis.ship)} --out effect.toml, then fit and diagnose "
-                "with --effects effect.toml.")
+                f"beyond the catalogue (above): sindyship discover DATA.csv... --ship {ship} "
+                "--out effect.toml, then fit and diagnose with --effects effect.toml.")
     elif verdict == "unstable":
         flights = ", ".join(f"{name} at {when:.0f} s" for name, when in diagnosis.diverged.items())
         text = (f"Verdict: the model fails - its training flights diverged ({flights}) and no "
@@ -305,12 +343,15 @@ def _verdict_lines(diagnosis) -> list[str]:
     return lines
 
 
-def diagnosis_report(diagnosis) -> str:
+def diagnosis_report(diagnosis, ship_argument: str | None = None) -> str:
     """The diagnosis as text a person reads, best effect first.
 
     Parameters
     ----------
     diagnosis : sindyship.diagnose.Diagnosis
+    ship_argument : str, optional
+        The ``--ship`` argument the verdict's command names (default: the ship's name if it
+        is built in, else a placeholder).
 
     Returns
     -------
@@ -331,7 +372,7 @@ def diagnosis_report(diagnosis) -> str:
         lines += ["", diagnosis.discovery.report(), ""]
     if getattr(diagnosis, "speed", None) is not None:
         lines += [textwrap.fill(diagnosis.speed.text(), width=96, subsequent_indent="  "), ""]
-    lines += _verdict_lines(diagnosis)
+    lines += _verdict_lines(diagnosis, ship_argument)
     return "\n".join(lines)
 
 

@@ -14,6 +14,7 @@ import json
 import math
 from contextlib import redirect_stdout
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -231,6 +232,33 @@ def test_kcs_rounds_continue_until_no_effect_is_meaningful(kcs_rounds):
     assert all(e["diverged_at_s"] is None for e in errors.values())
     assert max(e["mean_distance_L"] for e in errors.values()) < 0.1
     assert "Stopped: no effect" in kcs_rounds.report()
+
+
+def test_the_verdicts_fit_command_repeats_the_diagnosis_settings(kcs_rounds, tmp_path):
+    """The command the verdict names fits what was diagnosed: the ship as given, the library
+    unless it is the default, the speed form unless it is the ship's, the derivative, the
+    rudder signal, the effects (a file by its path) and an optimizer other than ls."""
+    import copy
+
+    from sindyship.library import load_effect
+
+    first = kcs_rounds.rounds[0].diagnosis
+    assert first.verdict == "add-effect"
+    assert ("sindyship fit DATA.csv... --ship kcs --effects asymmetry; then"
+            in " ".join(first.report().split()))
+    own = tmp_path / "lean.toml"
+    own.write_text(Path(load_effect("asymmetry").source).read_text(encoding="utf-8").replace(
+        'name = "asymmetry"', 'name = "lean"'), encoding="utf-8")
+    changed = copy.copy(first)
+    changed.library = resolve_library("abkowitz-vr", ["wind"], "instantaneous")
+    changed.settings = {**first.settings, "derivative": "savgol", "window": 21.0,
+                        "rudder_signal": "commanded", "optimizer": "prior"}
+    changed.ranking = [replace(first.ranking[0], effect=load_effect(str(own))),
+                       *first.ranking[1:]]
+    text = " ".join(changed.report(ship_argument="my ships/kcs.toml").split())
+    assert ("sindyship fit DATA.csv... --ship 'my ships/kcs.toml' --library abkowitz-vr --speed "
+            "instantaneous --derivative savgol --window 21 --rudder-signal commanded --effects "
+            f"wind,{own} --optimizer prior; then") in text
 
 
 def test_asymmetry_shows_as_even_residuals_over_yaw_rate(kcs_rounds):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -316,6 +317,16 @@ def test_duplicate_time(tmp_path):
     lines[2] = replace_cell(lines[2], 0, lines[1].split(",")[0])
     message = error_of(write(tmp_path, csv_text(lines=lines)))
     assert "repeats" in message and "row 4" in message and "'t'" in message
+
+
+def test_time_written_too_coarsely_is_named_rounded(tmp_path):
+    """A 0.05 s log whose time was written to one decimal repeats every other step: removing
+    the duplicates would halve the record, so the message says to write the time with more
+    digits (one repeat alone still says to remove it)."""
+    lines = [replace_cell(line, 0, f"{i * 0.05:.1f}") for i, line in enumerate(rows(20, 0.05))]
+    message = error_of(write(tmp_path, csv_text(lines=lines)))
+    assert re.search(r"\b(9|10) of 19 steps repeat", message) and "more digits" in message
+    assert "remove duplicate" not in message
 
 
 def test_decreasing_time(tmp_path):

@@ -148,7 +148,7 @@ def run(args) -> int:
             result = diagnose(records, ship, library=library, test=test, progress=bar,
                               **options)
     document = result.to_json()
-    text = result.report()
+    text = result.report(ship_argument=args.ship)
     if iterative is not None:
         document.update(iterative.to_json())
         text += "\n\n" + iterative.report()

@@ -206,11 +206,12 @@ class Diagnosis:
 
     # ------------------------------------------------------------------------------- text
 
-    def report(self) -> str:
-        """The diagnosis as text a person reads (:func:`sindyship.reports.diagnosis_report`)."""
+    def report(self, ship_argument: str | None = None) -> str:
+        """The diagnosis as text a person reads (:func:`sindyship.reports.diagnosis_report`;
+        ``ship_argument``: the ``--ship`` its verdict's command names)."""
         from ..reports import diagnosis_report
 
-        return diagnosis_report(self)
+        return diagnosis_report(self, ship_argument)
 
     def save_figures(self, out_dir, *, progress: bool = False) -> list:
         """Write the figures and before/after tables to a folder
