@@ -318,8 +318,10 @@ def explain_zigzag(record: Trajectory) -> tuple[ZigZag | None, str]:
 
 def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], str]:
     """The zig-zag, the levels of its plateaus and the sentence of :func:`explain_zigzag`."""
-    command = np.degrees(record["delta_c"] if record.has("delta_c") else record.rudder)
-    holds = _holds(command)
+    commanded = record.has("delta_c")
+    command = np.degrees(record["delta_c"] if commanded else record.rudder)
+    raw = _holds(command)
+    holds = raw if commanded else _settled(raw)
     if not holds:
         return None, (), (f"the rudder never holds an angle of at least 1 deg for "
                       f"{HOLD_SAMPLES} samples")
@@ -327,13 +329,14 @@ def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], st
     amplitude = float(np.median([abs(level) for _, _, level in holds
                                  if abs(level) >= 0.5 * largest]))
     plateaus = [h for h in holds if abs(abs(h[2]) - amplitude) <= PLATEAU_SPREAD]
-    chain = _longest_alternation(plateaus)
+    chain = _cut_short(command, raw, _longest_alternation(plateaus), amplitude)
     if len(chain) < 3:
         return None, (), (f"the rudder holds no run of three or more alternating angles near "
                       f"+-{amplitude:.1f} deg (longest: {len(chain)})")
     first_sign = int(np.sign(chain[0][2]))
-    start = _ramp_start(command, chain[0][0], first_sign)
-    reversals = [_ramp_start(command, h[0], int(np.sign(h[2]))) for h in chain[1:]]
+    start = _ramp_start(command, raw, chain[0][0], first_sign)
+    reversals = [_left(command, before[1], h[0], int(np.sign(h[2])))
+                 for before, h in zip(chain[:-1], chain[1:], strict=True)]
     psi = np.degrees(record["psi"] - record["psi"][start])
     at = np.abs(psi[reversals])
     before = np.abs(psi[np.maximum(np.array(reversals) - 1, 0)])
@@ -396,6 +399,51 @@ def _stretch_end(command: np.ndarray, i: int) -> int:
     return n
 
 
+def _settled(holds: list[tuple[int, int, float]]) -> list[tuple[int, int, float]]:
+    """The holds of an actual rudder with each run creeping toward a larger angle of the same
+    sign (by at most two hold ranges, a few samples apart) made one at the angle it settled
+    at: a rudder that a servo's lag brings to its command slowly holds for a few samples at
+    each degree on the way (a helmsman's step to another angle is a new hold)."""
+    settled: list[tuple[int, int, float]] = []
+    for first, last, level in holds:
+        if settled:
+            a, b, previous = settled[-1]
+            if (np.sign(previous) == np.sign(level) and first - b <= HOLD_SAMPLES
+                    and 0.0 < abs(level) - abs(previous) <= 2 * HOLD_RANGE):
+                settled[-1] = (a, last, level)
+                continue
+        settled.append((first, last, level))
+    return settled
+
+
+def _cut_short(command: np.ndarray, raw: list, chain: list, amplitude: float) -> list:
+    """The chain of plateaus with a first leg the rudder never held put in front: an actual
+    rudder that a servo brings to its command slowly can be reversed at the check angle on
+    its way out, before it settles (a 35/10 zig-zag's first leg peaks near 26 deg).  Such a
+    leg peaks at least half the amplitude out on the other side, after the last hold before
+    the first plateau; it is taken to have been commanded to the amplitude."""
+    if not chain:
+        return chain
+    sign = -np.sign(chain[0][2])
+    earlier = [h for h in raw if h[1] < chain[0][0]]
+    begin = earlier[-1][1] + 1 if earlier else 0
+    if begin >= chain[0][0]:
+        return chain
+    peak = begin + int(np.argmax(sign * command[begin:chain[0][0]]))
+    if sign * command[peak] < 0.5 * amplitude:
+        return chain
+    return [(peak, peak, float(sign * amplitude)), *chain]
+
+
+def _left(command: np.ndarray, last: int, first: int, sign: int) -> int:
+    """The first sample after ``last`` (the end of a hold) at which the rudder has moved more
+    than :data:`_EXECUTE_BAND` from where it was there toward the sign of a plateau starting
+    at ``first``: where it was put over, whether a step, a rate-limited ramp or a servo's
+    slow, noisy approach follows; ``first`` when it never moved that far."""
+    moved = np.flatnonzero(sign * (command[last + 1:first + 1] - command[last]) > _EXECUTE_BAND)
+    return last + 1 + int(moved[0]) if moved.size else first
+
+
 def _longest_alternation(plateaus):
     """The longest run of plateaus alternating in sign.
 
@@ -420,14 +468,22 @@ def _longest_alternation(plateaus):
     return max(runs, key=len) if runs else []
 
 
-def _ramp_start(command: np.ndarray, plateau: int, sign: int) -> int:
-    """The first sample at which the rudder left its previous value toward a plateau."""
+def _ramp_start(command: np.ndarray, raw: list, plateau: int, sign: int) -> int:
+    """The first sample at which the rudder left its previous value toward a plateau: where
+    it left the last hold before (:func:`_left`), else back over the ramp's end while it is
+    more than half way from the record's first value (a servo's slow approach) and then while
+    it moves toward the plateau by more than :data:`_MOVING` per sample; sample 0 when the
+    record starts on the ramp."""
+    earlier = [h for h in raw if h[1] < plateau]
+    if earlier:
+        return _left(command, earlier[-1][1], plateau, sign)
     index = plateau
-    while index > 0 and (command[index] - command[index - 1]) * sign > _MOVING:
+    half = 0.5 * sign * (command[plateau] + command[0])
+    while index > 0 and sign * command[index - 1] > half:
         index -= 1
-    if index == plateau or index == 0:
-        return index
-    return index + 1
+    while index > 0 and sign * (command[index] - command[index - 1]) > _MOVING:
+        index -= 1
+    return index if index in (0, plateau) else index + 1
 
 
 def _roundest(low: float, high: float) -> float:

@@ -398,6 +398,28 @@ def test_protocol_zigzags_are_recognised_and_turns_are_not(protocol_runs):
     assert zigzag is None and "no run of three or more alternating angles" in reason
 
 
+def test_zigzags_logged_with_the_actual_rudder_alone_are_recognised(protocol_runs, kcs):
+    """Without the command, the servo brings the rudder to each angle slowly (a hold at every
+    degree on the way) and reverses the 35/10 zig-zag's first leg near 26 deg before it
+    settles: the same zig-zags are recognised from their first sample, and flown closed loop
+    (they were replayed open loop, some 9 L off)."""
+    from sindyship.evaluation import evaluate
+    from sindyship.identify import fit
+
+    runs = protocol_runs["train"] + protocol_runs["test"]
+    zigzags = [r for r in runs if r.name.startswith("zz")]
+    actual = [Trajectory(r.data.drop(columns=["delta_c"]), r.name) for r in zigzags]
+    for record in actual:
+        zigzag = recognise_zigzag(record)
+        assert zigzag is not None, explain_zigzag(record)[1]
+        nominal = [int(x) for x in record.name[2:].split("_")]
+        assert zigzag == (nominal[0], nominal[1], 1, 0.0)
+    model = fit(protocol_runs["train"], kcs)
+    errors = evaluate(model, actual)
+    assert {e["flown_as"] for e in errors.values()} == {"zigzag"}
+    assert max(e["mean_distance_L"] for e in errors.values()) < 1.0
+
+
 def test_never_under_way_is_refused(zigzag, kcs):
     still = Trajectory(zigzag.data.assign(u=0.1), "still")
     with pytest.raises(SindyshipInputError, match="never under way"):
