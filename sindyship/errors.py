@@ -14,3 +14,8 @@ class SindyshipInputError(ValueError):
 class PriorCoverageNote(UserWarning):
     """The ``prior`` fit's library has no term for some of the ship's estimates
     (:func:`sindyship.priors.coverage_note`; also ``sindyship.priors.PriorCoverageNote``)."""
+
+
+class RudderSignalNote(UserWarning):
+    """The records have no actual rudder angle, so a fit uses the commanded one
+    (:func:`sindyship.identify.fitted_rudder_signal`)."""

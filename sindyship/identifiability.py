@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 
 from .errors import SindyshipInputError
-from .identify import Design, design, fit, resolve_library
+from .identify import Design, design, fit, resolve_library, resolve_rudder_signal
 from .model import AbkowitzModel
 from .ships import Ship
 from .targets import DOFS
@@ -374,10 +374,12 @@ def identifiability(records: Sequence[Trajectory], ship: Ship, *,
     if not records:
         raise SindyshipInputError("no records to judge; pass at least one record.")
     lib = resolve_library(library, effects)
+    rudder_signal = resolve_rudder_signal(records, rudder_signal)
     problems = design(records, ship, lib, rudder_signal=rudder_signal)
     conditioning = library_conditioning(problems)
     vif = {dof: conditioning[dof]["vif"] for dof in DOFS}
-    model = fit(records, ship, library=lib, optimizer="ls", problems=problems)
+    model = fit(records, ship, library=lib, optimizer="ls", problems=problems,
+                rudder_signal=rudder_signal)
     residual = {}
     for dof in DOFS:
         p = problems[dof]

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import SindyshipInputError
+from .errors import RudderSignalNote, SindyshipInputError
 from .library import (
     SPEED_FACTOR,
     Effect,
@@ -320,7 +320,9 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
         Regression method; ``params`` go to its constructor.  ``prior`` is least squares
         drawn toward the ship's semi-empirical derivatives (:mod:`sindyship.priors`).
     rudder_signal : {"actual", "commanded"}
-        Rudder angle used in the features (the protocol uses the actual angle).
+        Rudder angle used in the features (the protocol uses the actual angle); records that
+        all lack the actual angle are fitted on the commanded one, with a
+        :class:`~sindyship.errors.RudderSignalNote` (:func:`fitted_rudder_signal`).
     derivative, window
         Acceleration estimate (:func:`sindyship.targets.derivative`).
     problems : dict, optional
@@ -345,6 +347,7 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
         raise SindyshipInputError(f"optimizer must be one of {', '.join(_optimizer_names())}, "
                                   f"not {optimizer!r}.")
     lib = resolve_library(library, effects, speed)
+    rudder_signal = resolve_rudder_signal(records, rudder_signal)
     if problems is None:
         problems = design(records, ship, lib, rudder_signal=rudder_signal,
                           derivative=derivative, window=window)
@@ -372,6 +375,50 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
         _note_prior_coverage(ship, lib)
         model = straight_run_stable(model, fitted_with)
     return model
+
+
+def fitted_rudder_signal(records: Sequence[Trajectory], rudder_signal: str = "actual"
+                         ) -> tuple[str, str | None]:
+    """The rudder angle a fit uses, and a note when it is not the one asked for.
+
+    The actual angle (``delta``) needs it in every record: a fit on the commanded angle
+    taken for the actual one would count the steering gear's lag twice when flown.  Records
+    that all lack it are fitted on the commanded angle (a model whose rudder input is the
+    command, the lag inside its forces), with a note; some lacking it are refused.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> frame = pd.DataFrame({"t": [0.0, 1.0], "u": 1.0, "v": 0.0, "r": 0.0, "x": [0.0, 1.0],
+    ...                       "y": 0.0, "psi": 0.0, "delta_c": 0.0})
+    >>> fitted_rudder_signal([Trajectory(frame, "no-delta")])[0]
+    'commanded'
+    """
+    if rudder_signal != "actual":
+        return rudder_signal, None
+    missing = [r.name for r in records if not r.has("delta")]
+    if not missing:
+        return "actual", None
+    if len(missing) < len(records):
+        named = ", ".join(missing[:3]) + (f" and {len(missing) - 3} more" if len(missing) > 3
+                                          else "")
+        raise SindyshipInputError(
+            f"{named} {'has' if len(missing) == 1 else 'have'} no actual rudder angle (delta) "
+            "while the other records do; give every record its delta column, or fit all on "
+            "the commanded angle (--rudder-signal commanded).")
+    return "commanded", ("the records have no actual rudder angle (delta), so the model is "
+                         "fitted on the commanded one (--rudder-signal commanded): the "
+                         "steering gear's lag is inside its forces; record delta to fit the "
+                         "rudder's own force")
+
+
+def resolve_rudder_signal(records: Sequence[Trajectory], rudder_signal: str = "actual") -> str:
+    """The rudder angle a fit uses (:func:`fitted_rudder_signal`), with a
+    :class:`~sindyship.errors.RudderSignalNote` when it is not the one asked for."""
+    signal, note = fitted_rudder_signal(records, rudder_signal)
+    if note is not None:
+        warnings.warn(note[0].upper() + note[1:] + ".", RudderSignalNote, stacklevel=3)
+    return signal
 
 
 def _optimizer_names() -> list[str]:

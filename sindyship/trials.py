@@ -45,6 +45,17 @@ from typing import NamedTuple
 import numpy as np
 
 from sindyship.errors import SindyshipInputError
+from sindyship.rudder_holds import (
+    HOLD_RANGE,
+    HOLD_SAMPLES,
+    cut_short,
+    execute,
+    find_holds,
+    left_hold,
+    longest_alternation,
+    ramp_start,
+    settled,
+)
 from sindyship.trajectory import Trajectory
 
 __all__ = [
@@ -69,16 +80,11 @@ __all__ = [
 UNDERWAY_SPEED = 0.25  # of U0
 STEADY_ACCELERATION = 0.03  # U0 per L/U0
 PROPELLER_RUNNING = 0.5  # of the median n under way
-HOLD_RANGE = 1.0  # deg
-HOLD_SAMPLES = 5
-#: Samples of a stretch compared one by one before the rest is read in windows.
-SHORT_STRETCH = 8
 PLATEAU_SPREAD = 2.5  # deg
 ROUNDING = 1.5  # deg
 CHECK_SPREAD = 3.0  # deg
 TURN_RUDDER = 5.0  # deg
 TURN_SHARE = 0.25
-_MOVING = 0.25  # deg per sample: the rudder is moving toward a plateau
 
 
 class Window(NamedTuple):
@@ -272,7 +278,7 @@ def recognise_turn(record: Trajectory) -> Turn | None:
     """
     command = np.degrees(record["delta_c"] if record.has("delta_c") else record.rudder)
     n = len(command)
-    holds = [h for h in _holds(command)
+    holds = [h for h in find_holds(command)
              if abs(h[2]) >= TURN_RUDDER and (h[1] - h[0] + 1) >= TURN_SHARE * n]
     if not holds:
         return None
@@ -280,28 +286,10 @@ def recognise_turn(record: Trajectory) -> Turn | None:
     sign = int(np.sign(level))
     # the rudder first reached the hold's angle here (it may wander a degree before the hold)
     arrived = int(np.argmax(sign * (command[: first + 1] - level) >= -HOLD_RANGE))
-    start = _execute(command, arrived, sign)
+    start = execute(command, arrived, sign)
     return Turn(round(float(level), 1), float(record.t[start]))
 
 
-#: A rudder still on its way to a hold moves by more than this toward it [deg per sample].
-_RAMP_STEP = 1e-3
-#: The execute is the last sample within this [deg] of the rudder's approach value.
-_EXECUTE_BAND = 0.5
-
-
-def _execute(command: np.ndarray, hold: int, sign: int) -> int:
-    """The last sample at the approach value before the rudder moved to the hold that starts
-    at ``hold``: back along the ramp while the rudder keeps moving toward the hold (a step,
-    or a servo's exponential approach; a helmsman's held wheel or a wobble ends it), then
-    forward to the last sample within :data:`_EXECUTE_BAND` of where it began."""
-    i = hold
-    while i > 0 and sign * (command[i] - command[i - 1]) > _RAMP_STEP:
-        i -= 1
-    j = i
-    while j < hold and sign * (command[j + 1] - command[i]) <= _EXECUTE_BAND:
-        j += 1
-    return j
 
 
 def zigzag_levels(record: Trajectory) -> tuple[float, ...]:
@@ -320,22 +308,22 @@ def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], st
     """The zig-zag, the levels of its plateaus and the sentence of :func:`explain_zigzag`."""
     commanded = record.has("delta_c")
     command = np.degrees(record["delta_c"] if commanded else record.rudder)
-    raw = _holds(command)
-    holds = raw if commanded else _settled(raw)
-    if not holds:
+    raw = find_holds(command)
+    found = raw if commanded else settled(raw)
+    if not found:
         return None, (), (f"the rudder never holds an angle of at least 1 deg for "
                       f"{HOLD_SAMPLES} samples")
-    largest = max(abs(level) for _, _, level in holds)
-    amplitude = float(np.median([abs(level) for _, _, level in holds
+    largest = max(abs(level) for _, _, level in found)
+    amplitude = float(np.median([abs(level) for _, _, level in found
                                  if abs(level) >= 0.5 * largest]))
-    plateaus = [h for h in holds if abs(abs(h[2]) - amplitude) <= PLATEAU_SPREAD]
-    chain = _cut_short(command, raw, _longest_alternation(plateaus), amplitude)
+    plateaus = [h for h in found if abs(abs(h[2]) - amplitude) <= PLATEAU_SPREAD]
+    chain = cut_short(command, raw, longest_alternation(plateaus), amplitude)
     if len(chain) < 3:
         return None, (), (f"the rudder holds no run of three or more alternating angles near "
                       f"+-{amplitude:.1f} deg (longest: {len(chain)})")
     first_sign = int(np.sign(chain[0][2]))
-    start = _ramp_start(command, raw, chain[0][0], first_sign)
-    reversals = [_left(command, before[1], h[0], int(np.sign(h[2])))
+    start = ramp_start(command, raw, chain[0][0], first_sign)
+    reversals = [left_hold(command, before[1], h[0], int(np.sign(h[2])))
                  for before, h in zip(chain[:-1], chain[1:], strict=True)]
     psi = np.degrees(record["psi"] - record["psi"][start])
     at = np.abs(psi[reversals])
@@ -351,139 +339,6 @@ def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], st
     return zigzag, tuple(h[2] for h in chain), (
         f"a {rudder:g}/{check:g} zig-zag from t = {zigzag.start_time:.6g} s: {len(chain)} "
         f"plateaus at {', '.join(f'{v:.1f}' for v in levels)} deg")
-
-
-def _holds(command: np.ndarray) -> list[tuple[int, int, float]]:
-    """(first, last, level) of each stretch of at least HOLD_SAMPLES samples within HOLD_RANGE."""
-    holds = []
-    i, n = 0, len(command)
-    while i < n:
-        j = _stretch_end(command, i)
-        level = float(np.median(command[i:j]))
-        if j - i >= HOLD_SAMPLES and abs(level) >= 1.0:
-            holds.append((i, j - 1, level))
-        i = j
-    return holds
-
-
-def _stretch_end(command: np.ndarray, i: int) -> int:
-    """The end (exclusive) of the stretch from sample ``i`` whose spread (largest minus
-    smallest angle) stays within HOLD_RANGE: the first sample that widens it beyond.
-
-    A NaN sample inside a stretch is passed over; a stretch that starts at NaN or infinity is
-    that sample alone.  The first samples are compared one by one (a moving or noisy rudder
-    makes short stretches), the rest in windows of up to 65536 samples carrying the running
-    extremes, so a long hold costs a few array operations instead of a comparison per sample.
-    """
-    n = len(command)
-    if not np.isfinite(command[i]):
-        return i + 1
-    low = high = command[i]
-    lead = min(n, i + SHORT_STRETCH)
-    for j in range(i + 1, lead):
-        value = command[j]  # Python's max and min pass over NaN, as fmax and fmin do
-        if max(high, value) - min(low, value) > HOLD_RANGE:
-            return j
-        low, high = min(low, value), max(high, value)
-    j, size = lead, 32
-    while j < n:
-        window = command[j:j + size]
-        highs = np.fmax(np.fmax.accumulate(window), high)
-        lows = np.fmin(np.fmin.accumulate(window), low)
-        wider = np.flatnonzero(highs - lows > HOLD_RANGE)
-        if wider.size:
-            return j + int(wider[0])
-        low, high = lows[-1], highs[-1]
-        j += len(window)
-        size = min(8 * size, 65536)
-    return n
-
-
-def _settled(holds: list[tuple[int, int, float]]) -> list[tuple[int, int, float]]:
-    """The holds of an actual rudder with each run creeping toward a larger angle of the same
-    sign (by at most two hold ranges, a few samples apart) made one at the angle it settled
-    at: a rudder that a servo's lag brings to its command slowly holds for a few samples at
-    each degree on the way (a helmsman's step to another angle is a new hold)."""
-    settled: list[tuple[int, int, float]] = []
-    for first, last, level in holds:
-        if settled:
-            a, b, previous = settled[-1]
-            if (np.sign(previous) == np.sign(level) and first - b <= HOLD_SAMPLES
-                    and 0.0 < abs(level) - abs(previous) <= 2 * HOLD_RANGE):
-                settled[-1] = (a, last, level)
-                continue
-        settled.append((first, last, level))
-    return settled
-
-
-def _cut_short(command: np.ndarray, raw: list, chain: list, amplitude: float) -> list:
-    """The chain of plateaus with a first leg the rudder never held put in front: an actual
-    rudder that a servo brings to its command slowly can be reversed at the check angle on
-    its way out, before it settles (a 35/10 zig-zag's first leg peaks near 26 deg).  Such a
-    leg peaks at least half the amplitude out on the other side, after the last hold before
-    the first plateau; it is taken to have been commanded to the amplitude."""
-    if not chain:
-        return chain
-    sign = -np.sign(chain[0][2])
-    earlier = [h for h in raw if h[1] < chain[0][0]]
-    begin = earlier[-1][1] + 1 if earlier else 0
-    if begin >= chain[0][0]:
-        return chain
-    peak = begin + int(np.argmax(sign * command[begin:chain[0][0]]))
-    if sign * command[peak] < 0.5 * amplitude:
-        return chain
-    return [(peak, peak, float(sign * amplitude)), *chain]
-
-
-def _left(command: np.ndarray, last: int, first: int, sign: int) -> int:
-    """The first sample after ``last`` (the end of a hold) at which the rudder has moved more
-    than :data:`_EXECUTE_BAND` from where it was there toward the sign of a plateau starting
-    at ``first``: where it was put over, whether a step, a rate-limited ramp or a servo's
-    slow, noisy approach follows; ``first`` when it never moved that far."""
-    moved = np.flatnonzero(sign * (command[last + 1:first + 1] - command[last]) > _EXECUTE_BAND)
-    return last + 1 + int(moved[0]) if moved.size else first
-
-
-def _longest_alternation(plateaus):
-    """The longest run of plateaus alternating in sign.
-
-    Neighbours of the same sign are merged into one plateau; a gap between two plateaus
-    longer than twice the longer of them (the rudder left elsewhere) ends a run.
-    """
-    runs: list[list[tuple[int, int, float]]] = []
-    for hold in plateaus:
-        run = runs[-1] if runs else None
-        if run is not None:
-            first, last, level = run[-1]
-            gap = hold[0] - last
-            if gap > 2 * max(last - first, hold[1] - hold[0]) + 2:
-                run = None
-            elif np.sign(level) == np.sign(hold[2]):
-                run[-1] = (first, hold[1], level)
-                continue
-        if run is None:
-            runs.append([hold])
-        else:
-            run.append(hold)
-    return max(runs, key=len) if runs else []
-
-
-def _ramp_start(command: np.ndarray, raw: list, plateau: int, sign: int) -> int:
-    """The first sample at which the rudder left its previous value toward a plateau: where
-    it left the last hold before (:func:`_left`), else back over the ramp's end while it is
-    more than half way from the record's first value (a servo's slow approach) and then while
-    it moves toward the plateau by more than :data:`_MOVING` per sample; sample 0 when the
-    record starts on the ramp."""
-    earlier = [h for h in raw if h[1] < plateau]
-    if earlier:
-        return _left(command, earlier[-1][1], plateau, sign)
-    index = plateau
-    half = 0.5 * sign * (command[plateau] + command[0])
-    while index > 0 and sign * command[index - 1] > half:
-        index -= 1
-    while index > 0 and sign * (command[index] - command[index - 1]) > _MOVING:
-        index -= 1
-    return index if index in (0, plateau) else index + 1
 
 
 def _roundest(low: float, high: float) -> float:

@@ -166,3 +166,26 @@ def test_a_saved_format_1_model_still_loads_and_flies(kcs):
         json.loads(path.read_text())["coefficients"]["Y"]["v"])
     (run,) = fly(model.dynamics(), protocol_manoeuvres(600.0)["test"][:1])
     assert run.meta["diverged_at"] is None
+
+
+def test_records_without_the_actual_rudder_are_fitted_on_the_command(kcs, protocol_runs):
+    """A fit that took the commanded angle for the actual one counted the steering gear's lag
+    twice when flown (the held-out zig-zag 5.6 L off): records that all lack ``delta`` are
+    fitted on the command, with a note, and records that mix are refused."""
+    import warnings
+
+    from sindyship.errors import RudderSignalNote, SindyshipInputError
+    from sindyship.trajectory import Trajectory
+
+    train = protocol_runs["train"]
+    commanded_only = [Trajectory(r.data.drop(columns=["delta"]), r.name) for r in train]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = fit(commanded_only, kcs)
+    assert model.rudder_signal == "commanded"
+    assert [w.category for w in caught].count(RudderSignalNote) == 1
+    assert model.coefficients == fit(train, kcs, rudder_signal="commanded").coefficients
+    (flown,) = fly_like_batch(model.dynamics(), [protocol_runs["test"][2]])
+    assert distance_errors(flown, protocol_runs["test"][2], kcs.L)["mean_distance_L"] < 3.0
+    with pytest.raises(SindyshipInputError, match="spiral_port has no actual rudder angle"):
+        fit(train[:-1] + commanded_only[-1:], kcs)

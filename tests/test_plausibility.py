@@ -17,12 +17,11 @@ from sindyship.marin import MARIN_FILES, default_marin_dir, read_marin
 from sindyship.measurements import PlausibilityNote, read_csv, trajectory_from_frame, write_csv
 from sindyship.mmg import MMGModel
 from sindyship.plausibility import CHECKS, frame_misfit, heading_gain
+from sindyship.rudder_holds import HOLD_RANGE, stretch_end
 from sindyship.ships import load_ship
 from sindyship.simulation import RudderCommand, simulate_batch
 from sindyship.trajectory import Trajectory
 from sindyship.trials import (
-    HOLD_RANGE,
-    _stretch_end,
     explain_zigzag,
     recognise_zigzag,
     trim,
@@ -380,7 +379,7 @@ def test_rudder_holds_end_where_the_sample_by_sample_rule_ends_them(seed, quantu
                      *range(0, min(n, 300))})
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # the rule under test warns of nothing
-        got = [_stretch_end(command, int(i)) for i in starts]
+        got = [stretch_end(command, int(i)) for i in starts]
     with np.errstate(invalid="ignore"):  # inf - inf in the reference's arithmetic
         expected = [_stretch_end_one_by_one(command, int(i)) for i in starts]
     assert got == expected

@@ -438,6 +438,16 @@ def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool =
     add_json(p)
 
 
+def resolve_cli_rudder_signal(args, records) -> None:
+    """``args.rudder_signal`` as the fit will use it, with a note on stderr when the records
+    have no actual rudder angle (:func:`sindyship.identify.fitted_rudder_signal`)."""
+    from ..identify import fitted_rudder_signal
+
+    args.rudder_signal, note = fitted_rudder_signal(records, args.rudder_signal)
+    if note is not None:
+        progress(f"note: {note}.")
+
+
 def report_prior_coverage(ship, library) -> None:
     """A note on stderr when the library has no term for some of the prior's estimates
     (:func:`sindyship.priors.coverage_note`)."""

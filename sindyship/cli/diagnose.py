@@ -19,6 +19,7 @@ from ._common import (
     on_cluster,
     progress,
     report_prior_coverage,
+    resolve_cli_rudder_signal,
     speed_form,
     split_names,
 )
@@ -108,6 +109,7 @@ def run(args) -> int:
 
     library = resolve_library(args.library, split_names(args.effects), speed_form(args, ship))
     check_two_records(records, "diagnose")
+    resolve_cli_rudder_signal(args, records)
     # every candidate named, and the terms of the user's own effect files checked on the
     # records, before the long work (an effect whose channels the records lack is reported
     # untestable by the diagnosis)

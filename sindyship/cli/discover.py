@@ -13,6 +13,7 @@ from ._common import (
     emit,
     on_cluster,
     progress,
+    resolve_cli_rudder_signal,
     speed_form,
     split_names,
 )
@@ -72,6 +73,7 @@ def run(args) -> int:
 
     library = resolve_library(args.library, (), speed_form(args, ship))
     check_two_records(records, "discover")
+    resolve_cli_rudder_signal(args, records)
     effects = [load_effect(name) for name in split_names(args.effects)]
     # the search (scikit-learn with it) once the files, ship and library pass: their refusals
     # come in a fraction of a second, before any cluster starts

@@ -13,6 +13,7 @@ from ._common import (
     load_cli_ship,
     progress,
     report_prior_coverage,
+    resolve_cli_rudder_signal,
     resolved_library,
     ship_file,
     speed_form,
@@ -150,6 +151,7 @@ def run(args) -> int:
         return _run_streamed(args, ship, params, speed)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
+    resolve_cli_rudder_signal(args, records)
     smoothing = _smoothing(args, records, ship, effects, params, speed)
     if smoothing is not None:
         from ..smoothing import smooth_records

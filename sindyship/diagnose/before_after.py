@@ -11,7 +11,7 @@ import pandas as pd
 from .._diagnosis_thresholds import CONFIRMING_RATIO
 from .._io import clean_json
 from ..evaluation import compare_flights, error_summary
-from ..identify import Design, design, fit, resolve_library
+from ..identify import Design, design, fit, resolve_library, resolve_rudder_signal
 from ..library import (
     Effect,
     TermLibrary,
@@ -297,6 +297,7 @@ def before_after(
     base = resolve_library(library)
     added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
     extended = base.extended(*added)
+    rudder_signal = resolve_rudder_signal(train, rudder_signal)
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
     fitted = list(train)
     if smoothing is not None and smoothing != "none":

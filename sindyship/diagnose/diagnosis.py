@@ -19,7 +19,7 @@ from .._diagnosis_thresholds import (
 )
 from .._io import clean_json
 from ..errors import SindyshipInputError
-from ..identify import Design, design, resolve_library
+from ..identify import Design, design, resolve_library, resolve_rudder_signal
 from ..library import (
     DOFS,
     Effect,
@@ -358,6 +358,7 @@ def diagnose(
     records, test = list(records), list(test)
     _check_arguments(records, test, threshold)
     base = resolve_library(library)
+    rudder_signal = resolve_rudder_signal(records, rudder_signal)
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
     smoothing = resolve_smoothing(smoothing, records, ship, library=base, optimizer=optimizer,
                                   rudder_signal=rudder_signal, n_jobs=n_jobs)

@@ -47,7 +47,7 @@ import numpy as np
 
 from .._diagnosis_thresholds import MEANINGFUL_SHARE
 from .._io import clean_json
-from ..identify import design, resolve_library
+from ..identify import design, resolve_library, resolve_rudder_signal
 from ..library import DOFS, Effect, TermLibrary
 from ..optimizers import ForwardSelection, GroupedProblem, one_blas_thread
 from ..reports import shape_words
@@ -385,6 +385,7 @@ def discover(
     base = resolve_library(library)
     added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
     base = base.extended(*added) if added else base
+    rudder_signal = resolve_rudder_signal(records, rudder_signal)
     setting = resolve_smoothing(smoothing, records, ship, library=base,
                                 rudder_signal=rudder_signal)
     measured = records
