@@ -58,6 +58,11 @@ The checks, in the order they run, with their thresholds (module constants) and 
     KVLCC2 pass the reader's absolute limit of 100 rps).
 ``forward-speed``
     Refuses u <= 0 at every sample: the models describe a ship going ahead.
+``rudder-sign``
+    A positive rudder turns the ship to starboard: a rudder held ``RUDDER_SIGN_ANGLE`` = 10 deg
+    over for a quarter of the record must not see the ship turn ``RUDDER_SIGN_TURN`` = 0.2 rad
+    the other way over the hold's second half; else the gain b in dr/dt = a r + b delta + c
+    must not lie ``RUDDER_SIGN_T`` = 10 standard errors below zero (good records: +20 to +360).
 
 Decimal-comma files are recognised by the reader itself (:mod:`sindyship.measurements`).
 """
@@ -95,7 +100,8 @@ __all__ = [
 ]
 
 #: Names of the checks, in the order they run.
-CHECKS = ("motion", "sampling", "heading", "frame", "speed", "revolutions", "forward-speed")
+CHECKS = ("motion", "sampling", "heading", "frame", "speed", "revolutions", "forward-speed",
+          "rudder-sign")
 
 MOTION_TOLERANCE = 1e-9
 MAX_STEP = 1.0  # L/U0
@@ -112,6 +118,10 @@ MAX_SPEED_RATIO = 1.6  # of U0
 #: Most a record's median propeller revolutions may exceed the ship's own (a ratio): rpm read
 #: as rps are 60 times too high.
 MAX_REVOLUTION_RATIO = 5.0
+
+RUDDER_SIGN_ANGLE = math.radians(10.0)
+RUDDER_SIGN_TURN = 0.2  # rad
+RUDDER_SIGN_T = 10.0  # standard errors
 
 _KNOT = 1852.0 / 3600.0
 
@@ -198,6 +208,8 @@ def check_record(
         _check_revolutions(data["n"], ship, context)
     if "forward-speed" not in skip:
         _check_forward_speed(data["u"], context)
+    if "rudder-sign" not in skip:
+        _check_rudder_sign(data, context)
     return data, notes
 
 
@@ -303,6 +315,41 @@ def _check_forward_speed(u: np.ndarray, context: _Context) -> None:
             f"column '{context.header('u')}' is never positive (at most {np.max(u):.4g} m/s)",
             "u is the surge speed, positive ahead: check its sign and that the ship is under way",
         )
+
+
+def _check_rudder_sign(data, context: _Context) -> None:
+    """A positive rudder angle turns the ship to starboard: a turn held against the rudder, or
+    a yaw acceleration that follows the rudder with the opposite sign, is a flipped rudder."""
+    name = "delta" if "delta" in data else "delta_c"
+    delta, r, t = data[name], data["r"], data["t"]
+    held = np.abs(delta) >= RUDDER_SIGN_ANGLE
+    side = np.sign(delta) * held
+    edges = np.flatnonzero(np.diff(np.concatenate(([0.0], side, [0.0]))) != 0)
+    first, last = max(zip(edges[:-1], edges[1:], strict=True), key=lambda e: e[1] - e[0],
+                      default=(0, 0))
+    if last - first >= 0.25 * len(t) and side[first] != 0:  # a turn: which way did it go?
+        middle = (first + last) // 2
+        turned = side[first] * float(np.trapezoid(r[middle:last], t[middle:last]))
+        if turned >= -RUDDER_SIGN_TURN:
+            return
+        problem = (f"with column '{context.header(name)}' held at "
+                   f"{math.degrees(float(np.median(delta[first:last]))):.0f} deg from "
+                   f"t = {t[first]:.6g} s, the ship turned {math.degrees(-turned):.0f} deg the "
+                   "other way")
+    elif np.ptp(delta) >= RUDDER_SIGN_ANGLE:  # the yaw response: dr/dt = a r + b delta + c
+        design = np.column_stack([r, delta, np.ones_like(r)])
+        fitted, *_ = np.linalg.lstsq(design, np.gradient(r, t), rcond=None)
+        error = np.gradient(r, t) - design @ fitted
+        spread = float(error @ error) / max(len(t) - 3, 1) * np.linalg.pinv(design.T @ design)
+        below = -fitted[1] / math.sqrt(max(spread[1, 1], 1e-300))
+        if not below > RUDDER_SIGN_T:
+            return
+        problem = (f"the yaw acceleration follows column '{context.header(name)}' with the "
+                   f"opposite sign ({below:.0f} standard errors below zero)")
+    else:
+        return
+    context.refuse("rudder-sign", problem, "sindyship takes a positive rudder angle to turn "
+                   "the ship to starboard (r > 0), so negate the rudder columns")
 
 
 # ---------------------------------------------------------------------------------------------

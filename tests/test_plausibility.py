@@ -125,7 +125,24 @@ def test_unknown_check_name_is_refused(zigzag):
     with pytest.raises(SindyshipInputError, match="unknown plausibility check 'speeed'"):
         trajectory_from_frame(zigzag.data, skip_checks=["speeed"])
     assert set(CHECKS) == {"motion", "sampling", "heading", "frame", "speed", "revolutions",
-                           "forward-speed"}
+                           "forward-speed", "rudder-sign"}
+
+
+def test_a_flipped_rudder_sign_is_refused(protocol_runs):
+    """A positive rudder turns the ship to starboard: every protocol record with its rudder
+    negated is refused (a turn held against the rudder, or zig-zags whose yaw acceleration
+    follows the rudder with the opposite sign), and every one as flown passes."""
+    for record in protocol_runs["train"] + protocol_runs["test"]:
+        trajectory_from_frame(record.data, record.name)
+        if record.name == "straight":
+            continue
+        flipped = record.data.assign(delta=-record["delta"], delta_c=-record["delta_c"])
+        message = refusal(flipped)
+        assert "rudder-sign check" in message and "negate the rudder columns" in message
+        expected = "the other way" if record.name.startswith(("tc", "spiral")) \
+            else "standard errors below zero"
+        assert expected in message, (record.name, message)
+        trajectory_from_frame(flipped, record.name, skip_checks=["rudder-sign"])
 
 
 @pytest.mark.parametrize(
