@@ -66,7 +66,6 @@ def _marin() -> dict | None:
     """The KVLCC2 measurements: identify on the zig-zags, fly the turns before and after the
     effect the diagnosis names, compared over the windows both flights cover."""
     from sindyship.diagnose import before_after, diagnose
-    from sindyship.manoeuvres import turning_figures
     from sindyship.marin import MARIN_FILES, default_marin_dir, read_marin
     from sindyship.measurements import trajectory_from_frame
     from sindyship.ships import load_ship
@@ -75,8 +74,6 @@ def _marin() -> dict | None:
     if folder is None:
         return None
     raw = {key: read_marin(folder / name) for key, name in MARIN_FILES.items()}
-    measured = {"port": turning_figures(raw["tc_35"], 320.0),
-                "stbd": turning_figures(raw["tc_-35"], 320.0)}
     model_n = float(raw["tc_35"]["n"][0]) * 45.7**0.5
     ship = load_ship("kvlcc2").scaled(45.7)
     records = {key: trajectory_from_frame(rec.data, key, resample=1.0) for key, rec in raw.items()}
@@ -87,8 +84,9 @@ def _marin() -> dict | None:
     top = result.ranking[0]
     change = before_after(train, ship, effects=[top.effect.name], test=test, **settings)
     rows = {row["manoeuvre"]: row for row in change.rows}
+    default_fit, measured = _marin_default(train, test, ship, settings)
     return {
-        "default_fit": _marin_default(train, test, ship, settings),
+        "default_fit": default_fit,
         "measured_turns": measured,
         "model_revolutions_rps": model_n,
         "ranking": {s.effect.name: {"explained": s.explained, "signal": s.explained_signal,
@@ -102,35 +100,37 @@ def _marin() -> dict | None:
     }
 
 
-def _marin_default(train, test, ship, settings: dict) -> dict:
+def _marin_default(train, test, ship, settings: dict) -> tuple[dict, dict]:
     """The default fit (``sindyship fit``: the prior on the recommended library of the ship's
     speed form, refined by the records' flights) on the MARIN zig-zags, and the same fit on
     ``abkowitz-vr`` (without the cross-flow drag the instantaneous form's library adds): the
-    turns' figures (advance, tactical diameter, speed loss) as flown, and what the refinement
-    did."""
-    from sindyship.flights import fly_like_batch
+    turns' figures (advance, tactical diameter, speed loss) as ``evaluate`` flies and reports
+    them (from the rudder execute of the 1 s records ``python3 -m sindyship.marin`` writes),
+    and what the refinement did; and the turns' recorded figures, as ``evaluate`` reports
+    them."""
+    from sindyship.evaluation import evaluate
     from sindyship.identify import fit, recommended_library
-    from sindyship.manoeuvres import turning_figures
     from sindyship.refine import refine
 
-    out = {}
+    out, recorded = {}, {}
     for key, library in (("default", recommended_library(ship.speed_reference)),
                          ("abkowitz-vr", "abkowitz-vr")):
         model = refine(fit(train, ship, library=library, optimizer="prior",
                            speed=ship.speed_reference, **settings), train)
         turns = {}
-        for record, flown in zip(test, fly_like_batch(model, test), strict=True):
-            diverged = flown.meta.get("diverged_at")
-            figures = {} if diverged is not None else turning_figures(flown, ship.L)
-            turns[record.name] = {"diverged_at_s": diverged, **{
-                key: figures.get(key) for key in ("advance_L", "tactical_diameter_L",
-                                                  "speed_loss")}}
+        for name, errors in evaluate(model, test).items():
+            flown = errors["turn"]["flown"] or {}
+            turns[name] = {"diverged_at_s": errors["diverged_at_s"],
+                           **{k: flown.get(k) for k in ("advance_L", "tactical_diameter_L",
+                                                        "speed_loss")}}
+            side = {"tc_35": "port", "tc_-35": "stbd"}[name]
+            recorded[side] = {k: v for k, v in errors["turn"]["recorded"].items() if k != "side"}
         done = model.info["refined"]
         out[key] = {
             "library": model.library.name, "speed": model.library.speed, "turns": turns,
             "refined": done["largest_change"] is not None,
             "stopped": done["stopped"]}
-    return out
+    return out, recorded
 
 
 def compute() -> dict:
