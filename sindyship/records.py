@@ -166,6 +166,9 @@ def read_record(path: str | os.PathLike, *, name: str | None = None, ship=None,
     from .trials import flight_start, trim, underway_window
 
     path = Path(path)
+    if path.suffix.lower() == ".json":
+        raise SindyshipInputError(f"{path} is a saved model (JSON), not a record; give "
+                                  "measurement CSV or Parquet files here.")
     name = path.stem if name is None else name
     skip = "all" if "all" in skip_checks else tuple(skip_checks)
     options = {"resample": resample, "ship": ship, "skip_checks": skip}

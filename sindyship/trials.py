@@ -33,7 +33,8 @@ Thresholds (module constants) and why:
   turning circle may end in a pull-out); its execute is the last sample at the approach value
   before the rudder moved to the hardest such hold (:func:`recognise_turn`).  A turn from its
   execute is the standard turning test: whatever was steered before (course keeping by hand)
-  is not part of it.
+  is not part of it.  A record that starts already turning at ``MID_TURN = 0.25`` of its
+  largest yaw rate or more (a time range cut after the execute) holds no execute, and no turn.
 """
 
 from __future__ import annotations
@@ -85,6 +86,8 @@ ROUNDING = 1.5  # deg
 CHECK_SPREAD = 3.0  # deg
 TURN_RUDDER = 5.0  # deg
 TURN_SHARE = 0.25
+#: A record whose first sample turns faster than this share of its fastest starts in a turn.
+MID_TURN = 0.25
 
 
 class Window(NamedTuple):
@@ -287,8 +290,9 @@ def recognise_turn(record: Trajectory) -> Turn | None:
     # the rudder first reached the hold's angle here (it may wander a degree before the hold)
     arrived = int(np.argmax(sign * (command[: first + 1] - level) >= -HOLD_RANGE))
     start = execute(command, arrived, sign)
+    if start == 0 and abs(record["r"][0]) > MID_TURN * np.max(np.abs(record["r"])):
+        return None  # the record starts in the turn: its execute is not in it
     return Turn(round(float(level), 1), float(record.t[start]))
-
 
 
 

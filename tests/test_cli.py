@@ -163,6 +163,50 @@ def test_evaluate_with_a_record_where_the_model_belongs_says_the_model_comes_fir
                    "model; give the model first: sindyship evaluate MODEL.json DATA.csv...\n")
 
 
+def test_a_model_where_records_belong_and_a_record_where_a_model_belongs_are_named(
+        records, tmp_path):
+    """fit and diagnose given a saved model, export given a record: the message says which
+    file is which, instead of a CSV parser's or a JSON parser's complaint."""
+    model = str(tmp_path / "m.json")
+    assert run_sindyship("fit", records["zz20"], records["tc35"], "--ship", "kcs",
+                         "--refine", "0", "--out", model)[0] == 0
+    for verb in (("fit", model, "--ship", "kcs", "--out", str(tmp_path / "q.json")),
+                 ("diagnose", records["zz20"], records["tc35"], "--ship", "kcs", "--test",
+                  model)):
+        code, _, err = run_sindyship(*verb)
+        assert code == 2 and err == (f"sindyship {verb[0]}: error: {model} is a saved model "
+                                     "(JSON), not a record; give measurement CSV or Parquet "
+                                     "files here.\n")
+    code, _, err = run_sindyship("export", records["zz20"], "--latex", str(tmp_path / "e.tex"))
+    assert code == 2 and f"{records['zz20']} is a record, not a saved model" in err
+
+
+def test_a_fit_on_one_record_says_what_it_could_not_check(records, tmp_path):
+    code, _, err = run_sindyship("fit", records["zz20"], "--ship", "kcs", "--refine", "3",
+                                 "--out", str(tmp_path / "one.json"))
+    assert code == 0, err
+    assert "note: with 1 record the refinement is not checked on records it was not refined on" \
+        in err
+    assert "note: no identifiability report from one record" in err
+
+
+def test_evaluate_notes_a_flight_that_starts_far_from_the_design_speed(kcs, capsys):
+    """A record of another ship, or at another speed, is flown without complaint; a flight
+    starting outside 0.7 to 1.3 U0 of the model's ship gets a note."""
+    import pandas as pd
+
+    from sindyship.cli.evaluate import _note_speeds
+    from sindyship.trajectory import Trajectory
+
+    frame = pd.DataFrame({"t": [0.0, 1.0, 2.0], "u": kcs.U0 * np.array([0.5, 0.9, 0.9]),
+                          "v": 0.0, "r": 0.0, "x": 0.0, "y": 0.0, "psi": 0.0, "delta": 0.0})
+    record = Trajectory(frame, "slow")
+    _note_speeds([record], {"slow": {"start_s": 0.0}}, kcs)
+    assert "note: slow starts at 0.50 times the design speed U0" in capsys.readouterr().err
+    _note_speeds([record], {"slow": {"start_s": 1.0}}, kcs)
+    assert capsys.readouterr().err == ""
+
+
 def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
     from sindyship.reports import evaluation_report
 

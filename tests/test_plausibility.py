@@ -436,6 +436,16 @@ def test_zigzags_logged_with_the_actual_rudder_alone_are_recognised(protocol_run
     assert max(e["mean_distance_L"] for e in errors.values()) < 1.0
 
 
+def test_a_record_cut_after_its_execute_holds_no_turn(protocol_runs):
+    """A time range that starts in the turn leaves its execute out: no turn, so no turn
+    figures measured from mid-turn."""
+    from sindyship.trials import recognise_turn
+
+    turn = protocol_runs["test"][1]
+    assert recognise_turn(turn).start_time == 0.0
+    assert recognise_turn(trim(turn, (100.0, 200.0))) is None
+
+
 def test_never_under_way_is_refused(zigzag, kcs):
     still = Trajectory(zigzag.data.assign(u=0.1), "still")
     with pytest.raises(SindyshipInputError, match="never under way"):

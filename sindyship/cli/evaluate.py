@@ -57,8 +57,32 @@ def run(args) -> int:
                            skip_checks=args.skip_check, time_range=args.time_range)
     check_simulation_cost(model.ship, max(record.duration for record in records))
     errors = evaluate(model, records)
+    _note_speeds(records, errors, model.ship)
     if args.json:
         emit({"errors": errors})
     else:
         print(evaluation_report(errors))
     return 0
+
+
+#: Speeds at a flight's start, as a share of the model ship's U0, beyond which evaluate notes
+#: that the record may be of another ship or speed than the model's.
+SPEED_NOTE_RANGE = (0.7, 1.3)
+
+
+def _note_speeds(records, errors, ship) -> None:
+    """A note on stderr for each record whose flight starts far from the model ship's design
+    speed: the model is identified around it, and a record of another ship or at another
+    speed is flown without complaint."""
+    import numpy as np
+
+    from ._common import progress
+
+    for record in records:
+        start = errors[record.name].get("start_s")
+        k = 0 if start is None else int(np.searchsorted(record.t, start - 1e-9))
+        ratio = float(np.hypot(record["u"][k], record["v"][k])) / ship.U0
+        if not SPEED_NOTE_RANGE[0] <= ratio <= SPEED_NOTE_RANGE[1]:
+            progress(f"note: {record.name} starts at {ratio:.2f} times the design speed U0 = "
+                     f"{ship.U0:.4g} m/s of the model's ship {ship.name}; check that the ship "
+                     "and the speed are the ones measured.")

@@ -184,7 +184,7 @@ def run(args) -> int:
 def _refined(model, records, args, n_jobs=1):
     """The model refined by its records' flights (:func:`sindyship.refine.refine`), with
     each step and what the refinement did on stderr."""
-    from ..refine import refine
+    from ..refine import VALIDATION_RECORDS, refine
 
     progress(f"refining by the records' flights (multiple shooting, at most {args.refine} "
              "evaluations)")
@@ -213,6 +213,10 @@ def _refined(model, records, args, n_jobs=1):
     else:
         progress(f"not refined: no step lowered the error ({done['cost_before']:.4g}); the "
                  "fitted coefficients are kept.")
+    if done["largest_change"] is not None and "validation" not in done:
+        progress(f"note: with {len(records)} record{'s' if len(records) > 1 else ''} the "
+                 "refinement is not checked on records it was not refined on (that needs "
+                 f"{VALIDATION_RECORDS} or more): judge it on other manoeuvres before using it.")
     if not done["converged"] and not done["refused_unstable"] \
             and not done.get("refused_turning") and not done.get("refused_validation"):
         progress(f"note: the refinement stopped before it converged ({done['stopped']}); a "
@@ -288,6 +292,8 @@ def _identifiability(args, records, ship, library, params):
     """Terms the records cannot separate, on stderr (the remedies need the ship's MMG), for
     the fit's library (its effects included, in its speed form)."""
     if len(records) < 2:
+        progress("note: no identifiability report from one record (it compares fits that "
+                 "leave a manoeuvre out); give two or more records for it.")
         return None
     from ..identifiability import identifiability
 
