@@ -3,8 +3,10 @@ naming the file and the field for what is wrong (:meth:`sindyship.model.Abkowitz
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping
+from dataclasses import replace
 
 import numpy as np
 
@@ -23,8 +25,12 @@ MAX_COEFFICIENT = 1e6
 
 def _check_format(data: Mapping, source: str) -> None:
     version = data.get("format_version")
-    if not isinstance(version, int) or isinstance(version, bool):
+    if version is None:
         raise SindyshipInputError(f"{source}: not a sindyship model (no format_version).")
+    if not isinstance(version, int) or isinstance(version, bool):
+        raise SindyshipInputError(
+            f"{source}: format_version must be a whole number such as {FORMAT_VERSION}, not "
+            f"{json.dumps(version)[:20]}; the file was edited or is not a sindyship model.")
     if version > FORMAT_VERSION:
         raise SindyshipInputError(
             f"{source}: saved by a newer sindyship (format {version}); upgrade sindyship "
@@ -66,10 +72,13 @@ def _ship_of(data: Mapping, source: str, ship: Ship | None) -> Ship:
                 "(refit the model rather than editing it)."
             )
         if ship is not None and ship_digest(ship) != ship_digest(own):
+            renamed = ship_digest(replace(ship, name=own.name, title=own.title)) == \
+                ship_digest(own)
             raise SindyshipInputError(
-                f"{source}: the model was fitted for ship {own.name!r}, whose particulars differ "
-                f"from those of the ship given ({ship.name!r}); leave out --ship to use the "
-                "model's own ship."
+                f"{source}: the model was fitted for ship {own.name!r}, "
+                + ("the ship given under another name" if renamed else
+                   "whose particulars differ from those of the ship given")
+                + f" ({ship.name!r}); leave out --ship to use the model's own ship."
             )
         return own
     if ship is not None:

@@ -39,7 +39,6 @@ import csv
 import io
 import math
 import os
-import re
 import warnings
 from collections.abc import Iterable
 from pathlib import Path
@@ -48,6 +47,7 @@ import numpy as np
 import pandas as pd
 
 from sindyship._io import write_text_atomic
+from sindyship.csv_text import DECIMAL_COMMA, FILE_ROW, REQUIRED_TEXT, parse_csv_text, read_text
 from sindyship.errors import SindyshipInputError
 from sindyship.plausibility import check_record, resampling_gap_note, resolve_skip
 from sindyship.trajectory import REQUIRED_COLUMNS, RUDDER_COLUMNS, Trajectory
@@ -71,11 +71,6 @@ MAX_YAW_RATE = 0.5  # rad/s
 MAX_SPEED = 100.0  # m/s
 MAX_REVOLUTIONS = 100.0  # rps
 SAMPLING_TOLERANCE = 0.01  # fraction of the median time step
-
-# Index name that read_csv gives its frame, so that messages say "row 7 (...)" for files.
-_FILE_ROW = "spreadsheet row"
-
-_REQUIRED_TEXT = "t, u, v, r, x, y, psi and delta and/or delta_c"
 
 
 class PlausibilityNote(UserWarning):
@@ -330,94 +325,6 @@ def write_csv(trajectory: Trajectory, path: str | os.PathLike[str]) -> Path:
 
 
 # ---------------------------------------------------------------------------------------------
-# Reading the file
-
-
-def read_text(path: Path, source: str) -> str:
-    try:
-        return path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        problem = "file not found; check the path and the file name"
-    except IsADirectoryError:
-        problem = "is a folder, not a file; give the path of a CSV file"
-    except PermissionError:
-        problem = "cannot be read (permission denied); check the file's permissions"
-    except UnicodeDecodeError:
-        problem = "is not UTF-8 text; save it as a UTF-8 (or plain ASCII) CSV file"
-    except OSError as error:
-        problem = f"cannot be read ({error.strerror or error}); check the path"
-    raise SindyshipInputError(f"{source}: {problem}.")
-
-
-def parse_csv_text(text: str, source: str) -> pd.DataFrame:
-    """Split CSV text into a frame of strings indexed by spreadsheet row number."""
-    reader = csv.reader(io.StringIO(text))
-    header: list[str] | None = None
-    rows: list[list[str]] = []
-    numbers: list[int] = []
-    try:
-        for record in reader:
-            if not any(cell.strip() for cell in record):
-                continue  # a blank row carries no sample
-            if header is None:
-                header = record
-                continue
-            if len(record) != len(header):
-                _refuse_decimal_commas(header, record, reader.line_num, source)
-                raise SindyshipInputError(
-                    f"{source}: row {reader.line_num} (counting the header as row 1) has "
-                    f"{len(record)} values but the header names {len(header)} columns; "
-                    "give every row one value per column."
-                )
-            rows.append(record)
-            numbers.append(reader.line_num)
-    except csv.Error as error:
-        raise SindyshipInputError(
-            f"{source}: row {reader.line_num} is not valid CSV ({error}); fix the quoting."
-        ) from error
-    if header is None:
-        raise SindyshipInputError(
-            f"{source}: the file is empty; a measurement CSV needs a header row "
-            f"({_REQUIRED_TEXT}) and at least two rows of samples."
-        )
-    if len(header) == 1 and (";" in header[0] or "\t" in header[0]):
-        if rows:
-            _refuse_decimal_commas(header, rows[0], numbers[0], source)
-        raise SindyshipInputError(
-            f"{source}: the header has a single column '{header[0].strip()}'; "
-            "separate the columns with commas, not semicolons or tabs."
-        )
-    index = pd.Index(numbers, name=_FILE_ROW)
-    return pd.DataFrame(rows, columns=header, index=index, dtype=object)
-
-
-_DECIMAL_COMMA = re.compile(r"(?<![\d.])-?\d+,\d+(?:[eE][-+]?\d+)?(?![\d.,])")
-
-
-def _refuse_decimal_commas(header: list[str], record: list[str], line: int, source: str) -> None:
-    """Refuse a row written with decimal commas (``0,5``), which a column count would hide.
-
-    A row has decimal commas when it splits into more cells than the header names and its
-    text holds numbers like ``12,5``, or when the header is one semicolon-separated cell and
-    the row's cells hold such numbers.
-    """
-    if len(header) == 1:
-        example = _DECIMAL_COMMA.search(",".join(record).replace(";", " ").replace("\t", " "))
-        if example is None:
-            return
-        found = f"(e.g. '{example.group(0)}') and semicolons between the columns"
-    elif len(record) > len(header) and _DECIMAL_COMMA.search(",".join(record)):
-        found = f"({len(record)} comma-separated values for {len(header)} columns)"
-    else:
-        return
-    raise SindyshipInputError(
-        f"{source}: row {line} (counting the header as row 1) looks written with decimal "
-        f"commas {found}; save the file with decimal points and commas between the columns "
-        "(e.g. '12.5,0.3')."
-    )
-
-
-# ---------------------------------------------------------------------------------------------
 # Validation
 
 
@@ -447,30 +354,31 @@ def _check_required(columns: list[Column], frame: pd.DataFrame, source: str) -> 
     noun = "column" if len(missing) == 1 else "columns"
     raise SindyshipInputError(
         f"{source}: missing {noun} {', '.join(missing)}{hint}; a measurement needs the "
-        f"columns {_REQUIRED_TEXT}."
+        f"columns {REQUIRED_TEXT}."
     )
 
 
 def _row(index: pd.Index, position: int) -> str:
     """Name a row for a message: spreadsheet row for files, index label for frames."""
     label = index[position]
-    if index.name == _FILE_ROW:
+    if index.name == FILE_ROW:
         return f"row {label} (counting the header as row 1)"
     return f"the row with index label {label}"
 
 
 def column_as_float(values: np.ndarray, column: Column, index: pd.Index, source: str) -> np.ndarray:
-    try:
-        return np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        pass
+    if values.dtype != object or "_" not in "\x00".join(map(str, values)):  # 2_8: no CSV number
+        try:
+            return np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            pass
     for position, value in enumerate(values):
         try:
-            float(value)
+            float(str(value).replace("_", " "))
         except (TypeError, ValueError):
             if value is None or value is pd.NA or (isinstance(value, str) and not value.strip()):
                 what = "an empty cell"
-            elif _DECIMAL_COMMA.fullmatch(str(value).strip()):
+            elif DECIMAL_COMMA.fullmatch(str(value).strip()):
                 what = f"the decimal comma '{str(value).strip()}'"
             else:
                 what = f"the text '{str(value).strip()}'"

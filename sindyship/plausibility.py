@@ -398,8 +398,8 @@ def _unwrap_heading(data, context: _Context) -> tuple[np.ndarray, str | None]:
     steps[jumps + 1] = 2 * math.pi * turns
     note = (
         f"{context.source}: column '{context.header('psi')}' wraps around {jumps.size} "
-        f"time(s), first into {context.row(int(jumps[0]) + 1)}; unwrapped it (psi must be "
-        "continuous)."
+        f"time{'s' if jumps.size > 1 else ''}, first into {context.row(int(jumps[0]) + 1)}; "
+        "unwrapped it (psi must be continuous)."
     )
     return psi - np.cumsum(steps), note
 

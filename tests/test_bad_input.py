@@ -633,8 +633,10 @@ def _edited(saved_model: str, edit) -> str:
     (lambda d: d["coefficients"]["N"].update({"v^9": 0.1}), "not a term"),
     (lambda d: d.update(format_version=0), "does not exist"),
     (lambda d: d.update(format_version=-1), "does not exist"),
+    (lambda d: d.update(format_version="2"), 'must be a whole number such as 2, not "2"'),
     (lambda d: d["ship_definition"]["particulars"].update(L=231.0), "digest"),
-], ids=["huge-coefficient", "unknown-term", "version-0", "version-minus-1", "edited-ship"])
+], ids=["huge-coefficient", "unknown-term", "version-0", "version-minus-1", "version-text",
+        "edited-ship"])
 def test_an_edited_model_is_refused(new_folder, good_csv, saved_model, edit, words):
     code, out, err, model = evaluate_model(new_folder(), good_csv, _edited(saved_model, edit))
     assert_one_line(code, out, err, 2, str(model), words)

@@ -207,6 +207,16 @@ def test_evaluate_notes_a_flight_that_starts_far_from_the_design_speed(kcs, caps
     assert capsys.readouterr().err == ""
 
 
+def test_usage_errors_are_one_line_that_names_the_verb():
+    code, out, err = run_sindyship("export", "m.json", "--bogus")
+    assert (code, out) == (2, "")
+    assert err == ("sindyship export: error: unrecognized arguments: --bogus (see sindyship "
+                   "export --help)\n")
+    code, _, err = run_sindyship("fit", "d.csv", "--optimizer", "foo", "--out", "m.json")
+    assert code == 2 and err.startswith("sindyship fit: error: argument --optimizer: invalid "
+                                        "choice: 'foo'") and err.count("\n") == 1
+
+
 def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
     from sindyship.reports import evaluation_report
 

@@ -329,6 +329,23 @@ def test_time_written_too_coarsely_is_named_rounded(tmp_path):
     assert "remove duplicate" not in message
 
 
+def test_a_number_with_an_underscore_is_refused(tmp_path):
+    """Python reads 2_8 as 28; no CSV writer writes it, so it is a typo, not a number."""
+    lines = rows(4)
+    lines[2] = replace_cell(lines[2], 1, "8_0")
+    message = error_of(write(tmp_path, csv_text(lines=lines)))
+    assert "column 'u' has the text '8_0' in row 4" in message
+
+
+def test_a_quote_never_closed_names_its_row(tmp_path):
+    """Python's CSV reader takes every row after an unclosed quote into one cell; the count of
+    values then fails on the file's last row, which is not where the mistake is."""
+    lines = rows(6)
+    lines[1] = lines[1].replace(",", ',"', 1)
+    message = error_of(write(tmp_path, csv_text(lines=lines)))
+    assert "row 3 (counting the header as row 1) opens a quote" in message
+
+
 def test_decreasing_time(tmp_path):
     lines = rows(4)
     lines[1], lines[2] = lines[2], lines[1]

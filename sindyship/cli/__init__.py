@@ -79,6 +79,7 @@ def build_parser(verbs=None) -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"sindyship {__version__}")
     sub = parser.add_subparsers(dest="verb", metavar="VERB", required=True)
+    parser.verb_parsers = sub.choices  # a verb's own parser names its usage errors
     if isinstance(verbs, str):
         verbs = {verbs}
     for name, module in VERBS.items():
@@ -114,7 +115,9 @@ def main(argv: list[str] | None = None) -> int:
     _tolerant_streams()
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser({_verb_of(argv)})
-    args = parser.parse_args(argv)
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:  # named by the verb's own parser, as its other usage errors are
+        parser.verb_parsers[args.verb].error(f"unrecognized arguments: {' '.join(unknown)}")
     previous = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _terminate)

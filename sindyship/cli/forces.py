@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import SindyshipInputError
-from ._common import add_json, add_ship, emit
+from ._common import add_json, add_ship, emit, progress
 
 #: The verb's line in ``sindyship --help``.
 SUMMARY = "compare a model's forces with captive (towing-tank) tests"
@@ -67,6 +67,7 @@ def run(args) -> int:
         with output_folder(args.out) as folder:
             write_text_atomic(folder / "forces.json", result.to_json() + "\n")
             save_figure(plot_captive_forces(result), folder / "captive-forces.png", dpi=120)
+        progress(f"wrote forces.json and captive-forces.png to {args.out}/")
     if args.json:
         emit(result.to_dict())
     else:

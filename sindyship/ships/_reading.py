@@ -497,6 +497,9 @@ def load_ship(name_or_path: str | Path) -> Ship:
     else:
         path = Path(text_name)
         if not path.is_file():
+            if text_name.lower() in BUILTIN_SHIPS:
+                raise SindyshipInputError(f"there is no ship named {text_name!r}; the built-in "
+                                          f"ship is {text_name.lower()!r} (lower case).")
             raise SindyshipInputError(
                 f"{text_name}: no such ship file; use a built-in ship ({', '.join(BUILTIN_SHIPS)}) "
                 "or the path of a TOML file laid out like sindyship/ships/kcs.toml."
