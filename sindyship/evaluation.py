@@ -141,7 +141,9 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
     A zig-zag or a turn is flown and scored from its rudder execute
     (:func:`sindyship.flights.flight_start`).  Each entry is :func:`distance_errors` plus
     :func:`flown_as` (``start_s`` and ``start_reason`` say where the flight started and why),
-    and for a turn ``turn``: its figures flown and recorded (:func:`turn_figures`).
+    and for a turn ``turn``: its figures flown and recorded (:func:`turn_figures`); for a
+    zig-zag flown closed loop ``zigzag``: its overshoots and period flown and recorded
+    (:func:`zigzag_overshoots`).
     """
     from .arguments import as_records, check_motion
     from .model import AbkowitzModel
@@ -160,6 +162,8 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
         out[rec.name] = {**distance_errors(f, short, model.ship.L), **flown_as(rec)}
         if flight_start(short).kind == "turn":  # read from the part's meta
             out[rec.name]["turn"] = turn_figures(f, short, model.ship.L)
+        elif out[rec.name]["flown_as"] == "zigzag":
+            out[rec.name]["zigzag"] = zigzag_overshoots(f, short)
     return out
 
 
@@ -199,3 +203,36 @@ def turn_figures(flown: Trajectory, recorded: Trajectory, L: float) -> dict:
     if out["flown"] and out["recorded"] and out["flown"]["side"] != out["recorded"]["side"]:
         out["flown"] = {"side": out["flown"]["side"], **dict.fromkeys(TURN_FIGURES)}
     return out
+
+
+#: The figures of a zig-zag :func:`evaluate` reports (IMO MSC.137(76): the overshoots).
+ZIGZAG_FIGURES = ("first_overshoot_deg", "second_overshoot_deg", "period_s")
+
+
+def zigzag_overshoots(flown: Trajectory, recorded: Trajectory) -> dict:
+    """A zig-zag's first and second overshoot angles [deg] and its period [s], flown and
+    recorded, both from the flight's first sample, the rudder execute
+    (:func:`sindyship.manoeuvres.zigzag_figures`); None where the flight diverged or the
+    zig-zag never reached the reversal a figure needs.
+
+    Examples
+    --------
+    >>> from sindyship.manoeuvres import Manoeuvre, fly
+    >>> from sindyship.mmg import MMGModel
+    >>> from sindyship.ships import load_ship
+    >>> (run,) = fly(MMGModel(load_ship("kcs")), [Manoeuvre("zigzag", rudder=10, check=10,
+    ...                                                      duration=900)])
+    >>> figures = zigzag_overshoots(run, run)
+    >>> figures["flown"] == figures["recorded"], round(figures["recorded"]["first_overshoot_deg"])
+    (True, 12)
+    """
+    from .manoeuvres import zigzag_figures
+
+    def figures(run: Trajectory) -> dict | None:
+        if run.meta.get("diverged_at") is not None:
+            return None
+        values = zigzag_figures(run)
+        return {k: float(values[k]) if math.isfinite(values[k]) else None
+                for k in ZIGZAG_FIGURES}
+
+    return {"flown": figures(flown), "recorded": figures(recorded)}

@@ -159,6 +159,11 @@ class Manoeuvre:
                 f"duration {self.duration} s and dt {self.dt} s must be positive with at least "
                 "two samples."
             )
+        if self.kind == "pull-out" and not 0 < self.pull_out_time < self.duration:
+            raise SindyshipInputError(
+                f"a pull-out returns its rudder to zero before the record ends: pull_out_time "
+                f"{self.pull_out_time:g} s is not within (0, {self.duration:g}) s."
+            )
         if self.kind == "zigzag" and (self.rudder <= 0 or self.check <= 0):
             raise SindyshipInputError(
                 "a zig-zag needs a positive rudder amplitude and check angle (e.g. --rudder 20 "

@@ -400,7 +400,7 @@ class _Problem:
         self.keys = active_keys(model)
         self.fitted = np.array([model.coefficients[d][t] for d, t in self.keys])
         self.slots = model_slots(model)
-        self.batches = make_segments(model, records, segment_s)
+        self.batches, self.segment_s = make_segments(model, records, segment_s), segment_s
         if not self.batches:
             raise SindyshipInputError("the records are too short to fly: each needs at least "
                                       "two samples from its flight start.")
@@ -504,7 +504,8 @@ class _Problem:
 
     def report(self, step: int, cost: float, label: str) -> None:
         """One line on stderr per accepted step of the search, beginning with ``label``."""
-        print(f"{label}: step {step}, cost {cost:.6g}, flight error (rms) "
+        stage = "whole flights" if self.segment_s is None else f"{self.segment_s:.4g} s segments"
+        print(f"{label} ({stage}): step {step}, cost {cost:.6g}, flight error (rms) "
               f"{self.flight_rms:.4g}", file=sys.stderr, flush=True)
 
 

@@ -339,7 +339,8 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None) -> list[str]:
         text = (f"Verdict: the model is wrong - on held-out manoeuvres the library predicts "
                 f"only {share} of the measured force (variance explained), and no catalogued "
                 f"effect explains the rest; {_REMEDIES}.")
-    lines.append(textwrap.fill(text, width=96, subsequent_indent="  "))
+    lines.append(textwrap.fill(text, width=96, subsequent_indent="  ", break_long_words=False,
+                               break_on_hyphens=False))  # a command stays whole to copy
     return lines
 
 
@@ -424,25 +425,37 @@ def evaluation_report(errors: dict) -> str:
         lines.append(f"{name}: {cell}" + (f" ({how})" if how else ""))
         if err.get("turn") is not None:
             lines.append(_turn_line(err["turn"]))
+        if err.get("zigzag") is not None:
+            lines.append(_figures_line("zig-zag", err["zigzag"], (
+                ("first overshoot", "first_overshoot_deg", " deg", 1),
+                ("second overshoot", "second_overshoot_deg", " deg", 1),
+                ("period", "period_s", " s", 0))))
     return "\n".join(lines)
 
 
 def _turn_line(turn: dict) -> str:
-    """A turn's figures flown, with the recorded ones in brackets."""
+    """A turn's side and figures flown, with the recorded ones in brackets."""
     flown, recorded = turn["flown"] or {}, turn["recorded"] or {}
-
-    def value(figures, key, unit):
-        number = figures.get(key)
-        return "n/a" if number is None else f"{number:.2f}{unit}"
-
-    cells = [f"{label} {value(flown, key, unit)} (recorded {value(recorded, key, unit)})"
-             for label, key, unit in (("advance", "advance_L", " L"),
-                                      ("tactical diameter", "tactical_diameter_L", " L"),
-                                      ("speed loss", "speed_loss", ""))]
     sides = (flown.get("side"), recorded.get("side"))
     if None not in sides and sides[0] != sides[1]:
         return f"  turn flown to {sides[0]}, recorded to {sides[1]}: no figures to compare"
-    return "  turn flown: " + ", ".join(cells)
+    side = sides[1] or sides[0]
+    return _figures_line("turn" + (f" to {side}" if side else ""), turn, (
+        ("advance", "advance_L", " L", 2), ("tactical diameter", "tactical_diameter_L", " L", 2),
+        ("speed loss", "speed_loss", "", 2)))
+
+
+def _figures_line(what: str, figures: dict, rows) -> str:
+    """A manoeuvre's figures flown, with the recorded ones in brackets (n/a where missing)."""
+    flown, recorded = figures["flown"] or {}, figures["recorded"] or {}
+
+    def value(values, key, unit, digits):
+        number = values.get(key)
+        return "n/a" if number is None else f"{number:.{digits}f}{unit}"
+
+    return f"  {what} flown: " + ", ".join(
+        f"{label} {value(flown, key, unit, digits)} (recorded "
+        f"{value(recorded, key, unit, digits)})" for label, key, unit, digits in rows)
 
 
 def reproduce_report(output: dict) -> str:

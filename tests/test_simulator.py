@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sindyship.errors import SindyshipInputError
 from sindyship.manoeuvres import Manoeuvre, fly, turning_figures, zigzag_figures
 from sindyship.mmg import MMGModel, force_components
 from sindyship.simulation import (
@@ -146,6 +147,29 @@ def test_zigzag_first_sign_port_mirrors(kcs):
                                 ZigZagCommand(math.radians(20), math.radians(20), -1)], t, s0)
     np.testing.assert_allclose(a.states[5], -b.states[5], atol=1e-9)
     np.testing.assert_allclose(a.states[4], -b.states[4], atol=1e-6)
+
+
+def test_a_pull_out_on_the_command_line_returns_within_its_record(tmp_path):
+    """The rudder returns at half the record unless told (it was 1000 s for every ship and
+    record, so a 600 s pull-out of the 7 m KVLCC2 was a turning circle); a return after the
+    record's end is refused."""
+    from cli_in_process import run_sindyship
+
+    from sindyship.measurements import read_csv
+
+    out = tmp_path / "po.csv"
+    code, _, err = run_sindyship("simulate", "--ship", "kvlcc2", "--manoeuvre", "pull-out",
+                                 "--rudder", "10", "--duration", "600", "--out", str(out))
+    assert code == 0, err
+    record = read_csv(out)
+    assert np.all(record["delta_c"][record.t >= 300.0] == 0.0)
+    assert np.all(record["delta_c"][record.t < 300.0] > 0.0)
+    code, _, err = run_sindyship("simulate", "--ship", "kvlcc2", "--manoeuvre", "pull-out",
+                                 "--duration", "600", "--pull-out-time", "700", "--out",
+                                 str(out))
+    assert code == 2 and "--pull-out-time 700 s is not before the record's end" in err
+    with pytest.raises(SindyshipInputError, match="pull_out_time 1000 s is not within"):
+        Manoeuvre("pull-out", rudder=10, duration=600)
 
 
 def test_pull_out_returns_rudder_to_zero_and_yaw_decays(kcs):

@@ -284,8 +284,10 @@ def report_prior_fit(model) -> None:
         larger = (", or a larger --prior-strength" if state["strength"] < MOST_RAISED_STRENGTH
                   else "")
         progress(f"warning: the model is unstable in straight running even with the prior's "
-                 f"strength {reached}; its flights may diverge (add manoeuvres that the "
-                 f"identifiability report names{larger}).")
+                 f"strength {reached}, so a disturbance grows in its flights: the ship itself "
+                 "may be course-unstable (full-form ships such as tankers often are; a spiral "
+                 "test with a loop shows it), else add manoeuvres that the identifiability "
+                 f"report names{larger}.")
 
 
 def _identifiability(args, records, ship, library, params):

@@ -57,6 +57,10 @@ def add_parser(sub) -> None:
     p.add_argument("--dt", type=bounded_float(MIN_STEP, MAX_STEP, "seconds", low_open=False),
                    default=1.0, metavar="SECONDS",
                    help=f"sample interval [s], {MIN_STEP:g} to {MAX_STEP:g} (default 1)")
+    p.add_argument("--pull-out-time", type=bounded_float(0, MAX_DURATION, "seconds"),
+                   default=None, metavar="SECONDS",
+                   help="pull-out: time the rudder returns to zero [s], before the record's end "
+                   "(default: half the duration)")
     p.add_argument("--seed", type=SEED, default=0,
                    help="seed of the random rudder and of the random effects (noise, gusts, "
                    "wind wander, revolution changes), a whole number >= 0 (default 0)")
@@ -130,8 +134,14 @@ def run(args) -> int:
     sign = 1 if args.first == "starboard" else -1
     check = args.check if args.check is not None else (args.rudder if args.manoeuvre == "zigzag"
                                                        else 0.0)
+    returns = 0.5 * args.duration if args.pull_out_time is None else args.pull_out_time
+    if args.manoeuvre == "pull-out" and returns >= args.duration:
+        raise SindyshipInputError(f"--pull-out-time {returns:g} s is not before the record's "
+                                  f"end ({args.duration:g} s); give an earlier time or a longer "
+                                  "--duration.")
     manoeuvre = Manoeuvre(args.manoeuvre, rudder=args.rudder, check=check, first_sign=sign,
-                          duration=args.duration, dt=args.dt, seed=args.seed)
+                          duration=args.duration, dt=args.dt, seed=args.seed,
+                          pull_out_time=returns)
     (record,) = simulate_with_effects(ship, [manoeuvre], effects)
     _check_flown(record)
     write_csv(record, args.out)
