@@ -52,9 +52,9 @@ def parse_csv_text(text: str, source: str) -> pd.DataFrame:
             if header is None:
                 header = record
                 continue
+            _refuse_open_quote(record, reader.line_num, source)
             if len(record) != len(header):
                 _refuse_decimal_commas(header, record, reader.line_num, source)
-                _refuse_open_quote(record, reader.line_num, source)
                 raise SindyshipInputError(
                     f"{source}: row {reader.line_num} (counting the header as row 1) has "
                     f"{len(record)} values but the header names {len(header)} columns; "
@@ -109,7 +109,7 @@ def _refuse_open_quote(record: list[str], line: int, source: str) -> None:
     """Refuse a row whose quote is never closed: the reader takes every row after it into one
     cell, and the row a column count names would be the file's last."""
     swallowed = sum(cell.rstrip("\r\n").count("\n") for cell in record)
-    if swallowed:
+    if swallowed or any("\n" in cell for cell in record):
         raise SindyshipInputError(
             f"{source}: row {line - swallowed} (counting the header as row 1) opens a quote "
             "(\") that is never closed, so the rows after it read as one value; remove the "

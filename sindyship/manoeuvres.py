@@ -425,8 +425,11 @@ def zigzag_events(traj: Trajectory) -> dict:
         ``reversals`` and ``peaks`` (sample indices), ``overshoots_deg`` (one per leg between
         reversals) and ``heading_deg`` (heading change from the first sample).
     """
+    from .trials import zigzag_command
+
     psi = np.degrees(traj["psi"] - traj["psi"][0])
-    cmd = traj["delta_c"] if traj.has("delta_c") else traj.rudder
+    implied = zigzag_command(traj)  # an actual rudder crosses zero seconds after its command
+    cmd = traj.rudder if implied is None else implied
     sign = np.sign(cmd)
     reversals = np.flatnonzero(np.diff(sign) != 0) + 1
     reversals = reversals[sign[reversals - 1] != 0]

@@ -416,12 +416,12 @@ def _check_time(
     if bad.size:
         i = bad[0] + 1
         kind = "repeats" if steps[bad[0]] == 0 else "goes back"
-        rounded = np.count_nonzero(steps == 0) > 0.05 * steps.size  # a clock written too coarsely
+        rounded = kind == "repeats" and np.count_nonzero(steps == 0) > 0.05 * steps.size
         raise SindyshipInputError(
             f"{source}: time in column '{header}' {kind} in {_row(index, i)}, where "
             f"t = {t[i]:.10g} s follows t = {t[i - 1]:.10g} s; " + (
-                f"{np.count_nonzero(steps == 0)} of {steps.size} steps repeat, so the time looks "
-                "rounded: write it with more digits." if rounded else
+                f"{np.count_nonzero(steps == 0)} of {steps.size} steps repeat: write the time "
+                "with more digits if it was rounded, or remove rows written twice." if rounded else
                 "sort the rows by time and remove duplicate samples."))
     if resample is not None:
         return

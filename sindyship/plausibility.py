@@ -59,10 +59,10 @@ The checks, in the order they run, with their thresholds (module constants) and 
 ``forward-speed``
     Refuses u <= 0 at every sample: the models describe a ship going ahead.
 ``rudder-sign``
-    A positive rudder turns the ship to starboard: a rudder held ``RUDDER_SIGN_ANGLE`` = 10 deg
-    over for a quarter of the record must not see the ship turn ``RUDDER_SIGN_TURN`` = 0.2 rad
-    the other way over the hold's second half; else the gain b in dr/dt = a r + b delta + c
-    must not lie ``RUDDER_SIGN_T`` = 10 standard errors below zero (good records: +20 to +360).
+    A positive rudder turns the ship to starboard: each rudder column (``delta``, ``delta_c``)
+    the motion contradicts is refused by name (:mod:`sindyship.rudder_sign`: held over while
+    the ship turned half a circle the other way, or a yaw acceleration that follows it with
+    the opposite sign, ``RUDDER_SIGN_T`` = 5 standard errors below zero).
 
 Decimal-comma files are recognised by the reader itself (:mod:`sindyship.measurements`).
 """
@@ -75,6 +75,9 @@ from collections.abc import Callable, Iterable, Mapping
 import numpy as np
 
 from sindyship.errors import SindyshipInputError
+from sindyship.rudder_sign import (
+    against_rudder,
+)
 
 __all__ = [
     "CHECKS",
@@ -119,9 +122,6 @@ MAX_SPEED_RATIO = 1.6  # of U0
 #: as rps are 60 times too high.
 MAX_REVOLUTION_RATIO = 5.0
 
-RUDDER_SIGN_ANGLE = math.radians(10.0)
-RUDDER_SIGN_TURN = 0.2  # rad
-RUDDER_SIGN_T = 10.0  # standard errors
 
 _KNOT = 1852.0 / 3600.0
 
@@ -318,38 +318,15 @@ def _check_forward_speed(u: np.ndarray, context: _Context) -> None:
 
 
 def _check_rudder_sign(data, context: _Context) -> None:
-    """A positive rudder angle turns the ship to starboard: a turn held against the rudder, or
-    a yaw acceleration that follows the rudder with the opposite sign, is a flipped rudder."""
-    name = "delta" if "delta" in data else "delta_c"
-    delta, r, t = data[name], data["r"], data["t"]
-    held = np.abs(delta) >= RUDDER_SIGN_ANGLE
-    side = np.sign(delta) * held
-    edges = np.flatnonzero(np.diff(np.concatenate(([0.0], side, [0.0]))) != 0)
-    first, last = max(zip(edges[:-1], edges[1:], strict=True), key=lambda e: e[1] - e[0],
-                      default=(0, 0))
-    if last - first >= 0.25 * len(t) and side[first] != 0:  # a turn: which way did it go?
-        middle = (first + last) // 2
-        turned = side[first] * float(np.trapezoid(r[middle:last], t[middle:last]))
-        if turned >= -RUDDER_SIGN_TURN:
-            return
-        problem = (f"with column '{context.header(name)}' held at "
-                   f"{math.degrees(float(np.median(delta[first:last]))):.0f} deg from "
-                   f"t = {t[first]:.6g} s, the ship turned {math.degrees(-turned):.0f} deg the "
-                   "other way")
-    elif np.ptp(delta) >= RUDDER_SIGN_ANGLE:  # the yaw response: dr/dt = a r + b delta + c
-        design = np.column_stack([r, delta, np.ones_like(r)])
-        fitted, *_ = np.linalg.lstsq(design, np.gradient(r, t), rcond=None)
-        error = np.gradient(r, t) - design @ fitted
-        spread = float(error @ error) / max(len(t) - 3, 1) * np.linalg.pinv(design.T @ design)
-        below = -fitted[1] / math.sqrt(max(spread[1, 1], 1e-300))
-        if not below > RUDDER_SIGN_T:
-            return
-        problem = (f"the yaw acceleration follows column '{context.header(name)}' with the "
-                   f"opposite sign ({below:.0f} standard errors below zero)")
-    else:
-        return
-    context.refuse("rudder-sign", problem, "sindyship takes a positive rudder angle to turn "
-                   "the ship to starboard (r > 0), so negate the rudder columns")
+    """A positive rudder angle turns the ship to starboard: a rudder column (each one recorded)
+    held over while the ship turned half a circle the other way, or whose yaw acceleration
+    follows it with the opposite sign, has its sign flipped."""
+    for name in [n for n in ("delta", "delta_c") if n in data]:
+        problem = against_rudder(data[name], data["r"], data["t"], context.header(name))
+        if problem is not None:
+            context.refuse("rudder-sign", problem, f"sindyship takes a positive rudder angle to "
+                           f"turn the ship to starboard (r > 0): check the sign convention of "
+                           f"'{context.header(name)}' and negate it if it is flipped")
 
 
 # ---------------------------------------------------------------------------------------------

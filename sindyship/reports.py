@@ -302,7 +302,8 @@ def _held_out_caution(score) -> str:
             "like the held-out ones before keeping it.")
 
 
-def _verdict_lines(diagnosis, ship_argument: str | None = None) -> list[str]:
+def _verdict_lines(diagnosis, ship_argument: str | None = None,
+                   effect_arguments: list[str] | None = None) -> list[str]:
     lines = [textwrap.fill(f"Caution: {warning}.", width=96, subsequent_indent="  ")
              for warning in diagnosis.warnings]
     verdict = diagnosis.verdict
@@ -319,7 +320,8 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None) -> list[str]:
         why = "" if top.meaningful else (
             f" (its share of the force error is below the threshold, but re-flying the training "
             f"records with it brings them {_closer(top)} closer)")
-        options = _fit_options(diagnosis, ship_argument, [*diagnosis.library.effects, top.effect])
+        given = diagnosis.library.effects if effect_arguments is None else effect_arguments
+        options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
         text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... {options}; then "
                 "diagnose again with the same --effects." + _held_out_caution(top))
     elif verdict == "add-discovered":
@@ -344,7 +346,8 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None) -> list[str]:
     return lines
 
 
-def diagnosis_report(diagnosis, ship_argument: str | None = None) -> str:
+def diagnosis_report(diagnosis, ship_argument: str | None = None,
+                     effect_arguments: list[str] | None = None) -> str:
     """The diagnosis as text a person reads, best effect first.
 
     Parameters
@@ -353,6 +356,9 @@ def diagnosis_report(diagnosis, ship_argument: str | None = None) -> str:
     ship_argument : str, optional
         The ``--ship`` argument the verdict's command names (default: the ship's name if it
         is built in, else a placeholder).
+    effect_arguments : list of str, optional
+        The ``--effects`` arguments of the library's effects, as given (an effect file by its
+        path; default: their names).
 
     Returns
     -------
@@ -373,7 +379,7 @@ def diagnosis_report(diagnosis, ship_argument: str | None = None) -> str:
         lines += ["", diagnosis.discovery.report(), ""]
     if getattr(diagnosis, "speed", None) is not None:
         lines += [textwrap.fill(diagnosis.speed.text(), width=96, subsequent_indent="  "), ""]
-    lines += _verdict_lines(diagnosis, ship_argument)
+    lines += _verdict_lines(diagnosis, ship_argument, effect_arguments)
     return "\n".join(lines)
 
 

@@ -73,6 +73,7 @@ __all__ = [
     "explain_zigzag",
     "recognise_turn",
     "recognise_zigzag",
+    "zigzag_command",
     "zigzag_levels",
     "trim",
     "underway_window",
@@ -302,29 +303,47 @@ def zigzag_levels(record: Trajectory) -> tuple[float, ...]:
     return _recognise(record)[1]
 
 
+def zigzag_command(record: Trajectory) -> np.ndarray | None:
+    """The rudder command [rad] a recognised zig-zag implies, sample by sample: the record's
+    own ``delta_c``, or, from the actual rudder alone, zero before the execute and each leg's
+    held angle from the sample it was put over (where the actual rudder, lagging its command,
+    crosses zero seconds later); None when no zig-zag is recognised."""
+    if record.has("delta_c"):
+        return record["delta_c"]
+    zigzag, levels, _, switches = _recognise(record)
+    if zigzag is None:
+        return None
+    command = np.zeros(len(record.t))
+    for begin, level in zip(switches, levels, strict=True):
+        command[begin:] = math.radians(level)
+    return command
+
+
 def explain_zigzag(record: Trajectory) -> tuple[ZigZag | None, str]:
     """The recognised zig-zag (or None) and a sentence saying what was found or missing."""
-    zigzag, _, reason = _recognise(record)
+    zigzag, _, reason, _ = _recognise(record)
     return zigzag, reason
 
 
-def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], str]:
-    """The zig-zag, the levels of its plateaus and the sentence of :func:`explain_zigzag`."""
+def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], str, tuple]:
+    """The zig-zag, the levels of its plateaus, the sentence of :func:`explain_zigzag` and the
+    samples where the rudder was put over (the execute, then each reversal)."""
     commanded = record.has("delta_c")
     command = np.degrees(record["delta_c"] if commanded else record.rudder)
     raw = find_holds(command)
     found = raw if commanded else settled(raw)
     if not found:
         return None, (), (f"the rudder never holds an angle of at least 1 deg for "
-                      f"{HOLD_SAMPLES} samples")
+                      f"{HOLD_SAMPLES} samples"), ()
     largest = max(abs(level) for _, _, level in found)
     amplitude = float(np.median([abs(level) for _, _, level in found
                                  if abs(level) >= 0.5 * largest]))
     plateaus = [h for h in found if abs(abs(h[2]) - amplitude) <= PLATEAU_SPREAD]
-    chain = cut_short(command, raw, longest_alternation(plateaus), amplitude)
+    chain = longest_alternation(plateaus)
+    chain = chain if commanded else cut_short(command, raw, chain, amplitude)
     if len(chain) < 3:
         return None, (), (f"the rudder holds no run of three or more alternating angles near "
-                      f"+-{amplitude:.1f} deg (longest: {len(chain)})")
+                      f"+-{amplitude:.1f} deg (longest: {len(chain)})"), ()
     first_sign = int(np.sign(chain[0][2]))
     start = ramp_start(command, raw, chain[0][0], first_sign)
     reversals = [left_hold(command, before[1], h[0], int(np.sign(h[2])))
@@ -335,14 +354,14 @@ def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], st
     if np.ptp(at) > CHECK_SPREAD:
         return None, (), (f"the heading change at the {len(reversals)} rudder reversals spreads "
                       f"over {np.ptp(at):.1f} deg (more than {CHECK_SPREAD:g}): no common "
-                      "check angle")
+                      "check angle"), ()
     levels = [abs(h[2]) for h in chain]
     check = _roundest(float(np.median(before)), float(np.median(at)))
     rudder = _roundest(float(np.mean(levels)), float(np.mean(levels)))
     zigzag = ZigZag(rudder, check, first_sign, float(record.t[start]))
     return zigzag, tuple(h[2] for h in chain), (
         f"a {rudder:g}/{check:g} zig-zag from t = {zigzag.start_time:.6g} s: {len(chain)} "
-        f"plateaus at {', '.join(f'{v:.1f}' for v in levels)} deg")
+        f"plateaus at {', '.join(f'{v:.1f}' for v in levels)} deg"), (start, *reversals)
 
 
 def _roundest(low: float, high: float) -> float:

@@ -60,7 +60,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import SindyshipInputError
-from .identify import Design, design, dof_params, resolve_library
+from .identify import Design, design, dof_params, resolve_library, resolve_rudder_signal
 from .ships import Ship
 from .targets import DOFS
 from .trajectory import Trajectory
@@ -319,6 +319,7 @@ def ensemble(records: Sequence[Trajectory], ship: Ship, optimizer: str = "ls",
             f"unknown ensemble scheme {scheme!r}; choose one of {', '.join(SCHEMES)}."
         )
     records = list(records)
+    rudder_signal = resolve_rudder_signal(records, rudder_signal)
     if problems is None:
         lib = resolve_library(library, effects)
         problems = design(records, ship, lib, rudder_signal=rudder_signal,

@@ -259,6 +259,9 @@ def test_the_verdicts_fit_command_repeats_the_diagnosis_settings(kcs_rounds, tmp
     assert ("sindyship fit DATA.csv... --ship 'my ships/kcs.toml' --library abkowitz-vr --speed "
             "instantaneous --derivative savgol --window 21 --rudder-signal commanded --effects "
             f"wind,{own} --optimizer prior; then") in text
+    # an effect file already in the diagnosed library is named as it was given
+    text = " ".join(changed.report(effect_arguments=["found/gust.toml"]).split())
+    assert f"--effects found/gust.toml,{own} --optimizer prior; then" in text
 
 
 def test_asymmetry_shows_as_even_residuals_over_yaw_rate(kcs_rounds):

@@ -138,11 +138,29 @@ def test_a_flipped_rudder_sign_is_refused(protocol_runs):
             continue
         flipped = record.data.assign(delta=-record["delta"], delta_c=-record["delta_c"])
         message = refusal(flipped)
-        assert "rudder-sign check" in message and "negate the rudder columns" in message
+        assert "rudder-sign check" in message and "negate it if it is flipped" in message
         expected = "the other way" if record.name.startswith(("tc", "spiral")) \
             else "standard errors below zero"
         assert expected in message, (record.name, message)
         trajectory_from_frame(flipped, record.name, skip_checks=["rudder-sign"])
+        # one flipped column is named: the command drives zig-zags and commanded fits
+        one = record.data.assign(delta_c=-record["delta_c"])
+        assert "check the sign convention of 'delta_c'" in refusal(one)
+
+
+def test_weather_helm_on_a_course_change_is_no_flipped_rudder():
+    """Two hours in a beam wind with 14 deg of port helm held throughout while the course is
+    altered 20 deg to starboard: the ship turns against the rudder, but by far less than half
+    a circle, and the rudder barely moves, so the record passes."""
+    t = np.arange(0.0, 7200.0, 1.0)
+    r = np.where((t >= 4000.0) & (t < 5500.0), math.radians(20.0) / 1500.0, 0.0)
+    psi = np.concatenate(([0.0], np.cumsum(0.5 * (r[1:] + r[:-1]))))
+    x = np.concatenate(([0.0], np.cumsum(8.0 * np.cos(0.5 * (psi[1:] + psi[:-1])))))
+    y = np.concatenate(([0.0], np.cumsum(8.0 * np.sin(0.5 * (psi[1:] + psi[:-1])))))
+    delta = math.radians(-14.0) + math.radians(1.5) * np.sin(t / 300.0)
+    frame = pd.DataFrame({"t": t, "u": 8.0, "v": 0.0, "r": r, "x": x, "y": y, "psi": psi,
+                          "delta": delta})
+    trajectory_from_frame(frame, "passage")
 
 
 @pytest.mark.parametrize(
@@ -434,6 +452,13 @@ def test_zigzags_logged_with_the_actual_rudder_alone_are_recognised(protocol_run
     errors = evaluate(model, actual)
     assert {e["flown_as"] for e in errors.values()} == {"zigzag"}
     assert max(e["mean_distance_L"] for e in errors.values()) < 1.0
+    # the overshoots are measured from where the rudder was put over, not where the lagging
+    # actual rudder crossed zero (which gave 8.6 deg for 18.4)
+    commanded = evaluate(model, zigzags)
+    for name, error in errors.items():
+        for key, value in error["zigzag"]["recorded"].items():
+            expected = commanded[name]["zigzag"]["recorded"][key]
+            assert value == pytest.approx(expected, abs=1.5 if key != "period_s" else 2.0), key
 
 
 def test_a_record_cut_after_its_execute_holds_no_turn(protocol_runs):

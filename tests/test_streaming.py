@@ -24,6 +24,7 @@ from sindyship.optimizers._base import _FitData
 from sindyship.optimizers._factored import _FactorData
 from sindyship.smoothing import smooth_records
 from sindyship.streaming import fit_files, reduce_files, stream_settings
+from sindyship.trajectory import Trajectory
 
 PLAN = [Manoeuvre("turning-circle", rudder=35, duration=500),
         Manoeuvre("turning-circle", rudder=-35, duration=500),
@@ -83,6 +84,20 @@ def test_streamed_coefficients_equal_the_in_memory_fit(files, records, kcs, opti
     if optimizer == "prior":
         assert saved["info"]["prior"] == same["info"]["prior"]
         assert saved["info"]["straight_run"] == same["info"]["straight_run"]
+
+
+def test_a_streamed_fit_on_the_actual_rudder_refuses_a_record_without_it(files, kcs, tmp_path):
+    """In memory such records are fitted on the command; streamed, each record is read on its
+    own, so one without ``delta`` is refused with the option that fits it."""
+    from sindyship.errors import SindyshipInputError
+    from sindyship.measurements import read_csv
+
+    bare = tmp_path / "bare.csv"
+    write_csv(Trajectory(read_csv(files["csv"][0]).data.drop(columns=["delta"]), "bare"), bare)
+    with pytest.raises(SindyshipInputError, match="bare.csv: has no actual rudder angle"):
+        fit_files([bare, *files["csv"][1:]], kcs)
+    commanded = fit_files([bare, *files["csv"][1:]], kcs, rudder_signal="commanded")
+    assert commanded.rudder_signal == "commanded"
 
 
 def test_smoothing_effects_and_savgol_derivatives_stream_as_in_memory(files, records, kcs):

@@ -150,7 +150,7 @@ def run(args) -> int:
             result = diagnose(records, ship, library=library, test=test, progress=bar,
                               **options)
     document = result.to_json()
-    text = result.report(ship_argument=args.ship)
+    text = result.report(ship_argument=args.ship, effect_arguments=split_names(args.effects))
     if iterative is not None:
         document.update(iterative.to_json())
         text += "\n\n" + iterative.report()

@@ -129,6 +129,9 @@ def run(args) -> int:
     check_rudder(args.check, ship, "--check")
     check_simulation_cost(ship, args.duration, args.dt)
     effects = parse_effects(args.effect + ([f"seed={args.seed}"] if args.seed else []))
+    if args.pull_out_time is not None and args.manoeuvre != "pull-out":
+        raise SindyshipInputError("--pull-out-time is for --manoeuvre pull-out; leave it out for "
+                                  "other manoeuvres.")
     if args.protocol:
         return _protocol(args, ship, effects)
     sign = 1 if args.first == "starboard" else -1

@@ -206,12 +206,14 @@ class Diagnosis:
 
     # ------------------------------------------------------------------------------- text
 
-    def report(self, ship_argument: str | None = None) -> str:
+    def report(self, ship_argument: str | None = None,
+               effect_arguments: list[str] | None = None) -> str:
         """The diagnosis as text a person reads (:func:`sindyship.reports.diagnosis_report`;
-        ``ship_argument``: the ``--ship`` its verdict's command names)."""
+        ``ship_argument`` and ``effect_arguments``: the ``--ship`` and the library's
+        ``--effects`` its verdict's command names)."""
         from ..reports import diagnosis_report
 
-        return diagnosis_report(self, ship_argument)
+        return diagnosis_report(self, ship_argument, effect_arguments)
 
     def save_figures(self, out_dir, *, progress: bool = False) -> list:
         """Write the figures and before/after tables to a folder

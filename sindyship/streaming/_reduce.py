@@ -15,6 +15,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from ..errors import SindyshipInputError
 from ..optimizers import RowFactor, merge_factors, pairwise_tree
 from ..ships import Ship
 from ..smoothing import SmoothingSetting, smooth_records
@@ -125,6 +126,10 @@ def reduce_record(path: str | os.PathLike, name: str, settings: StreamSettings) 
                                      time_range=settings.time_range)
     if settings.smoothing is not None:
         (record,) = smooth_records([record], settings.smoothing)
+    if settings.rudder_signal == "actual" and not record.has("delta"):
+        raise SindyshipInputError(
+            f"{path}: has no actual rudder angle (delta), which a streamed fit on the actual "
+            "angle needs in every record; fit such records with --rudder-signal commanded.")
     library = resolve_library(settings.library, settings.effects, settings.speed)
     problems = design([record], ship, library, rudder_signal=settings.rudder_signal,
                       derivative=settings.derivative, window=settings.window)
