@@ -93,16 +93,16 @@ def settled(holds: list[tuple[int, int, float]]) -> list[tuple[int, int, float]]
     sign (by at most two hold ranges, a few samples apart) made one at the angle it settled
     at: a rudder that a servo's lag brings to its command slowly holds for a few samples at
     each degree on the way (a helmsman's step to another angle is a new hold)."""
-    settled: list[tuple[int, int, float]] = []
+    merged: list[tuple[int, int, float]] = []
     for first, last, level in holds:
-        if settled:
-            a, b, previous = settled[-1]
+        if merged:
+            a, b, previous = merged[-1]
             if (np.sign(previous) == np.sign(level) and first - b <= HOLD_SAMPLES
                     and 0.0 < abs(level) - abs(previous) <= 2 * HOLD_RANGE):
-                settled[-1] = (a, last, level)
+                merged[-1] = (a, last, level)
                 continue
-        settled.append((first, last, level))
-    return settled
+        merged.append((first, last, level))
+    return merged
 
 
 def cut_short(command: np.ndarray, raw: list, chain: list, amplitude: float) -> list:

@@ -296,7 +296,6 @@ def recognise_turn(record: Trajectory) -> Turn | None:
     return Turn(round(float(level), 1), float(record.t[start]))
 
 
-
 def zigzag_levels(record: Trajectory) -> tuple[float, ...]:
     """The rudder angles [deg] the recognised zig-zag held, plateau by plateau (signed), or ()
     when the record is no zig-zag: a logged zig-zag is flown with the angles it held."""
