@@ -96,6 +96,28 @@ def time_window(text: str) -> tuple[float, float] | str:
     return window
 
 
+def record_columns(path: str | os.PathLike) -> set[str] | None:
+    """The channel names of a record file's header (units stripped), read without its rows;
+    None for a file whose header cannot be read (its reader says why when it is read)."""
+    import csv
+
+    from .units import parse_headers
+
+    path = Path(path)
+    try:
+        if path.suffix.lower() in PARQUET_SUFFIXES:
+            import pyarrow.parquet as pq
+
+            headers = [str(name) for name in pq.read_schema(path).names]
+        else:
+            with path.open(encoding="utf-8-sig", newline="") as handle:
+                headers = next((row for row in csv.reader(handle) if any(c.strip() for c in row)),
+                               [])
+        return {column.name for column in parse_headers(headers, str(path))}
+    except (OSError, ValueError, ImportError, csv.Error, SindyshipInputError):
+        return None
+
+
 def _read_parquet(path: Path, name: str, **options) -> Trajectory:
     """A Parquet record through the checks of the CSV reader."""
     from .measurements import trajectory_from_frame

@@ -27,7 +27,8 @@ Thresholds (module constants) and why:
   run of at least three plateaus that alternate in sign; its amplitude and check angle are
   rounded to the nearest multiple of 5 deg when one lies within ``ROUNDING = 1.5`` deg,
   else to 0.1 deg.  The heading change (from the execute) at the rudder reversals must
-  agree within ``CHECK_SPREAD = 3`` deg.
+  agree within ``CHECK_SPREAD = 3`` deg plus the largest yaw rate times the sampling step
+  (a reversal falls between two samples).
 - Turn: the record holds a rudder angle of at least ``TURN_RUDDER = 5`` deg for at least
   ``TURN_SHARE = 0.25`` of its samples (a spiral's steps last a seventh of it each; a
   turning circle may end in a pull-out); its execute is the last sample at the approach value
@@ -350,9 +351,12 @@ def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], st
     psi = np.degrees(record["psi"] - record["psi"][start])
     at = np.abs(psi[reversals])
     before = np.abs(psi[np.maximum(np.array(reversals) - 1, 0)])
-    if np.ptp(at) > CHECK_SPREAD:
+    # the heading moves by up to r dt between the samples a reversal falls between
+    spread = CHECK_SPREAD + float(np.degrees(np.max(np.abs(record["r"])))
+                                  * np.median(np.diff(record.t)))
+    if np.ptp(at) > spread:
         return None, (), (f"the heading change at the {len(reversals)} rudder reversals spreads "
-                      f"over {np.ptp(at):.1f} deg (more than {CHECK_SPREAD:g}): no common "
+                      f"over {np.ptp(at):.1f} deg (more than {spread:.3g}): no common "
                       "check angle"), ()
     levels = [abs(h[2]) for h in chain]
     check = _roundest(float(np.median(before)), float(np.median(at)))

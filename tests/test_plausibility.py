@@ -12,7 +12,7 @@ from cli_in_process import run_sindyship
 
 from sindyship.effects import add_noise, parse_effects, simulate_with_effects
 from sindyship.errors import SindyshipInputError
-from sindyship.manoeuvres import fly, protocol_manoeuvres, result_to_trajectory
+from sindyship.manoeuvres import Manoeuvre, fly, protocol_manoeuvres, result_to_trajectory
 from sindyship.marin import MARIN_FILES, default_marin_dir, read_marin
 from sindyship.measurements import PlausibilityNote, read_csv, trajectory_from_frame, write_csv
 from sindyship.mmg import MMGModel
@@ -146,6 +146,37 @@ def test_a_flipped_rudder_sign_is_refused(protocol_runs):
         # one flipped column is named: the command drives zig-zags and commanded fits
         one = record.data.assign(delta_c=-record["delta_c"])
         assert "check the sign convention of 'delta_c'" in refusal(one)
+
+
+def test_the_rudder_sign_holds_at_fast_sampling_with_noise_and_in_a_strong_wind(kcs):
+    """A flipped zig-zag logged at 20 Hz with 1 % noise and a flipped 200 s turn are refused;
+    a 280 s turn in a beam wind 1.6 times the ship's speed, which the wind's yaw moment
+    swings, passes (it turns over a quarter circle with its rudder)."""
+    def simulated(manoeuvre, effects=()):
+        return simulate_with_effects(kcs, [manoeuvre], parse_effects(list(effects)))[0].data
+
+    def flipped(frame):
+        return frame.assign(delta=-frame["delta"], delta_c=-frame["delta_c"])
+
+    noisy = simulated(Manoeuvre("zigzag", rudder=20, check=20, duration=300, dt=0.05),
+                      ["noise=0.01"])
+    trajectory_from_frame(noisy, "zz", ship=kcs)
+    assert "standard errors below zero" in refusal(flipped(noisy), ship=kcs)
+    short = simulated(Manoeuvre("turning-circle", rudder=35, duration=200, dt=0.1))
+    assert "deg the other way" in refusal(flipped(short), ship=kcs)
+    windy = simulated(Manoeuvre("turning-circle", rudder=15, duration=280, dt=0.93),
+                      ["wind=20", "wind_dir=90"])
+    trajectory_from_frame(windy, "tc", ship=kcs)
+
+
+def test_a_coarsely_logged_zigzag_is_recognised():
+    """The 7 m KVLCC2 logged at 1 s (0.2 L/U0) turns up to some 5 deg between two samples, so
+    the heading at its reversals spreads by more than 3 deg; the tolerance grows with r dt."""
+    kvlcc2 = load_ship("kvlcc2")
+    for rudder, check, first in ((10, 10, 1), (20, 20, 1), (35, 10, -1)):
+        (run,) = fly(MMGModel(kvlcc2), [Manoeuvre("zigzag", rudder=rudder, check=check,
+                                                   first_sign=first, duration=600, dt=1.0)])
+        assert recognise_zigzag(run) == (rudder, check, first, 0.0), explain_zigzag(run)[1]
 
 
 def test_weather_helm_on_a_course_change_is_no_flipped_rudder():

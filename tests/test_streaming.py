@@ -177,6 +177,31 @@ def test_the_cluster_reduces_the_records_as_this_process_does(files, kcs, client
     assert [r.names for r in remote_records] == [r.names for r in local_records]
 
 
+def test_fit_stream_reads_the_rudder_signal_from_the_headers(files, client, tmp_path, capsys):
+    """Streamed, the records are read one at a time on the cluster: the command line reads the
+    files' headers first, so records without ``delta`` are fitted on the command with the
+    in-memory note (and a mix is refused), as in memory."""
+    from sindyship.measurements import read_csv
+    from sindyship.records import record_columns
+
+    assert {"t", "psi", "r", "delta"} <= record_columns(files["parquet"][0])  # unit headers
+    bare = []
+    for k, path in enumerate(files["csv"]):
+        bare.append(tmp_path / f"bare{k}.csv")
+        write_csv(Trajectory(read_csv(path).data.drop(columns=["delta"]), f"bare{k}"), bare[-1])
+    assert "delta" not in record_columns(bare[0])
+    out = tmp_path / "commanded.json"
+    code = main(["fit", *map(str, bare), "--stream", "--scheduler", client.scheduler.address,
+                 "--optimizer", "ls", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "note: the records have no actual rudder angle (delta)" in err
+    assert AbkowitzModel.load(out).rudder_signal == "commanded"
+    code = main(["fit", str(bare[0]), *map(str, files["csv"][1:]), "--stream", "--scheduler",
+                 client.scheduler.address, "--out", str(tmp_path / "mixed.json")])
+    assert code == 2 and "bare0 has no actual rudder angle" in capsys.readouterr().err
+
+
 def test_fit_stream_takes_a_glob_and_writes_the_in_memory_model(files, records, kcs, client,
                                                                   tmp_path, capsys):
     out = tmp_path / "model.json"

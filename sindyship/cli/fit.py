@@ -147,7 +147,16 @@ def run(args) -> int:
 
     if args.refine is None:  # on for the prior fit
         args.refine = MAX_EVALUATIONS if args.optimizer == "prior" else 0
-    if args.stream or args.scheduler:
+    if args.stream or args.scheduler:  # the rudder signal from the files' headers
+        from pathlib import Path
+        from types import SimpleNamespace
+
+        from ..records import record_columns
+
+        columns = {path: record_columns(path) for path in args.data}
+        headers = [SimpleNamespace(name=Path(path).stem, has=names.__contains__)
+                   for path, names in columns.items() if names is not None]
+        resolve_cli_rudder_signal(args, headers)
         return _run_streamed(args, ship, params, speed)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
