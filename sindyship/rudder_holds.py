@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["HOLD_RANGE", "HOLD_SAMPLES", "cut_short", "execute", "find_holds", "left_hold",
-           "longest_alternation", "ramp_start", "settled", "stretch_end"]
+__all__ = ["HOLD_RANGE", "HOLD_SAMPLES", "back_to_peak", "cut_short", "execute", "find_holds",
+           "left_hold", "longest_alternation", "ramp_start", "settled", "stretch_end"]
 
 HOLD_RANGE = 1.0  # deg
 HOLD_SAMPLES = 5
@@ -131,6 +131,17 @@ def left_hold(command: np.ndarray, last: int, first: int, sign: int) -> int:
     slow, noisy approach follows; ``first`` when it never moved that far."""
     moved = np.flatnonzero(sign * (command[last + 1:first + 1] - command[last]) > _EXECUTE_BAND)
     return last + 1 + int(moved[0]) if moved.size else first
+
+
+def back_to_peak(command: np.ndarray, moved: int, floor: int, sign: int) -> int:
+    """The sample after the rudder's last turning point before ``moved`` (not before
+    ``floor``): back while each step went toward ``sign``.  An actual rudder peaks where its
+    command reversed (a lagging servo turns at once, slowly), while the sample it has moved
+    far enough from its hold can come seconds later."""
+    i = moved
+    while i - 1 > floor and sign * (command[i - 1] - command[i - 2]) > 0:
+        i -= 1
+    return i
 
 
 def longest_alternation(plateaus):

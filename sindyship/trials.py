@@ -50,6 +50,7 @@ from sindyship.errors import SindyshipInputError
 from sindyship.rudder_holds import (
     HOLD_RANGE,
     HOLD_SAMPLES,
+    back_to_peak,
     cut_short,
     execute,
     find_holds,
@@ -348,6 +349,9 @@ def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], st
     start = ramp_start(command, raw, chain[0][0], first_sign)
     reversals = [left_hold(command, before[1], h[0], int(np.sign(h[2])))
                  for before, h in zip(chain[:-1], chain[1:], strict=True)]
+    if not commanded:  # a slow servo leaves a hold only after it has turned: back to its peak
+        reversals = [back_to_peak(command, i, before[0], int(np.sign(h[2])))
+                     for i, before, h in zip(reversals, chain[:-1], chain[1:], strict=True)]
     psi = np.degrees(record["psi"] - record["psi"][start])
     at = np.abs(psi[reversals])
     before = np.abs(psi[np.maximum(np.array(reversals) - 1, 0)])

@@ -169,6 +169,21 @@ def test_the_rudder_sign_holds_at_fast_sampling_with_noise_and_in_a_strong_wind(
     trajectory_from_frame(windy, "tc", ship=kcs)
 
 
+def test_a_fast_logged_zigzag_of_the_actual_rudder_is_read_right(kcs):
+    """At 0.1 s the KCS's slow servo is a string of short holds, and it leaves its last hold
+    only seconds after it turned: the reversal is its turning point, so a 10/10 zig-zag reads
+    10/10 (it read 10/15) with the overshoot of the commanded record (it gave 9.4 for 12.0)."""
+    from sindyship.manoeuvres import zigzag_figures
+
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=10, check=10, duration=300,
+                                           dt=0.1)])
+    actual = Trajectory(run.data.drop(columns=["delta_c"]), "zz")
+    zigzag = recognise_zigzag(actual)
+    assert (zigzag.amplitude_deg, zigzag.check_deg, zigzag.first_sign) == (10, 10, 1)
+    assert zigzag_figures(actual)["first_overshoot_deg"] == pytest.approx(
+        zigzag_figures(run)["first_overshoot_deg"], abs=0.3)
+
+
 def test_a_coarsely_logged_zigzag_is_recognised():
     """The 7 m KVLCC2 logged at 1 s (0.2 L/U0) turns up to some 5 deg between two samples, so
     the heading at its reversals spreads by more than 3 deg; the tolerance grows with r dt."""
