@@ -109,8 +109,8 @@ def _fit_options(diagnosis, ship_argument: str | None, effects) -> str:
     """The ``fit`` options that repeat the diagnosis's own settings with ``effects`` (effect
     objects) added: the ship, the library unless it is the diagnosis's default (``fit`` then
     takes its recommended one), the speed form unless it is the ship's, the derivative, the
-    rudder signal and the optimizer unless it is least squares (``fit`` then takes its
-    recommended ``prior``)."""
+    rudder signal, the smoothing and the optimizer unless it is least squares (``fit`` then
+    takes its recommended ``prior``)."""
     from .library import builtin_library_dir
 
     library, settings = diagnosis.library, diagnosis.settings
@@ -124,6 +124,9 @@ def _fit_options(diagnosis, ship_argument: str | None, effects) -> str:
         options.append(f"--derivative savgol --window {settings['window']:g}")
     if settings.get("rudder_signal") == "commanded":
         options.append("--rudder-signal commanded")
+    smoothing = settings.get("smoothing") or {}
+    if smoothing.get("method", "none") != "none":  # the setting chosen, also when 'auto' chose
+        options.append(f"--smoothing {smoothing['method']}:{smoothing['window_s']:g}")
     if effects:
         folder = builtin_library_dir() / "effects"
         options.append("--effects " + shlex.quote(",".join(

@@ -252,12 +252,14 @@ def test_the_verdicts_fit_command_repeats_the_diagnosis_settings(kcs_rounds, tmp
     changed = copy.copy(first)
     changed.library = resolve_library("abkowitz-vr", ["wind"], "instantaneous")
     changed.settings = {**first.settings, "derivative": "savgol", "window": 21.0,
-                        "rudder_signal": "commanded", "optimizer": "prior"}
+                        "rudder_signal": "commanded", "optimizer": "prior",
+                        "smoothing": {"method": "rts", "window_s": 21.0}}
     changed.ranking = [replace(first.ranking[0], effect=load_effect(str(own))),
                        *first.ranking[1:]]
     text = " ".join(changed.report(ship_argument="my ships/kcs.toml").split())
     assert ("sindyship fit DATA.csv... --ship 'my ships/kcs.toml' --library abkowitz-vr --speed "
-            "instantaneous --derivative savgol --window 21 --rudder-signal commanded --effects "
+            "instantaneous --derivative savgol --window 21 --rudder-signal commanded --smoothing "
+            "rts:21 --effects "
             f"wind,{own} --optimizer prior; then") in text
     # an effect file already in the diagnosed library is named as it was given
     text = " ".join(changed.report(effect_arguments=["found/gust.toml"]).split())
