@@ -192,12 +192,9 @@ def turn_figures(flown: Trajectory, recorded: Trajectory, L: float) -> dict:
     from .manoeuvres import turning_figures
 
     def figures(run: Trajectory) -> dict | None:
-        if run.meta.get("diverged_at") is not None:
-            return None
-        values = turning_figures(run, L, execute=0)
+        values = _finite(run, lambda: turning_figures(run, L, execute=0), TURN_FIGURES)
         side = "starboard" if run["psi"][-1] >= run["psi"][0] else "port"
-        return {"side": side, **{k: float(values[k]) if math.isfinite(values[k]) else None
-                                 for k in TURN_FIGURES}}
+        return None if values is None else {"side": side, **values}
 
     out = {"flown": figures(flown), "recorded": figures(recorded)}
     if out["flown"] and out["recorded"] and out["flown"]["side"] != out["recorded"]["side"]:
@@ -228,11 +225,14 @@ def zigzag_overshoots(flown: Trajectory, recorded: Trajectory) -> dict:
     """
     from .manoeuvres import zigzag_figures
 
-    def figures(run: Trajectory) -> dict | None:
-        if run.meta.get("diverged_at") is not None:
-            return None
-        values = zigzag_figures(run)
-        return {k: float(values[k]) if math.isfinite(values[k]) else None
-                for k in ZIGZAG_FIGURES}
+    return {name: _finite(run, lambda run=run: zigzag_figures(run), ZIGZAG_FIGURES)
+            for name, run in (("flown", flown), ("recorded", recorded))}
 
-    return {"flown": figures(flown), "recorded": figures(recorded)}
+
+def _finite(run: Trajectory, measured, keys) -> dict | None:
+    """The figures ``measured()`` gives for ``run`` under ``keys``, None where one is not
+    finite; None for a flight that diverged."""
+    if run.meta.get("diverged_at") is not None:
+        return None
+    values = measured()
+    return {k: float(values[k]) if math.isfinite(values[k]) else None for k in keys}

@@ -377,11 +377,18 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
     return model
 
 
-def fitted_rudder_signal(records: Sequence[Trajectory], rudder_signal: str = "actual"
+def delta_recorded(records: Sequence[Trajectory]) -> list[tuple[str, bool]]:
+    """Each record's name and whether it has the actual rudder angle ``delta``."""
+    return [(record.name, record.has("delta")) for record in records]
+
+
+def fitted_rudder_signal(with_delta: Sequence[tuple[str, bool]], rudder_signal: str = "actual"
                          ) -> tuple[str, str | None]:
     """The rudder angle a fit uses, and a note when it is not the one asked for.
 
-    The actual angle (``delta``) needs it in every record: a fit on the commanded angle
+    ``with_delta`` holds each record's name and whether it has ``delta``
+    (:func:`delta_recorded`; a streamed fit reads it from the files' headers).  The actual
+    angle needs it in every record: a fit on the commanded angle
     taken for the actual one would count the steering gear's lag twice when flown.  Records
     that all lack it are fitted on the commanded angle (a model whose rudder input is the
     command, the lag inside its forces), with a note; some lacking it are refused.
@@ -391,15 +398,15 @@ def fitted_rudder_signal(records: Sequence[Trajectory], rudder_signal: str = "ac
     >>> import pandas as pd
     >>> frame = pd.DataFrame({"t": [0.0, 1.0], "u": 1.0, "v": 0.0, "r": 0.0, "x": [0.0, 1.0],
     ...                       "y": 0.0, "psi": 0.0, "delta_c": 0.0})
-    >>> fitted_rudder_signal([Trajectory(frame, "no-delta")])[0]
+    >>> fitted_rudder_signal(delta_recorded([Trajectory(frame, "no-delta")]))[0]
     'commanded'
     """
     if rudder_signal != "actual":
         return rudder_signal, None
-    missing = [r.name for r in records if not r.has("delta")]
+    missing = [name for name, has_delta in with_delta if not has_delta]
     if not missing:
         return "actual", None
-    if len(missing) < len(records):
+    if len(missing) < len(with_delta):
         named = ", ".join(missing[:3]) + (f" and {len(missing) - 3} more" if len(missing) > 3
                                           else "")
         raise SindyshipInputError(
@@ -415,7 +422,7 @@ def fitted_rudder_signal(records: Sequence[Trajectory], rudder_signal: str = "ac
 def resolve_rudder_signal(records: Sequence[Trajectory], rudder_signal: str = "actual") -> str:
     """The rudder angle a fit uses (:func:`fitted_rudder_signal`), with a
     :class:`~sindyship.errors.RudderSignalNote` when it is not the one asked for."""
-    signal, note = fitted_rudder_signal(records, rudder_signal)
+    signal, note = fitted_rudder_signal(delta_recorded(records), rudder_signal)
     if note is not None:
         warnings.warn(note[0].upper() + note[1:] + ".", RudderSignalNote, stacklevel=3)
     return signal

@@ -479,7 +479,9 @@ class AbkowitzModel:
     def load(cls, path: str | Path, *, ship: Ship | None = None) -> AbkowitzModel:
         """Read a saved model (JSON)."""
         path = Path(path)
-        if path.suffix.lower() in (".csv", ".parquet", ".pq"):
+        from .records import PARQUET_SUFFIXES
+
+        if path.suffix.lower() in (".csv", *PARQUET_SUFFIXES):
             raise SindyshipInputError(f"{path} is a record, not a saved model; give the "
                                       "model's JSON file (sindyship fit ... --out MODEL.json).")
         try:

@@ -114,14 +114,19 @@ def cut_short(command: np.ndarray, raw: list, chain: list, amplitude: float) -> 
     if not chain:
         return chain
     sign = -np.sign(chain[0][2])
-    earlier = [h for h in raw if h[1] < chain[0][0]]
-    begin = earlier[-1][1] + 1 if earlier else 0
+    end = _last_hold_end(raw, chain[0][0])
+    begin = 0 if end is None else end + 1
     if begin >= chain[0][0]:
         return chain
     peak = begin + int(np.argmax(sign * command[begin:chain[0][0]]))
     if sign * command[peak] < 0.5 * amplitude:
         return chain
     return [(peak, peak, float(sign * amplitude)), *chain]
+
+
+def _last_hold_end(raw: list, index: int) -> int | None:
+    """The last sample of the last hold of ``raw`` that ends before ``index`` (None: none)."""
+    return next((last for _, last, _ in reversed(raw) if last < index), None)
 
 
 def left_hold(command: np.ndarray, last: int, first: int, sign: int) -> int:
@@ -174,9 +179,9 @@ def ramp_start(command: np.ndarray, raw: list, plateau: int, sign: int) -> int:
     more than half way from the record's first value (a servo's slow approach) and then while
     it moves toward the plateau by more than :data:`_MOVING` per sample; sample 0 when the
     record starts on the ramp."""
-    earlier = [h for h in raw if h[1] < plateau]
-    if earlier:
-        return left_hold(command, earlier[-1][1], plateau, sign)
+    end = _last_hold_end(raw, plateau)
+    if end is not None:
+        return left_hold(command, end, plateau, sign)
     index = plateau
     half = 0.5 * sign * (command[plateau] + command[0])
     while index > 0 and sign * command[index - 1] > half:

@@ -49,13 +49,13 @@ def against_rudder(delta: np.ndarray, r: np.ndarray, t: np.ndarray, header: str)
     # the yaw response dr/dt = a r + b delta + c on the means of at most 200 blocks of samples,
     # whose errors are nearly independent, and noise averaged, whatever the sampling rate
     size = max(1, len(t) // 200)
-    blocks = [np.mean(x[: len(t) // size * size].reshape(-1, size), axis=1) for x in (t, r, delta)]
-    tb, rb, db = blocks
+    tb, rb, db = (np.mean(x[: len(t) // size * size].reshape(-1, size), axis=1)
+                  for x in (t, r, delta))
     if len(tb) < 5:
         return None
-    design = np.column_stack([rb, db, np.ones_like(rb)])
-    fitted, *_ = np.linalg.lstsq(design, np.gradient(rb, tb), rcond=None)
-    error = np.gradient(rb, tb) - design @ fitted
+    design, rate = np.column_stack([rb, db, np.ones_like(rb)]), np.gradient(rb, tb)
+    fitted, *_ = np.linalg.lstsq(design, rate, rcond=None)
+    error = rate - design @ fitted
     spread = float(error @ error) / max(len(error) - 3, 1) * np.linalg.pinv(design.T @ design)
     below = -fitted[1] / math.sqrt(max(spread[1, 1], 1e-300))
     return None if not below > RUDDER_SIGN_T else (

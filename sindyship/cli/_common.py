@@ -438,12 +438,13 @@ def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool =
     add_json(p)
 
 
-def resolve_cli_rudder_signal(args, records) -> None:
+def resolve_cli_rudder_signal(args, with_delta) -> None:
     """``args.rudder_signal`` as the fit will use it, with a note on stderr when the records
-    have no actual rudder angle (:func:`sindyship.identify.fitted_rudder_signal`)."""
+    (``with_delta``: each one's name and whether it has ``delta``) have no actual rudder angle
+    (:func:`sindyship.identify.fitted_rudder_signal`)."""
     from ..identify import fitted_rudder_signal
 
-    args.rudder_signal, note = fitted_rudder_signal(records, args.rudder_signal)
+    args.rudder_signal, note = fitted_rudder_signal(with_delta, args.rudder_signal)
     if note is not None:
         progress(f"note: {note}.")
 

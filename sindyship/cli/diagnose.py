@@ -109,7 +109,9 @@ def run(args) -> int:
 
     library = resolve_library(args.library, split_names(args.effects), speed_form(args, ship))
     check_two_records(records, "diagnose")
-    resolve_cli_rudder_signal(args, records)
+    from ..identify import delta_recorded
+
+    resolve_cli_rudder_signal(args, delta_recorded(records))
     # every candidate named, and the terms of the user's own effect files checked on the
     # records, before the long work (an effect whose channels the records lack is reported
     # untestable by the diagnosis)

@@ -73,7 +73,9 @@ def run(args) -> int:
 
     library = resolve_library(args.library, (), speed_form(args, ship))
     check_two_records(records, "discover")
-    resolve_cli_rudder_signal(args, records)
+    from ..identify import delta_recorded
+
+    resolve_cli_rudder_signal(args, delta_recorded(records))
     effects = [load_effect(name) for name in split_names(args.effects)]
     # the search (scikit-learn with it) once the files, ship and library pass: their refusals
     # come in a fraction of a second, before any cluster starts

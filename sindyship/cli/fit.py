@@ -135,7 +135,7 @@ def run(args) -> int:
                  suffixes=(".json",))
     check_inputs(fit_inputs(args))
     ship = load_cli_ship(args.ship)
-    from ..identify import fit, resolve_library
+    from ..identify import delta_recorded, fit, resolve_library
 
     speed = speed_form(args, ship)
     args.library = resolved_library(args, speed)
@@ -149,18 +149,16 @@ def run(args) -> int:
         args.refine = MAX_EVALUATIONS if args.optimizer == "prior" else 0
     if args.stream or args.scheduler:  # the rudder signal from the files' headers
         from pathlib import Path
-        from types import SimpleNamespace
 
         from ..records import record_columns
 
         columns = {path: record_columns(path) for path in args.data}
-        headers = [SimpleNamespace(name=Path(path).stem, has=names.__contains__)
-                   for path, names in columns.items() if names is not None]
-        resolve_cli_rudder_signal(args, headers)
+        resolve_cli_rudder_signal(args, [(Path(path).stem, "delta" in names)
+                                         for path, names in columns.items() if names is not None])
         return _run_streamed(args, ship, params, speed)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
-    resolve_cli_rudder_signal(args, records)
+    resolve_cli_rudder_signal(args, delta_recorded(records))
     smoothing = _smoothing(args, records, ship, effects, params, speed)
     if smoothing is not None:
         from ..smoothing import smooth_records
