@@ -6,15 +6,20 @@ least ``HOLD_SAMPLES = 5`` samples.  A step command holds exactly; an actual rud
 each angle through its steering gear (a rate-limited ramp, then a servo's slow approach that
 holds a few samples at every degree on the way, :func:`settled`); a helmsman's wheel wanders
 before the execute.  The execute and each reversal are where the rudder left its last hold
-(:func:`left_hold`).
+(:func:`left_hold`).  An actual rudder logged alone and sampled finer than its steering gear
+moves is first read in means of consecutive samples (:func:`read_in_blocks`), so that a
+servo's slow approach neither breaks into a hold at every degree nor is lost in the noise.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["HOLD_RANGE", "HOLD_SAMPLES", "back_to_peak", "cut_short", "execute", "find_holds",
-           "left_hold", "longest_alternation", "ramp_start", "settled", "stretch_end"]
+__all__ = ["FRAGMENTED_HOLDS", "HOLD_RANGE", "HOLD_SAMPLES", "MIN_SAMPLES_PER_READING",
+           "READINGS_PER_LEG",
+           "back_to_peak", "cut_short", "execute", "find_holds", "leg_time", "left_hold",
+           "longest_alternation", "ramp_start", "read_in_blocks", "samples_per_reading",
+           "settled", "stretch_end"]
 
 HOLD_RANGE = 1.0  # deg
 HOLD_SAMPLES = 5
@@ -26,6 +31,16 @@ _MOVING = 0.25
 _RAMP_STEP = 1e-3
 #: The execute is the last sample within this [deg] of the rudder's approach value.
 _EXECUTE_BAND = 0.5
+#: An actual rudder logged alone is read in means of consecutive samples, about this many
+#: readings to a leg of its zig-zag (:func:`samples_per_reading`).
+READINGS_PER_LEG = 80
+#: Fewer samples than this to a reading are read one by one: a reading of two would need a
+#: hold twice as long (a helmsman's last second before the execute is lost) to halve the
+#: noise's variance only.
+MIN_SAMPLES_PER_READING = 3
+#: Holds to a leg above which an actual rudder's holds are fragments: one holding each leg's
+#: angle makes one a leg and a helmsman's lead-in a few more (measured trials: up to 2.7).
+FRAGMENTED_HOLDS = 4
 
 
 def execute(command: np.ndarray, hold: int, sign: int) -> int:
@@ -110,18 +125,24 @@ def cut_short(command: np.ndarray, raw: list, chain: list, amplitude: float) -> 
     rudder that a servo brings to its command slowly can be reversed at the check angle on
     its way out, before it settles (a 35/10 zig-zag's first leg peaks near 26 deg).  Such a
     leg peaks at least half the amplitude out on the other side, after the last hold before
-    the first plateau; it is taken to have been commanded to the amplitude."""
+    the first plateau that is not on its way (the servo creeping out holds on the leg's side
+    at half the amplitude or more, short of the plateaus); it is taken to have been
+    commanded to the amplitude, from the first of those holds (else from its peak)."""
     if not chain:
         return chain
     sign = -np.sign(chain[0][2])
-    end = _last_hold_end(raw, chain[0][0])
-    begin = 0 if end is None else end + 1
+    before = [h for h in raw if h[1] < chain[0][0]]
+    on_the_way = []
+    while before and np.sign(before[-1][2]) == sign and abs(before[-1][2]) >= 0.5 * amplitude:
+        on_the_way.insert(0, before.pop())
+    begin = before[-1][1] + 1 if before else 0
     if begin >= chain[0][0]:
         return chain
     peak = begin + int(np.argmax(sign * command[begin:chain[0][0]]))
     if sign * command[peak] < 0.5 * amplitude:
         return chain
-    return [(peak, peak, float(sign * amplitude)), *chain]
+    first = on_the_way[0][0] if on_the_way else peak
+    return [(first, peak, float(sign * amplitude)), *chain]
 
 
 def _last_hold_end(raw: list, index: int) -> int | None:
@@ -189,3 +210,63 @@ def ramp_start(command: np.ndarray, raw: list, plateau: int, sign: int) -> int:
     while index > 0 and sign * (command[index] - command[index - 1]) > _MOVING:
         index -= 1
     return index if index in (0, plateau) else index + 1
+
+
+def leg_time(t: np.ndarray, command: np.ndarray) -> float | None:
+    """The median time [s] the rudder takes from one side to the other: between its
+    crossings of the bands a quarter of its range (2nd to 98th percentile) above and below
+    the middle, a swing counted once however it wobbles inside a band; None for fewer than
+    two swings or a range under two :data:`HOLD_RANGE`."""
+    finite = np.isfinite(command)
+    if finite.sum() < 2:
+        return None
+    low, high = np.percentile(command[finite], [2.0, 98.0])
+    if high - low < 2 * HOLD_RANGE:
+        return None
+    middle, quarter = 0.5 * (low + high), 0.25 * (high - low)
+    side = np.where(command > middle + quarter, 1, np.where(command < middle - quarter, -1, 0))
+    outside = np.flatnonzero(side)
+    swings = outside[1:][np.diff(side[outside]) != 0]
+    return float(np.median(np.diff(t[swings]))) if len(swings) >= 2 else None
+
+
+def samples_per_reading(t: np.ndarray, command: np.ndarray) -> int:
+    """How many consecutive samples of an actual rudder make one reading: a leg of the
+    zig-zag (:func:`leg_time`) read in about :data:`READINGS_PER_LEG` readings when its holds
+    are fragments (more than :data:`FRAGMENTED_HOLDS` to a leg); else 1, as when that is fewer
+    than :data:`MIN_SAMPLES_PER_READING` samples or the record holds no swings to time.
+
+    A hold is :data:`HOLD_SAMPLES` readings within :data:`HOLD_RANGE`.  Logged at 1 s, a
+    full-scale servo's slow approach to its angle holds at the end of each leg; logged at
+    20 Hz, every degree of the approach holds and 0.3 deg of noise breaks every hold.  Read
+    in means over about a second, both look as they do at 1 s (``benchmarks/
+    bench_recognition.py``).  A rudder that holds each leg's angle is read sample by sample:
+    a reading five times as long as a sample would lose a helmsman's last seconds before the
+    execute."""
+    if len(t) < 2:
+        return 1
+    leg = leg_time(t, command)
+    step = float(np.median(np.diff(t)))
+    if leg is None or not step > 0:
+        return 1
+    samples = int(round(leg / (READINGS_PER_LEG * step)))
+    if samples < MIN_SAMPLES_PER_READING:
+        return 1
+    legs = (t[-1] - t[0]) / leg
+    return samples if len(find_holds(command)) > FRAGMENTED_HOLDS * legs else 1
+
+
+def read_in_blocks(command: np.ndarray,
+                   samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The first and the centre sample of each block of ``samples`` consecutive samples (the
+    last block may be shorter), and the mean of its finite angles (NaN for a block without
+    any): a reading's mean is the rudder at its centre, and a rudder that moved between two
+    readings moved about where the later one begins."""
+    first = np.arange(0, len(command), samples)
+    centre = first + np.diff(np.append(first, len(command))) // 2
+    finite = np.isfinite(command)
+    sums = np.add.reduceat(np.where(finite, command, 0.0), first)
+    counts = np.add.reduceat(finite.astype(float), first)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        means = np.where(counts > 0, sums / np.maximum(counts, 1.0), np.nan)
+    return first, centre, means

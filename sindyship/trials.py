@@ -28,7 +28,13 @@ Thresholds (module constants) and why:
   rounded to the nearest multiple of 5 deg when one lies within ``ROUNDING = 1.5`` deg,
   else to 0.1 deg.  The heading change (from the execute) at the rudder reversals must
   agree within ``CHECK_SPREAD = 3`` deg plus the largest yaw rate times the sampling step
-  (a reversal falls between two samples).
+  (a reversal falls between two samples).  An actual rudder logged alone whose holds are
+  fragments (more than ``FRAGMENTED_HOLDS = 4`` to a leg) is read in means of consecutive
+  samples first, about ``READINGS_PER_LEG = 80`` to a leg
+  (:func:`sindyship.rudder_holds.samples_per_reading`): a full-scale servo approaches its
+  angle so slowly that, logged at 20 Hz, every degree on the way holds for five samples, and
+  0.3 deg of noise breaks every hold.  Its readings may leave a hold one reading either way
+  of the rudder, so the heading tolerance takes twice the reading step.
 - Turn: the record holds a rudder angle of at least ``TURN_RUDDER = 5`` deg for at least
   ``TURN_SHARE = 0.25`` of its samples (a spiral's steps last a seventh of it each; a
   turning circle may end in a pull-out); its execute is the last sample at the approach value
@@ -57,6 +63,8 @@ from sindyship.rudder_holds import (
     left_hold,
     longest_alternation,
     ramp_start,
+    read_in_blocks,
+    samples_per_reading,
     settled,
 )
 from sindyship.trajectory import Trajectory
@@ -328,9 +336,27 @@ def explain_zigzag(record: Trajectory) -> tuple[ZigZag | None, str]:
 
 def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], str, tuple]:
     """The zig-zag, the levels of its plateaus, the sentence of :func:`explain_zigzag` and the
-    samples where the rudder was put over (the execute, then each reversal)."""
+    samples where the rudder was put over (the execute, then each reversal).  An actual
+    rudder logged alone and sampled finer than a leg of its zig-zag needs is recognised on its
+    readings (:func:`sindyship.rudder_holds.samples_per_reading`), each switch where its
+    reading begins (:func:`sindyship.rudder_holds.read_in_blocks`)."""
     commanded = record.has("delta_c")
     command = np.degrees(record["delta_c"] if commanded else record.rudder)
+    t, psi, r = record.t, record["psi"], record["r"]
+    samples = 1 if commanded else samples_per_reading(t, command)
+    if samples == 1:
+        return _recognise_rudder(t, psi, r, command, commanded, t)
+    firsts, centres, reading = read_in_blocks(command, samples)
+    zigzag, levels, reason, switches = _recognise_rudder(
+        t[centres], psi[centres], r[centres], reading, commanded, t[firsts], read=True)
+    return zigzag, levels, (f"{reason} (the actual rudder read in means of {samples} "
+                            "samples)"), tuple(int(firsts[i]) for i in switches)
+
+
+def _recognise_rudder(t, psi, r, command, commanded: bool, switch_t, read: bool = False):
+    """:func:`_recognise` on the times, heading, yaw rate and rudder angles [deg] given;
+    ``switch_t`` is the time [s] a switch at each sample is taken to have happened, and
+    ``read`` says the angles are readings (means of several samples)."""
     raw = find_holds(command)
     found = raw if commanded else settled(raw)
     if not found:
@@ -352,12 +378,13 @@ def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], st
     if not commanded:  # a slow servo leaves a hold only after it has turned: back to its peak
         reversals = [back_to_peak(command, i, before[0], int(np.sign(h[2])))
                      for i, before, h in zip(reversals, chain[:-1], chain[1:], strict=True)]
-    psi = np.degrees(record["psi"] - record["psi"][start])
+    psi = np.degrees(psi - psi[start])
     at = np.abs(psi[reversals])
     before = np.abs(psi[np.maximum(np.array(reversals) - 1, 0)])
-    # the heading moves by up to r dt between the samples a reversal falls between
-    spread = CHECK_SPREAD + float(np.degrees(np.max(np.abs(record["r"])))
-                                  * np.median(np.diff(record.t)))
+    # the heading moves by up to r dt between the samples a reversal falls between; a noisy
+    # reading's mean leaves a hold up to one reading either way of where the rudder did
+    spread = CHECK_SPREAD + (2.0 if read else 1.0) * float(np.degrees(np.max(np.abs(r)))
+                                                           * np.median(np.diff(t)))
     if np.ptp(at) > spread:
         return None, (), (f"the heading change at the {len(reversals)} rudder reversals spreads "
                       f"over {np.ptp(at):.1f} deg (more than {spread:.3g}): no common "
@@ -365,7 +392,7 @@ def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], st
     levels = [abs(h[2]) for h in chain]
     check = _roundest(float(np.median(before)), float(np.median(at)))
     rudder = _roundest(float(np.mean(levels)), float(np.mean(levels)))
-    zigzag = ZigZag(rudder, check, first_sign, float(record.t[start]))
+    zigzag = ZigZag(rudder, check, first_sign, float(switch_t[start]))
     return zigzag, tuple(h[2] for h in chain), (
         f"a {rudder:g}/{check:g} zig-zag from t = {zigzag.start_time:.6g} s: {len(chain)} "
         f"plateaus at {', '.join(f'{v:.1f}' for v in levels)} deg"), (start, *reversals)

@@ -507,6 +507,42 @@ def test_zigzags_logged_with_the_actual_rudder_alone_are_recognised(protocol_run
             assert value == pytest.approx(expected, abs=1.5 if key != "period_s" else 2.0), key
 
 
+def test_a_slow_servo_logged_fast_is_read_in_means_of_samples(protocol_runs, kcs):
+    """The KCS's servo logged at 10 and 20 Hz without the command: every degree of its slow
+    approach held five samples and the zig-zags were not recognised (or a 10/10 with 0.1 deg
+    of noise read 10/15); read in means of samples, about 80 to a leg, they are, from their
+    first sample, and flown closed loop as close as with the command."""
+    from sindyship.evaluation import evaluate
+    from sindyship.identify import fit
+    from sindyship.rudder_holds import samples_per_reading
+    from sindyship.trials import _recognise_rudder
+
+    rng = np.random.default_rng(3)
+    model = fit(protocol_runs["train"], kcs)
+    actual, commanded = [], []
+    for rudder, check, dt, noise in ((35, 10, 0.1, 0.0), (20, 20, 0.1, 0.0),
+                                     (10, 10, 0.05, 0.1)):
+        (run,) = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=rudder, check=check,
+                                                duration=800, dt=dt)])
+        frame = run.data.drop(columns=["delta_c"])
+        frame["delta"] += math.radians(noise) * rng.standard_normal(len(frame))
+        record = Trajectory(frame, f"zz{rudder}_{check}")
+        command = np.degrees(record.rudder)
+        assert samples_per_reading(record.t, command) >= 10
+        by_sample = _recognise_rudder(record.t, record["psi"], record["r"], command, False,
+                                      record.t)[0]
+        assert by_sample is None or by_sample[:2] != (rudder, check)
+        zigzag, reason = explain_zigzag(record)
+        assert zigzag == (rudder, check, 1, 0.0), reason
+        assert "read in means of" in reason
+        actual.append(record)
+        commanded.append(run.with_name(record.name))
+    flown, with_command = evaluate(model, actual), evaluate(model, commanded)
+    for name, error in flown.items():
+        assert error["flown_as"] == "zigzag"
+        assert error["mean_distance_L"] < with_command[name]["mean_distance_L"] + 0.15, name
+
+
 def test_a_record_cut_after_its_execute_holds_no_turn(protocol_runs):
     """A time range that starts in the turn leaves its execute out: no turn, so no turn
     figures measured from mid-turn."""
