@@ -105,12 +105,13 @@ def _file_or_name(item, default_folder) -> str:
     return str(source)
 
 
-def _fit_options(diagnosis, ship_argument: str | None, effects) -> str:
+def _fit_options(diagnosis, ship_argument: str | None, effects, *,
+                 optimizer: bool = True) -> str:
     """The ``fit`` options that repeat the diagnosis's own settings with ``effects`` (effect
     objects) added: the ship, the library unless it is the diagnosis's default (``fit`` then
     takes its recommended one), the speed form unless it is the ship's, the derivative, the
-    rudder signal, the smoothing and the optimizer unless it is least squares (``fit`` then
-    takes its recommended ``prior``)."""
+    rudder signal, the smoothing and, with ``optimizer``, the optimizer unless it is least
+    squares (``fit`` then takes its recommended ``prior``; ``discover`` takes none)."""
     from .library import builtin_library_dir
 
     library, settings = diagnosis.library, diagnosis.settings
@@ -131,7 +132,7 @@ def _fit_options(diagnosis, ship_argument: str | None, effects) -> str:
         folder = builtin_library_dir() / "effects"
         options.append("--effects " + shlex.quote(",".join(
             e if isinstance(e, str) else _file_or_name(e, folder) for e in effects)))
-    if settings.get("optimizer", "ls") != "ls":
+    if optimizer and settings.get("optimizer", "ls") != "ls":
         options.append(f"--optimizer {settings['optimizer']}")
     return " ".join(options)
 
@@ -329,10 +330,12 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
                 "diagnose again with the same --effects." + _held_out_caution(top))
     elif verdict == "add-discovered":
         found = " and ".join(f.family for f in diagnosis.discovery.accepted)
-        ship = shlex.quote(ship_argument or _ship_argument(diagnosis.ship))
-        text = (f"Verdict: no catalogued effect is meaningful, but {found} was discovered "
-                f"beyond the catalogue (above): sindyship discover DATA.csv... --ship {ship} "
-                "--out effect.toml, then fit and diagnose with --effects effect.toml.")
+        given = list(diagnosis.library.effects if effect_arguments is None else effect_arguments)
+        options = _fit_options(diagnosis, ship_argument, given, optimizer=False)
+        effects = ",".join(e if isinstance(e, str) else e.name for e in [*given, "effect.toml"])
+        text = (f"Verdict: {diagnosis.no_catalogued_effect}, but {found} was discovered "
+                f"beyond the catalogue (above): sindyship discover DATA.csv... {options} "
+                f"--out effect.toml, then fit and diagnose with --effects {shlex.quote(effects)}.")
     elif verdict == "unstable":
         flights = ", ".join(f"{name} at {when:.0f} s" for name, when in diagnosis.diverged.items())
         text = (f"Verdict: the model fails - its training flights diverged ({flights}) and no "

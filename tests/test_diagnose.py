@@ -158,6 +158,27 @@ def test_channels_absent_or_never_changing_make_effects_not_testable(kcs):
         diagnose(runs[:1], kcs)
 
 
+def test_a_steady_wind_from_one_direction_is_testable(kcs):
+    """The wind's terms read the apparent wind, which turns with the ship: a steady wind from
+    one direction (wind_dir one value in every record) tests it, and the diagnosis ranks it
+    (it was listed as not testable, and environment was named instead); no wind at all is
+    not testable."""
+    from sindyship.diagnose.scoring import _untestable
+    from sindyship.library import load_effect
+
+    plan = [Manoeuvre("turning-circle", rudder=r, duration=300) for r in (35, -35)]
+    steady = simulate_with_effects(kcs, plan, parse_effects(["wind=15", "wind_dir=45"]))
+    assert all(np.ptp(r["wind_dir"]) == 0.0 and np.ptp(r["wind_speed"]) == 0.0
+               for r in steady)
+    wind = load_effect("wind")
+    assert _untestable(wind, steady) is None
+    ranked = diagnose(steady, kcs, fly_training=False, effects=["wind", "environment"])
+    assert ranked.ranking[0].effect.name == "wind" and not ranked.not_testable
+    calm = [Trajectory(r.data.assign(wind_speed=0.0), r.name) for r in steady]
+    reason = _untestable(wind, calm)
+    assert reason.needs == ("wind_dir", "wind_speed") and "does not change" in reason.reason
+
+
 # ------------------------------------------------------------------------ (3) complete case
 def test_data_from_an_abkowitz_model_is_diagnosed_complete(kcs):
     """No hidden effect: every catalogued effect explains (next to) nothing.
@@ -486,6 +507,36 @@ def test_a_before_after_whose_after_diverges_is_judged_worse(kcs):
     change = BeforeAfter("abkowitz", "abkowitz+x", ("x",), [row])
     assert change.confirmed is False
     assert change.held_out_supports is None  # no held-out flights
+
+
+def test_a_divergence_cured_near_the_end_does_not_confirm_flights_flown_farther_off(kcs):
+    """Curing a divergence confirms an effect unless the other flights, over the windows both
+    flights cover, come out clearly farther off (more than 1 / CONFIRMING_RATIO): a spiral
+    cured 67 s before the end of 3200 s had confirmed cross-flow drag that flew every other
+    training flight 1.29 times as far off."""
+    from sindyship._diagnosis_thresholds import CONFIRMING_RATIO
+    from sindyship.diagnose import BeforeAfter
+    from sindyship.evaluation import compare_flights, error_summary
+
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=35, duration=600)])
+
+    def flight(off, diverged=None):
+        data = run.data.copy()
+        data["x"] = data["x"] + off * kcs.L
+        return Trajectory(data, name=run.name, meta={"diverged_at": diverged})
+
+    def row(name, before, after):
+        return {"manoeuvre": name, "set": "training",
+                "before": error_summary(before, run, kcs.L),
+                "after": error_summary(after, run, kcs.L),
+                "common": compare_flights(before, after, run, kcs.L)}
+
+    cured = row("cured", flight(0.1, diverged=580.0), flight(0.1))
+    for factor, confirmed in ((1.05, True), (1.3, False)):
+        other = row("other", flight(0.1), flight(0.1 * factor))
+        change = BeforeAfter("abkowitz", "abkowitz+x", ("x",), [cured, other])
+        assert (change.ratio("training") <= 1.0 / CONFIRMING_RATIO) is confirmed
+        assert change.confirmed is confirmed, factor
 
 
 def test_held_out_flights_that_contradict_a_confirmed_effect_are_said_so(kcs):

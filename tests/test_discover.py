@@ -17,7 +17,7 @@ from sindyship.errors import SindyshipInputError
 from sindyship.flights import fly_like
 from sindyship.identify import fit
 from sindyship.library import Effect, TermLibrary, load_effect, load_library
-from sindyship.manoeuvres import Manoeuvre
+from sindyship.manoeuvres import Manoeuvre, protocol_manoeuvres
 from sindyship.model import AbkowitzModel
 from sindyship.terms import Term
 from sindyship.trajectory import Trajectory
@@ -405,3 +405,34 @@ def test_columns_no_term_can_name_are_left_out_and_reported(symmetric, lagged):
     assert found.to_json()["unnamed_channels"] == ["Heel", "wave height"]
     written = tomllib.loads(found.effect_toml())  # the odd byte is written as \xff
     assert "\\xff" in written["physics"] and written["name"] == found.effect().name
+
+
+def test_an_effect_only_the_flights_favour_yields_to_a_discovery(symmetric):
+    """The protocol with the rudder sensor 4 s late: every flight diverges, no catalogued
+    effect is meaningful, and re-flying favours crossflow and environment over the windows
+    before the divergences.  That stopped the search beyond the catalogue and named one of
+    them (environment left the zig-zag 1.9 L off); the search now runs and finds the lag,
+    and the verdict says why no catalogued effect is named and repeats the diagnosis's
+    library and effects in its command."""
+    from sindyship.diagnose import diagnose
+    from sindyship.identify import resolve_library
+
+    effects = parse_effects(["rudder_lag=4"])
+    train = simulate_with_effects(symmetric, protocol_manoeuvres()["train"], effects)
+    result = diagnose(train, symmetric)
+    favoured = [s.effect.name for s in result.ranking if not s.meaningful
+                and s.confirmation is not None and s.confirmation.confirmed]
+    assert set(favoured) == {"crossflow", "environment"}  # what used to be named
+    assert result.meaningful_top is None and result.top is None
+    assert result.verdict == "add-discovered"
+    assert result.discovery.best.delays["delta"] == pytest.approx(4.0, abs=0.5)
+    verdict = " ".join(result.report().split("Verdict:", 1)[1].split())
+    assert verdict.startswith("no catalogued effect is meaningful (crossflow, environment "
+                              "bring the training flights closer but explain too little")
+    library = resolve_library("abkowitz-noconst", ["crossflow"])
+    other = diagnose(train, symmetric, library=library, effects=["asymmetry"])
+    assert other.verdict == "add-discovered"
+    verdict = " ".join(other.report().split("Verdict:", 1)[1].split())
+    assert ("sindyship discover DATA.csv... --ship SHIP.toml --library abkowitz-noconst "
+            "--effects crossflow --out effect.toml") in verdict
+    assert verdict.endswith("--effects crossflow,effect.toml.")

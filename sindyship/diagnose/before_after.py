@@ -114,13 +114,16 @@ class BeforeAfter:
 
         A flight that diverges where the other does not, or earlier, is the worse one
         whatever the means (docs/protocol.md): False when some training flight diverges after
-        adding the effect where it did not before (or earlier), True when only divergences
-        before are cured, else True when the geometric-mean distance over the common windows
-        falls below :data:`CONFIRMING_RATIO` times its value before.  None without training
-        flights.  Held-out flights never enter it (they would select the model on the test
-        set).
+        adding the effect where it did not before (or earlier); when only divergences before
+        are cured, True unless the geometric-mean distance over the common windows grows by
+        more than the confirming margin (above 1 / :data:`CONFIRMING_RATIO` times its value
+        before: a divergence cured near a record's end does not confirm an effect that flies
+        every other manoeuvre farther off); else True when that distance falls below
+        :data:`CONFIRMING_RATIO` times its value before.  None without training flights.
+        Held-out flights never enter it (they would select the model on the test set).
         """
-        return self._judged("training", CONFIRMING_RATIO, no_distance=False)
+        return self._judged("training", CONFIRMING_RATIO, no_distance=False,
+                            cured_limit=1.0 / CONFIRMING_RATIO)
 
     @property
     def held_out_supports(self) -> bool | None:
@@ -133,21 +136,22 @@ class BeforeAfter:
         """
         return self._judged("held-out", 1.0, no_distance=None)
 
-    def _judged(self, kind: str, threshold: float, *, no_distance: bool | None
-                ) -> bool | None:
+    def _judged(self, kind: str, threshold: float, *, no_distance: bool | None,
+                cured_limit: float = math.inf) -> bool | None:
         """Whether the set's flights favour the effects: False when one diverges with them
-        where it did not without (or earlier), True when only divergences without them are
-        cured, else whether the geometric-mean ratio is at most ``threshold``
-        (``no_distance`` without a distance to compare; None without flights of the set)."""
+        where it did not without (or earlier); when only divergences without them are cured,
+        True unless the geometric-mean ratio exceeds ``cured_limit``; else whether it is at
+        most ``threshold`` (``no_distance`` without a distance to compare; None without
+        flights of the set)."""
         rows = [row for row in self.rows if row["set"] == kind]
         if not rows:
             return None
         worse = {_worse_by_divergence(row) for row in rows}
         if "after" in worse:
             return False
-        if "before" in worse:
-            return True
         ratio = self.ratio(kind)
+        if "before" in worse:
+            return bool(not math.isfinite(ratio) or ratio <= cured_limit)
         return bool(ratio <= threshold) if math.isfinite(ratio) else no_distance
 
     def report(self) -> str:

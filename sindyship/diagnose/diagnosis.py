@@ -175,16 +175,46 @@ class Diagnosis:
 
     @property
     def top(self) -> EffectScore | None:
-        """The effect to add, or None when the library is complete: the best meaningful effect
-        that re-flying does not refute (its confirmation is not False), else the best other
-        effect whose confirmation brings the training flights closer by a clear margin
-        (:data:`FLIGHT_OVERRIDE_RATIO`): the verdict never disagrees with the flights."""
+        """The effect to add, or None: the best meaningful effect that re-flying does not
+        refute (its confirmation is not False); else, unless the search beyond the catalogue
+        discovered one, the other effect whose confirmation brings the training flights
+        closest, by a clear margin (:func:`flight_confirmed`): the verdict never disagrees
+        with the flights.  An effect its forces do not single out yields to a discovered one,
+        which they do."""
+        meaningful = self.meaningful_top
+        if meaningful is not None:
+            return meaningful
+        if self.discovery is not None and self.discovery.accepted:
+            return None
+        flown = [score for score in self.ranking if not score.meaningful
+                 and flight_confirmed(score)]
+        return min(flown, key=lambda score: score.confirmation.ratio("training"), default=None)
+
+    @property
+    def no_catalogued_effect(self) -> str:
+        """Why no catalogued effect is named, for the verdict: none is meaningful, or
+        re-flying the training records refutes those that are; and the effects the flights
+        alone favour, which explain too little of the force to stand against a discovery."""
+        refuted = [s.effect.name for s in self.ranking if s.meaningful
+                   and s.confirmation is not None and s.confirmation.confirmed is False]
+        text = ("no catalogued effect is meaningful" if not refuted else
+                f"re-flying the training records refutes {', '.join(refuted)}, the catalogued "
+                f"effect{'s' if len(refuted) > 1 else ''} the force error singles out")
+        flown = [s.effect.name for s in self.ranking if not s.meaningful
+                 and flight_confirmed(s)]
+        if flown:
+            one = len(flown) == 1
+            text += (f" ({', '.join(flown)} bring{'s' if one else ''} the training flights "
+                     f"closer but explain{'s' if one else ''} too little of the force error to "
+                     "stand against a discovery)")
+        return text
+
+    @property
+    def meaningful_top(self) -> EffectScore | None:
+        """The best meaningful effect that re-flying does not refute, or None."""
         for score in self.ranking:
             if score.meaningful and (score.confirmation is None
                                      or score.confirmation.confirmed is not False):
-                return score
-        for score in self.ranking:
-            if not score.meaningful and flight_confirmed(score):
                 return score
         return None
 
@@ -458,11 +488,11 @@ def _check_arguments(records: Sequence[Trajectory], test: Sequence[Trajectory],
 def _search_beyond(result: Diagnosis, fitted: Sequence[Trajectory], settings: Mapping,
                    n_jobs: int | None) -> None:
     """Run :func:`discover` into ``result.discovery`` when no catalogued effect is meaningful
-    and the model is visibly wrong (a training flight diverged, or an equation's error stands
-    clearly above its noise floor)."""
+    (one the flights alone favour does not stop the search) and the model is visibly wrong (a
+    training flight diverged, or an equation's error stands clearly above its noise floor)."""
     floor = result.noise_floor
     visibly_wrong = bool(result.diverged) or any(floor[dof] < NOISE_VISIBLE for dof in DOFS)
-    if result.top is None and visibly_wrong:
+    if result.meaningful_top is None and visibly_wrong:
         result.discovery = discover(fitted, result.ship, library=result.library,
                                     threshold=result.threshold, check_catalogue=False,
                                     n_jobs=n_jobs, **settings)

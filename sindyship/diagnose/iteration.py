@@ -183,7 +183,9 @@ def diagnose_iteratively(
         if pick is None:
             rounds.append(Round(result, None, None))
             meaningful = any(s.meaningful for s in result.ranking)
-            stopped = ("no meaningful effect was confirmed by re-flying the training records"
+            stopped = ("an effect beyond the catalogue was discovered (the verdict says how to "
+                       "add it)" if result.verdict == "add-discovered" else
+                       "no meaningful effect was confirmed by re-flying the training records"
                        if meaningful else "no effect explains a meaningful share, and none "
                        "brings the training flights clearly closer")
             break

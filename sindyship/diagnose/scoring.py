@@ -12,10 +12,11 @@ from .._io import clean_json
 from ..library import (
     DOFS,
     Effect,
+    apparent_wind,
 )
 from ..optimizers import GroupedProblem
 from ..reports import DOF_NAMES
-from ..terms import describe_variable
+from ..terms import DERIVED_SOURCES, describe_variable
 from ..trajectory import Trajectory
 from .before_after import BeforeAfter
 from .residuals import STATE_BINS, Residuals, _bin_index, _bin_labels
@@ -52,8 +53,14 @@ def _untestable(effect: Effect, records: Sequence[Trajectory]) -> NotTestable | 
 
     A channel is missing when some record lacks it, and carries no information when it has
     one value throughout all the records (a channel constant within each record but
-    different between records, such as the depth of runs in two waters, is testable).
+    different between records, such as the depth of runs in two waters, is testable).  A
+    channel the terms read only through a variable made from the motion (the true wind of the
+    apparent wind) is judged by that variable: a steady wind from one direction still turns
+    with the ship.
     """
+    derived = {name for name in effect.variables if name in DERIVED_SOURCES}
+    through_motion = ({source for name in derived for source in DERIVED_SOURCES[name]}
+                      - set(effect.variables))
     needs, reasons = [], []
     for channel in effect.channels:
         variable = describe_variable(channel)
@@ -66,6 +73,8 @@ def _untestable(effect: Effect, records: Sequence[Trajectory]) -> NotTestable | 
             where = "every record" if len(missing) == len(records) else ", ".join(missing)
             reasons.append(f"{channel}{what} is absent from {where}")
             continue
+        if channel in through_motion:
+            continue  # judged by the apparent wind below
         values = np.concatenate([r[variable.column] for r in records])
         finite = values[np.isfinite(values)]
         spread = float(np.ptp(finite)) if finite.size else 0.0
@@ -73,10 +82,32 @@ def _untestable(effect: Effect, records: Sequence[Trajectory]) -> NotTestable | 
             needs.append(channel)
             value = f" ({finite[0]:g})" if finite.size else ""
             reasons.append(f"{channel}{what} has one value{value} throughout all the records")
+    if derived and not needs and not _apparent_wind_changes(records):
+        needs = sorted(through_motion)
+        reasons.append("the apparent wind made from wind_speed and wind_dir does not change "
+                       "(no wind was recorded)")
     if not needs:
         return None
     advice = f"record {', '.join(needs)} in every record, with values that change"
     return NotTestable(effect, tuple(needs), "; ".join(reasons) + f": {advice}.")
+
+
+def _apparent_wind_changes(records: Sequence[Trajectory]) -> bool:
+    """Whether the apparent wind (speed or angle) the records' true wind and motion make
+    changes over the records."""
+    speeds, angles = [], []
+    for r in records:
+        speed, angle = apparent_wind(r["u"], r["v"], r["psi"], r["wind_speed"], r["wind_dir"])
+        speeds.append(speed)
+        angles.append(np.sin(angle))
+    return any(_varies(np.concatenate(values)) for values in (speeds, angles)) and any(
+        float(np.nanmax(np.abs(r["wind_speed"]), initial=0.0)) > 0.0 for r in records)
+
+
+def _varies(values: np.ndarray) -> bool:
+    finite = values[np.isfinite(values)]
+    return bool(finite.size) and float(np.ptp(finite)) > 1e-9 * max(
+        1.0, float(np.max(np.abs(finite))))
 
 
 @dataclass
