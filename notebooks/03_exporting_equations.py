@@ -77,8 +77,10 @@ spec.loader.exec_module(kcs_lasso)
 # %% [markdown]
 # ## The generated simulator beside sindyship's
 # A 10/10 zig-zag flown closed loop by both. They use the same integration scheme, so the
-# tracks agree to rounding error; the generated code is faster because sympy's common
-# subexpression elimination turns the model into straight-line numpy code.
+# tracks agree to rounding error. sindyship flies with numba-compiled loops where numba is
+# installed, so the plain numpy module is slower here; `generate_python(model, compiled=True)`
+# (`export --compile`) gives the module compiled loops of its own
+# (`benchmarks/bench_export.py` times all three).
 
 # %%
 t = np.arange(DURATION)

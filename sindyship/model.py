@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -438,13 +439,18 @@ class AbkowitzModel:
             which no saved model may hold (such a fit comes from records that do not belong to
             the ship, or from a ship file with the wrong units).
         """
-        largest = max((abs(value) for terms in self.coefficients.values()
-                       for value in terms.values()), default=0.0)
+        largest, name = max(((abs(value), f"{dof}[{term}]")
+                             for dof, terms in self.coefficients.items()
+                             for term, value in terms.items()), default=(0.0, ""),
+                            key=lambda pair: pair[0] if math.isfinite(pair[0]) else math.inf)
         if not largest <= MAX_COEFFICIENT:
             raise SindyshipInputError(
-                f"the fit gave a coefficient of magnitude {largest:.3g}, beyond the "
-                f"{MAX_COEFFICIENT:g} a saved model may hold; check that the records belong "
-                f"to the ship {self.ship.name!r} and that its file has the right units.")
+                f"the fit gave {name} a coefficient of magnitude {largest:.3g}, beyond the "
+                f"{MAX_COEFFICIENT:g} a saved model may hold: the records cannot tell its term "
+                "from others (a channel with as few values as the terms' powers, such as "
+                "revolutions n at two settings for 1, n and n^2), or they do not belong to the "
+                f"ship {self.ship.name!r} (check its file's units); record more distinct "
+                "values, drop terms from the library, or fit with --optimizer prior.")
         write_text_atomic(path, json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n")
 
     @classmethod

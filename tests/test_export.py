@@ -305,6 +305,36 @@ def test_the_generated_simulator_flies_recorded_channels(kcs, tmp_path):
                   ) / kcs.L < 1e-10
     with pytest.raises(ValueError, match="channel 'n'"):
         sim.simulate(record.t, 0.0, None, {})
+    # without channels the exported default is taken, and one never given is asked for (it
+    # had flown NaN, a flight that looked diverged at its first step)
+    for call in (lambda: sim.simulate(record.t, 0.0), lambda: sim.rhs(0.0, record.state()[:, 0],
+                                                                      0.0)):
+        with pytest.raises(ValueError, match="give the channel 'n' .*exported without a value"):
+            call()
+    given = load_module(generate_python(with_n, channels={"n": 1.8 * kcs.L / kcs.U0}),
+                        tmp_path / "sim_n_given.py")
+    flight = given.simulate(record.t, record["delta_c"], record.state()[:, 0])
+    steady = sim.simulate(record.t, record["delta_c"], record.state()[:, 0],
+                          {"n": np.full(run.n_samples, 1.8)})
+    assert flight.diverged_at is None
+    assert np.allclose(flight.states, steady.states, rtol=0, atol=1e-9 * kcs.L)
+
+
+@pytest.mark.parametrize(("options", "message"), [
+    (["--channel", "N=35.86", "--python", "sim.py"],
+     "--channel N: the model's library uses no channel of that name (it uses: none)"),
+    (["--channel", "n=35.86"], "--channel sets the simulator's default value"),
+])
+def test_export_refuses_a_channel_the_model_does_not_use(model, tmp_path, capsys, options,
+                                                          message):
+    from sindyship.cli import main
+
+    path = tmp_path / "model.json"
+    model.save(path)
+    assert main(["export", str(path), *[str(tmp_path / o) if o.endswith(".py") else o
+                                         for o in options]]) == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "sim.py").exists()
 
 def _symbols():
     return {name: sympy.Symbol(name, real=True) for name in ("du", "v", "r", "delta")}
@@ -334,6 +364,37 @@ def test_model_equations_equal_the_model_numerically(model, seed):
         assert symbolic[dof].rhs.free_symbols - set(s.values()) == active
     assert force_expressions(model, numeric=True)["X"].subs({x: 0 for x in s.values()}) == 0
     assert set(coriolis_expressions(model.ship)["X"].free_symbols) == {s["r"], s["v"]}
+
+
+def test_instantaneous_equations_are_what_the_model_computes(kcs):
+    """A model of the instantaneous speed form reads v, r over U and scales its forces with
+    (U/U0)^2: the sympy, text and LaTeX equations say so (they printed the design form, off
+    by the speed factor and with Coriolis terms in the wrong speed), and the sympy right-hand
+    sides equal the model's forces plus Coriolis at flown states."""
+    from sindyship.identify import fit
+    from sindyship.model import coriolis_of_values
+
+    train = fly(MMGModel(kcs), protocol_manoeuvres(duration=600)["train"])
+    model = fit(train, kcs, speed="instantaneous")
+    eqs = model_equations(model, numeric=True)
+    u = kcs.U0 * np.array([0.7, 1.0, 0.45])
+    v = kcs.U0 * np.array([-0.1, 0.02, 0.2])
+    r = kcs.U0 / kcs.L * np.array([0.3, -0.05, -0.6])
+    delta = np.array([0.1, -0.3, 0.6])
+    values = model.flight_variables(u, v, r, delta, np.zeros(3), {})
+    forces = model.forces_from_values(values)
+    extra = coriolis_of_values(kcs, values)
+    s = _symbols()
+    for i, dof in enumerate(DOFS):
+        rhs = sympy.lambdify([s[n] for n in s], eqs[dof].rhs, "numpy")
+        got = rhs(*(values[n] for n in s))
+        assert np.allclose(got, forces[dof] + extra[i], rtol=1e-12, atol=1e-16), dof
+    text = equations_text(model, precision=3)
+    assert "U/U0 = (1 + du) / sqrt(1 - v^2)" in " ".join(text.split())
+    assert text.count("= (U/U0)^2 [") == 3 and "(Coriolis) + 0.0159 (U/U0)^2 v r" in text
+    tex = equations_latex(model, precision=3)
+    assert tex.count(r"\left(\frac{U}{U_0}\right)^{2} \big[") == 3
+    assert r"\frac{U}{U_0} &= \frac{1 + \Delta u'}{\sqrt{1 - v'^2}}" in tex
 
 
 def _parse_align(tex: str) -> list[sympy.Eq]:

@@ -106,6 +106,16 @@ def run(args) -> int:
     ship = load_cli_ship(args.ship) if args.ship else None
     model = AbkowitzModel.load(args.model, ship=ship)
     channels = _parse_channels(args.channel)
+    if channels and not args.python:
+        raise SindyshipInputError("--channel sets the simulator's default value of a channel; "
+                                  "give --python FILE too.")
+    unknown = sorted(set(channels) - set(model.recorded_channels))
+    if unknown:
+        uses = ", ".join(model.recorded_channels) or "none"
+        raise SindyshipInputError(
+            f"--channel {unknown[0]}: the model's library uses no channel of that name (it "
+            f"uses: {uses}); give the library's channels or drop --channel."
+        )
     if args.python:
         code = generate_python(model, source_note=f"Exported from {Path(args.model).name}.",
                                channels=channels, compiled=args.compile)

@@ -182,8 +182,13 @@ class _Model:
 
 
 def _scaled(channels):
-    \"\"\"Channels given in SI (as in the measurement CSV) in the library's scaling.\"\"\"
+    \"\"\"Channels given in SI (as in the measurement CSV) in the library's scaling; None
+    keeps the CHANNEL_ constants, which must then have values.\"\"\"
     if channels is None:
+        unset = sorted(name for name, value in CHANNEL_DEFAULTS.items() if math.isnan(value))
+        if unset:
+            raise ValueError(f"give the channel {unset[0]!r} (channels=...): the model's "
+                             "library uses it, and it was exported without a value")
         return None
     missing = sorted(set(CHANNEL_SCALING) - set(channels))
     if missing:
@@ -513,8 +518,11 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
             factor, offset = channel_scaling(name, ship.L, ship.U0)
             lines.append(f"    {_literal(name)}: ({_constant(factor)}, {_constant(offset)}),")
         lines.append("}")
+        lines.append("CHANNEL_DEFAULTS = {" + ", ".join(
+            f"{_literal(name)}: {const}" for name, const in channel_names.items()) + "}")
     else:
-        lines += ["", "CHANNEL_SCALING = {}  # the library uses no recorded channel"]
+        lines += ["", "CHANNEL_SCALING = {}  # the library uses no recorded channel",
+                  "CHANNEL_DEFAULTS = {}"]
     lines += [
         "",
         "# ---------------------------------------------------------------------------------",

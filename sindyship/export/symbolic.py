@@ -19,6 +19,9 @@ ACCELERATIONS = tuple(sympy.Symbol(name, real=True) for name in ("u_dot'", "v_do
 _ACC_TEXT = ("u_dot'", "v_dot'", "r_dot'")
 _ACC_LATEX = (r"\dot{u}'", r"\dot{v}'", r"\dot{r}'")
 _DU, _V, _R = (sympy.Symbol(name, real=True) for name in ("du", "v", "r"))
+#: U/U0 of the ``instantaneous`` speed form, in its own variables (v = v/U): u/U = cos(beta)
+#: and v/U = sin(beta), so U/U0 = (u/U0) / sqrt(1 - (v/U)^2).
+SPEED_RATIO = (1 + _DU) / sympy.sqrt(1 - _V**2)
 #: How the Coriolis terms' total surge speed u' = 1 + du is written.
 _U_TOTAL = sympy.Symbol("u_total", real=True)
 _CORIOLIS_TEXT = {"u_total": "(1 + du)", "v": "v", "r": "r"}
@@ -111,7 +114,11 @@ def model_equations(model: AbkowitzModel, numeric: bool = False) -> dict[str, sy
     The left-hand side is the mass-matrix row (:func:`sindyship.targets.abkowitz_mass_matrix`)
     times the accelerations :data:`ACCELERATIONS`; the right-hand side the force of eq. 15
     (:func:`force_expressions`) plus the Coriolis terms (:func:`coriolis_expressions`).
-    Inertia values are numbers; coefficients are symbols unless ``numeric``.
+    Inertia values are numbers; coefficients are symbols unless ``numeric``.  A library of
+    the ``instantaneous`` speed form reads v, r (and the channels' speeds and rates) over the
+    instantaneous speed U: its forces are multiplied by (U/U0)^2 and its Coriolis terms take
+    (U/U0) v and (U/U0) r, with U/U0 = :data:`SPEED_RATIO` (at least
+    :data:`sindyship.library.SPEED_FLOOR`, as the model's flights take it).
 
     Examples
     --------
@@ -127,6 +134,10 @@ def model_equations(model: AbkowitzModel, numeric: bool = False) -> dict[str, sy
     M = abkowitz_mass_matrix(model.ship)
     forces = force_expressions(model, numeric=numeric)
     extra = coriolis_expressions(model.ship)
+    if model.library.speed == "instantaneous":
+        forces = {dof: SPEED_RATIO**2 * force for dof, force in forces.items()}
+        extra = {dof: term.subs({_V: SPEED_RATIO * _V, _R: SPEED_RATIO * _R},
+                                simultaneous=True) for dof, term in extra.items()}
     out = {}
     for i, dof in enumerate(DOFS):
         lhs = sum((sympy.Float(float(M[i, j])) * ACCELERATIONS[j] for j in range(3)

@@ -61,9 +61,13 @@ def _monomial(powers: Mapping[str, int], names: Mapping[str, str], latex: bool) 
     return " ".join(words)
 
 
-def _equation_pieces(model: AbkowitzModel, dof: str, *, latex: bool, numeric: bool,
-                     precision: int) -> tuple[str, list[tuple[float, str]]]:
-    """Left-hand side text and the signed right-hand-side pieces (sign, body) of eq. 14."""
+def _equation_words(model: AbkowitzModel, dof: str, *, latex: bool, numeric: bool,
+                    precision: int) -> tuple[str, list[str], int]:
+    """Left-hand side text of eq. 14, its right-hand side as signed words (``["-0.1 v",
+    "+ 0.2 r", ...]``) and how many of them, at the end, are Coriolis terms.  A library of the
+    ``instantaneous`` speed form has its hydrodynamic terms bracketed and multiplied by
+    (U/U0)^2, and each Coriolis term in v and r by the power of U/U0 that turns v/U and r L/U
+    back into v/U0 and r L/U0."""
     M = abkowitz_mass_matrix(model.ship)
     i = DOFS.index(dof)
     number = _number_latex if latex else _number_text
@@ -76,7 +80,7 @@ def _equation_pieces(model: AbkowitzModel, dof: str, *, latex: bool, numeric: bo
     lhs = " ".join(f"{s} {b}" for s, b in lhs_parts).removeprefix("+ ")
     if lhs.startswith("- "):
         lhs = "-" + lhs[2:]
-    pieces: list[tuple[float, str]] = []
+    hydrodynamic: list[tuple[float, str]] = []
     for term, value in _active_terms(model, dof):
         monomial = term.latex_term() if latex else term.text
         monomial = "" if monomial == "1" else monomial
@@ -84,30 +88,48 @@ def _equation_pieces(model: AbkowitzModel, dof: str, *, latex: bool, numeric: bo
             monomial = (r"\cdot " if latex else "* ") + monomial
         if numeric:
             body = f"{number(abs(value), precision)} {monomial}".strip()
-            pieces.append((math.copysign(1.0, value), body))
+            hydrodynamic.append((math.copysign(1.0, value), body))
         else:
             name = term.latex(dof) if latex else term.identifier(dof)
-            pieces.append((1.0, f"{name} {monomial}".strip()))
+            hydrodynamic.append((1.0, f"{name} {monomial}".strip()))
+    instantaneous = model.library.speed == "instantaneous"
+    ratio = r"\left(\frac{U}{U_0}\right)" if latex else "(U/U0)"
     names = _CORIOLIS_LATEX if latex else _CORIOLIS_TEXT
+    coriolis_pieces: list[tuple[float, str]] = []
     for powers, value in _coriolis_polynomials(model.ship)[dof].terms():
         value = float(value)
         if value == 0.0:
             continue
         named = dict(zip(("u_total", "v", "r"), powers, strict=True))
-        body = f"{number(abs(value), precision)} {_monomial(named, names, latex)}"
-        pieces.append((math.copysign(1.0, value), body.strip()))
-    return lhs, pieces
+        scale = powers[1] + powers[2] if instantaneous else 0
+        factor = f"{ratio}{_power(scale, latex)} " if scale else ""
+        body = f"{number(abs(value), precision)} {factor}{_monomial(named, names, latex)}"
+        coriolis_pieces.append((math.copysign(1.0, value), body.strip()))
+    words = _join(hydrodynamic) if hydrodynamic else []
+    if instantaneous and words:
+        words[0] = f"{ratio}^{{2}} \\big[ {words[0]}" if latex else f"{ratio}^2 [{words[0]}"
+        words[-1] += r" \big]" if latex else "]"
+    words += _join(coriolis_pieces, first=not words)
+    return lhs, words or ["0"], len(coriolis_pieces)
 
 
-def _join(pieces: list[tuple[float, str]]) -> list[str]:
-    """Signed pieces as words ``["-0.1 v", "+ 0.2 r", ...]`` (the first without a plus)."""
+def _power(exponent: int, latex: bool) -> str:
+    """An exponent as written after a factor (none for 1)."""
+    if exponent == 1:
+        return ""
+    return f"^{{{exponent}}}" if latex else f"^{exponent}"
+
+
+def _join(pieces: list[tuple[float, str]], first: bool = True) -> list[str]:
+    """Signed pieces as words ``["-0.1 v", "+ 0.2 r", ...]`` (the first without a plus
+    unless they continue a sum, ``first=False``)."""
     words = []
     for k, (sign, body) in enumerate(pieces):
-        if k == 0:
+        if k == 0 and first:
             words.append(("-" if sign < 0 else "") + body)
         else:
             words.append(("- " if sign < 0 else "+ ") + body)
-    return words or ["0"]
+    return words
 
 
 def _header(model: AbkowitzModel) -> str:
@@ -117,7 +139,8 @@ def _header(model: AbkowitzModel) -> str:
             f"{model.rudder_signal} rudder")
     if model.library.speed == "instantaneous":
         text += ("; forces over the instantaneous speed U = sqrt(u^2 + v^2): v, r and the "
-                 "channels' speeds and rates over U, every hydrodynamic term times (U/U0)^2")
+                 "channels' speeds and rates over U, every hydrodynamic term times (U/U0)^2, "
+                 "with U/U0 = (1 + du) / sqrt(1 - v^2)")
     return " ".join(text.split())
 
 
@@ -149,11 +172,8 @@ def equations_text(model: AbkowitzModel, precision: int = 4, *, width: int = 100
     precision = _check_precision(precision)
     lines = textwrap.wrap(_header(model), width=width, subsequent_indent="    ")
     for dof in DOFS:
-        lhs, pieces = _equation_pieces(model, dof, latex=False, numeric=True,
-                                       precision=precision)
-        n_coriolis = sum(1 for _, value in _coriolis_polynomials(model.ship)[dof].terms()
-                         if float(value) != 0.0)
-        words = _join(pieces)
+        lhs, words, n_coriolis = _equation_words(model, dof, latex=False, numeric=True,
+                                                 precision=precision)
         first_coriolis = len(words) - n_coriolis if n_coriolis else None
         line = f"{dof}: {lhs} ="
         for k, word in enumerate(words):
@@ -202,9 +222,8 @@ def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool =
         raise SindyshipInputError(f"terms_per_line must be at least 1, not {terms_per_line}.")
     rows = [r"\begin{align}"]
     for n, dof in enumerate(DOFS):
-        lhs, pieces = _equation_pieces(model, dof, latex=True, numeric=numeric,
-                                       precision=precision)
-        words = _join(pieces)
+        lhs, words, _ = _equation_words(model, dof, latex=True, numeric=numeric,
+                                        precision=precision)
         chunks = [words[k:k + terms_per_line] for k in range(0, len(words), terms_per_line)]
         last = n == len(DOFS) - 1
         for k, chunk in enumerate(chunks):
@@ -212,6 +231,10 @@ def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool =
             end = "" if (last and k == len(chunks) - 1) else (
                 r" \\" if k == len(chunks) - 1 else r" \nonumber \\")
             rows.append(start + " ".join(chunk) + end)
+    if model.library.speed == "instantaneous":  # what the variables are over
+        rows[-1] += r" \\"
+        rows.append(r"\frac{U}{U_0} &= \frac{1 + \Delta u'}{\sqrt{1 - v'^2}}, \qquad "
+                    r"v' = \frac{v}{U}, \quad r' = \frac{r L}{U} \nonumber")
     rows.append(r"\end{align}")
     return "\n".join(rows)
 
