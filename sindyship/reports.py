@@ -108,15 +108,17 @@ def _file_or_name(item, default_folder) -> str:
 def _fit_options(diagnosis, ship_argument: str | None, effects, *,
                  optimizer: bool = True) -> str:
     """The ``fit`` options that repeat the diagnosis's own settings with ``effects`` (effect
-    objects) added: the ship, the library unless it is the diagnosis's default (``fit`` then
-    takes its recommended one), the speed form unless it is the ship's, the derivative, the
-    rudder signal, the smoothing and, with ``optimizer``, the optimizer unless it is least
-    squares (``fit`` then takes its recommended ``prior``; ``discover`` takes none)."""
+    objects) added: the ship, how the records were read (``settings["read_options"]``), the
+    library unless it is the diagnosis's default (``fit`` then takes its recommended one), the
+    speed form unless it is the ship's, the derivative, the rudder signal, the smoothing and,
+    with ``optimizer``, the optimizer unless it is least squares (``fit`` then takes its
+    recommended ``prior``; ``discover`` takes none)."""
     from .library import builtin_library_dir
 
     library, settings = diagnosis.library, diagnosis.settings
     base = _file_or_name(library, builtin_library_dir())
-    options = [f"--ship {shlex.quote(ship_argument or _ship_argument(diagnosis.ship))}"]
+    options = [f"--ship {shlex.quote(ship_argument or _ship_argument(diagnosis.ship))}",
+               *settings.get("read_options", ())]  # resampling, checks skipped, time range
     if base != "abkowitz":
         options.append(f"--library {shlex.quote(base)}")
     if library.speed != diagnosis.ship.speed_reference:
@@ -306,6 +308,16 @@ def _held_out_caution(score) -> str:
             "like the held-out ones before keeping it.")
 
 
+def _other_fit(diagnosis) -> str:
+    """A note that the command fits another model than the one the ratios above describe:
+    a diagnosis by least squares names ``fit``'s recommended ``prior`` fit, refined."""
+    if diagnosis.settings.get("optimizer", "ls") != "ls":
+        return ""
+    return (f" (The flights above are least squares on {diagnosis.library.name}; the command "
+            "fits the recommended prior and refines it: judge that model with sindyship "
+            "evaluate on records it was not fitted on.)")
+
+
 def _verdict_lines(diagnosis, ship_argument: str | None = None,
                    effect_arguments: list[str] | None = None) -> list[str]:
     lines = [textwrap.fill(f"Caution: {warning}.", width=96, subsequent_indent="  ")
@@ -327,7 +339,8 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
         given = diagnosis.library.effects if effect_arguments is None else effect_arguments
         options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
         text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... {options}; then "
-                "diagnose again with the same --effects." + _held_out_caution(top))
+                "diagnose again with the same --effects." + _held_out_caution(top)
+                + _other_fit(diagnosis))
     elif verdict == "add-discovered":
         found = " and ".join(f.family for f in diagnosis.discovery.accepted)
         given = list(diagnosis.library.effects if effect_arguments is None else effect_arguments)
@@ -565,31 +578,3 @@ def forces_report(result) -> str:
     for name, stats in rows:
         lines.append(f"{name:<18}" + "".join(f"  {cell(stats[dof])}" for dof in ("X", "Y", "N")))
     return "\n".join(lines)
-
-
-def shape_words(variables, intervals) -> str:
-    """The shape of the position among ``variables`` in words, with the 95 % intervals of its
-    line's bearing and distance when given (empty when there is none).
-
-    Examples
-    --------
-    >>> shape_words(["v", "edge_b000_p020_w05"], {"distance_L": [1.9, 2.1]})
-    'Shape: a smooth step from 0 to 1 across a line at +2.0 L from the origin along the \
-bearing 000 deg, 0.5 L wide (95 % intervals when the manoeuvres are resampled: distance 1.9 \
-to 2.1 L)'
-    """
-    from .terms import describe_shape, parse_shape
-
-    shape = next((parse_shape(v) for v in sorted(variables) if parse_shape(v)), None)
-    if shape is None:
-        return ""
-    ranges = []
-    if "bearing_deg" in intervals:
-        low, high = intervals["bearing_deg"]
-        ranges.append(f"bearing {low:.1f} to {high:.1f} deg")
-    if "distance_L" in intervals:
-        low, high = intervals["distance_L"]
-        ranges.append(f"distance {low:.1f} to {high:.1f} L")
-    return (f"Shape: {describe_shape(shape)}"
-            + (f" (95 % intervals when the manoeuvres are resampled: {', '.join(ranges)})"
-               if ranges else ""))

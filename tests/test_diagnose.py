@@ -287,6 +287,27 @@ def test_the_verdicts_fit_command_repeats_the_diagnosis_settings(kcs_rounds, tmp
     assert f"--effects found/gust.toml,{own} --optimizer prior; then" in text
 
 
+def test_the_verdicts_command_reads_the_records_as_the_diagnosis_did(tmp_path, capsys):
+    """A record that loads only with a check skipped, a time range or a resampling: the
+    verdict's fit command repeats those options (it had dropped them, and the fit it named
+    refused the records)."""
+    from sindyship.cli import main
+
+    runs = fly(MMGModel(load_ship("kcs")), [Manoeuvre("turning-circle", rudder=r, duration=400)
+                                             for r in (35, -35, 20)])
+    paths = []
+    for run in runs:
+        path = tmp_path / f"{run.name}.csv"
+        write_csv(run, path)
+        paths.append(str(path))
+    assert main(["diagnose", *paths, "--ship", "kcs", "--confirm", "0",
+                 "--skip-check", "rudder-sign", "--time-range", "0:390",
+                 "--resample", "2"]) == 0
+    verdict = " ".join(capsys.readouterr().out.split("Verdict:", 1)[1].split())
+    assert "DATA.csv... --ship kcs --resample 2 --skip-check rudder-sign --time-range 0:390 " \
+        in verdict
+
+
 def test_asymmetry_shows_as_even_residuals_over_yaw_rate(kcs_rounds):
     """Port and starboard turns of equal yaw rate leave sway and yaw residuals of one sign."""
     table = kcs_rounds.rounds[0].diagnosis.residuals.binned("yaw_rate")

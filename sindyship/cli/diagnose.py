@@ -151,6 +151,8 @@ def run(args) -> int:
         else:
             result = diagnose(records, ship, library=library, test=test, progress=bar,
                               **options)
+    # the verdict's command reads the records as they were read here
+    result.settings["read_options"] = _read_options(args)
     document = result.to_json()
     text = result.report(ship_argument=args.ship, effect_arguments=split_names(args.effects))
     if iterative is not None:
@@ -167,3 +169,15 @@ def run(args) -> int:
     else:
         print(text)
     return 0
+
+
+def _read_options(args) -> list[str]:
+    """The options that said how the records were read (resampling, checks skipped, the time
+    range), as the verdict's command repeats them."""
+    import shlex
+
+    options = [] if args.resample is None else [f"--resample {args.resample:g}"]
+    options += [f"--skip-check {name}" for name in args.skip_check]
+    if args.time_range != "auto":
+        options.append(f"--time-range {shlex.quote(args.time_range)}")
+    return options

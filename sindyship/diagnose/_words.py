@@ -7,10 +7,35 @@ import json
 from collections.abc import Mapping, Sequence
 
 from ..library import DOFS
-from ..reports import shape_words
-from ..terms import SHAPE_KINDS, parse_shape
+from ..terms import SHAPE_KINDS, describe_shape, parse_shape
 
-__all__ = ["_hint", "_physics", "_title", "_toml_string"]
+__all__ = ["_hint", "_physics", "_title", "_toml_string", "shape_words"]
+
+
+def shape_words(variables, intervals) -> str:
+    """The shape of the position among ``variables`` in words, with the 95 % intervals of its
+    line's bearing and distance when given (empty when there is none).
+
+    Examples
+    --------
+    >>> shape_words(["v", "edge_b000_p020_w05"], {"distance_L": [1.9, 2.1]})
+    'Shape: a smooth step from 0 to 1 across a line at +2.0 L from the origin along the \
+bearing 000 deg, 0.5 L wide (95 % intervals when the manoeuvres are resampled: distance 1.9 \
+to 2.1 L)'
+    """
+    shape = next((parse_shape(v) for v in sorted(variables) if parse_shape(v)), None)
+    if shape is None:
+        return ""
+    ranges = []
+    if "bearing_deg" in intervals:
+        low, high = intervals["bearing_deg"]
+        ranges.append(f"bearing {low:.1f} to {high:.1f} deg")
+    if "distance_L" in intervals:
+        low, high = intervals["distance_L"]
+        ranges.append(f"distance {low:.1f} to {high:.1f} L")
+    return (f"Shape: {describe_shape(shape)}"
+            + (f" (95 % intervals when the manoeuvres are resampled: {', '.join(ranges)})"
+               if ranges else ""))
 
 
 def _toml_string(text: str) -> str:

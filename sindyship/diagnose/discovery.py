@@ -50,12 +50,11 @@ from .._io import clean_json
 from ..identify import design, resolve_library, resolve_rudder_signal
 from ..library import DOFS, Effect, TermLibrary
 from ..optimizers import ForwardSelection, GroupedProblem, one_blas_thread
-from ..reports import shape_words
 from ..ships import Ship
 from ..smoothing import resolve_smoothing, smooth_records
 from ..terms import SHAPE_KINDS
 from ..trajectory import Trajectory
-from ._words import _hint, _physics, _title, _toml_string
+from ._words import _hint, _physics, _title, _toml_string, shape_words
 from .candidates import Family, families, family_columns, unnamed_channels
 from .contest import FlightContest, flight_contest
 from .delays import lomo_errors, search_delay

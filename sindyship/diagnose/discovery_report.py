@@ -3,7 +3,8 @@ what they mean, and what was discovered (or why nothing was)."""
 
 from __future__ import annotations
 
-from ..reports import DOF_NAMES, shape_words, wrapped_text
+from ..reports import DOF_NAMES, wrapped_text
+from ._words import shape_words
 
 __all__ = ["discovery_report"]
 
