@@ -14,8 +14,10 @@ of 0, 0.1 and 0.3 deg on the actual rudder (no ``delta_c``), and counts for each
 - ``missed``: not recognised (such a record is replayed open loop);
 
 both as :func:`sindyship.trials.recognise_zigzag` reads it (in readings of about
-:data:`sindyship.rudder_holds.READINGS_PER_LEG` to a leg when logged finer) and sample by
-sample, as it was read before.
+:data:`sindyship.rudder_holds.READINGS_PER_LEG` to a leg when its holds are fragments) and
+sample by sample.  Then it counts ``false`` recognitions: random rudder steps (10, 20 and
+35 deg, holds of 1.6 to 6.4 L/U0, 64 L/U0 long, seeds 0 to 9, logged at two of the steps,
+with and without 0.1 deg of noise), which are no zig-zag.
 
 Prints the table and saves ``benchmarks/results/recognition.json``.  Run with
 ``python benchmarks/bench_recognition.py`` (about a minute).
@@ -43,6 +45,14 @@ STEPS_KCS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)
 NOISE_DEG = (0.0, 0.1, 0.3)
 LENGTH = 40.0  # L/U0
 SEED = 0
+#: Random rudder steps: amplitudes [deg], seeds, the sampling steps (of STEPS_KCS), noise
+#: [deg], hold times and length [L/U0].
+RANDOM_RUDDER = (10, 20, 35)
+RANDOM_SEEDS = range(10)
+RANDOM_STEPS = (0.1, 0.5)
+RANDOM_NOISE_DEG = (0.0, 0.1)
+RANDOM_HOLD = (1.6, 6.4)
+RANDOM_LENGTH = 64.0
 
 
 def sample_by_sample(record: Trajectory):
@@ -58,6 +68,28 @@ def verdict(found, amplitude: float, check: float, latest: float) -> str:
     right = (found.amplitude_deg == amplitude and found.check_deg == check
              and found.first_sign == 1 and found.start_time <= latest)
     return "right" if right else "wrong"
+
+
+def random_rudder(ship, rng) -> dict:
+    """How many random-rudder records are recognised as a zig-zag (none is one)."""
+    unit = ship.L / ship.U0
+    kcs_time = (lambda s: s.L / s.U0)(load_ship("kcs"))
+    counts = {"records": 0, "read": 0, "by_sample": 0}
+    for seed in RANDOM_SEEDS:
+        for step in RANDOM_STEPS:
+            plan = [Manoeuvre("random", rudder=amplitude, seed=seed,
+                              hold=(RANDOM_HOLD[0] * unit, RANDOM_HOLD[1] * unit),
+                              duration=RANDOM_LENGTH * unit, dt=step * unit / kcs_time)
+                    for amplitude in RANDOM_RUDDER]
+            for flown in fly(MMGModel(ship), plan):
+                actual = flown.data.drop(columns=["delta_c"])
+                for noise in RANDOM_NOISE_DEG:
+                    record = Trajectory(actual.assign(delta=actual["delta"] + np.radians(noise)
+                                                      * rng.standard_normal(len(actual))), "r")
+                    counts["records"] += 1
+                    counts["read"] += recognise_zigzag(record) is not None
+                    counts["by_sample"] += sample_by_sample(record) is not None
+    return counts
 
 
 def run() -> dict:
@@ -88,9 +120,12 @@ def run() -> dict:
                     counts["by_sample"][by_sample] += 1
                     cases.append({"zigzag": f"{amplitude}/{check}", "step_s": step,
                                   "noise_deg": noise, "read": read, "by_sample": by_sample})
-        out["ships"][name] = {"steps_s": steps, "counts": counts, "cases": cases}
-        print(f"{name}: read {counts['read']}, sample by sample {counts['by_sample']}",
-              flush=True)
+        false = random_rudder(ship, np.random.default_rng(SEED + 1))
+        out["ships"][name] = {"steps_s": steps, "counts": counts, "cases": cases,
+                              "random_rudder": false}
+        print(f"{name}: read {counts['read']}, sample by sample {counts['by_sample']}; random "
+              f"rudder recognised as a zig-zag: {false['read']} of {false['records']} read, "
+              f"{false['by_sample']} sample by sample", flush=True)
     out["seconds"] = time.perf_counter() - start
     return out
 

@@ -48,7 +48,17 @@ from .trials import (  # noqa: F401  (detect_zigzag and recognised_zigzag are us
 
 
 def command_for(record: Trajectory):
-    """The rudder command that re-flies a record (see the module docstring)."""
+    """The rudder command that re-flies a record (see the module docstring): a zig-zag its
+    flight start recognised (on the whole record, :func:`flight_start`) as recognised there."""
+    saved = record.meta.get("flight_start") or {}
+    zigzag = saved.get("zigzag")
+    if zigzag is not None and abs(saved["time"] - float(record.t[0])) <= 1e-9:
+        angles = (math.radians(zigzag["amplitude_deg"]), math.radians(zigzag["check_deg"]),
+                  int(zigzag["first_sign"]))
+        if zigzag["levels_deg"] is None:
+            return ZigZagCommand(*angles)
+        return RecordedZigZag(*angles, levels=tuple(math.radians(level)
+                                                    for level in zigzag["levels_deg"]))
     strict = detect_zigzag(record)
     if strict is not None:
         rudder, check, first = strict
@@ -270,8 +280,7 @@ def flown_part(record: Trajectory) -> Trajectory:
 def _part_from(record: Trajectory, start) -> Trajectory:
     part = record if start.time <= record.t[0] + 1e-9 else \
         trim(record, (start.time, float(record.t[-1])))
-    meta = {**part.meta, "flight_start": {"time": start.time, "kind": start.kind,
-                                           "reason": start.reason}}
+    meta = {**part.meta, "flight_start": start.as_meta()}
     return Trajectory(part.data, name=part.name, meta=meta)
 
 
@@ -288,9 +297,13 @@ def flown_as(record: Trajectory) -> dict:
         ``start_reason``.
     """
     start = flight_start(record)
-    zigzag = recognised_zigzag(_part_from(record, start))
+    zigzag = start.zigzag
+    if zigzag is None and start.kind != "zigzag":
+        found = recognised_zigzag(_part_from(record, start))
+        zigzag = None if found is None else {"amplitude_deg": found[0], "check_deg": found[1]}
     if zigzag is not None:
-        out = {"flown_as": "zigzag", "amplitude_deg": zigzag[0], "check_deg": zigzag[1]}
+        out = {"flown_as": "zigzag", "amplitude_deg": zigzag["amplitude_deg"],
+               "check_deg": zigzag["check_deg"]}
     else:
         out = {"flown_as": "replay-commanded" if record.has("delta_c") else "replay-actual"}
     out.update(start_s=start.time, start_reason=start.reason)

@@ -217,8 +217,7 @@ def read_record(path: str | os.PathLike, *, name: str | None = None, ship=None,
             cut = (begin, window.stop, reason)
             record = trim(record, (begin, window.stop))
         record = Trajectory(record.data, name=record.name, meta={
-            **record.meta, "flight_start": {"time": start.time, "kind": start.kind,
-                                            "reason": start.reason}})
+            **record.meta, "flight_start": start.as_meta()})
     elif time_range not in ("auto", "all"):
         record = trim(record, time_range)
         if record.n_samples < 2:

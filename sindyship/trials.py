@@ -28,7 +28,10 @@ Thresholds (module constants) and why:
   rounded to the nearest multiple of 5 deg when one lies within ``ROUNDING = 1.5`` deg,
   else to 0.1 deg.  The heading change (from the execute) at the rudder reversals must
   agree within ``CHECK_SPREAD = 3`` deg plus the largest yaw rate times the sampling step
-  (a reversal falls between two samples).  An actual rudder logged alone whose holds are
+  (a reversal falls between two samples), and each must lie at least ``MIN_CHECK = 1`` deg
+  toward the side the leg's rudder turns the ship (a rudder reversed on the other side, or
+  at the execute heading, as random steps of a rudder can be, is no zig-zag's).  An actual
+  rudder logged alone whose holds are
   fragments (more than ``FRAGMENTED_HOLDS = 4`` to a leg) is read in means of consecutive
   samples first, about ``READINGS_PER_LEG = 80`` to a leg
   (:func:`sindyship.rudder_holds.samples_per_reading`): a full-scale servo approaches its
@@ -99,6 +102,8 @@ TURN_RUDDER = 5.0  # deg
 TURN_SHARE = 0.25
 #: A record whose first sample turns faster than this share of its fastest starts in a turn.
 MID_TURN = 0.25
+#: Least heading change [deg] toward a leg's side at which a zig-zag's rudder reverses.
+MIN_CHECK = 1.0
 
 
 class Window(NamedTuple):
@@ -389,6 +394,13 @@ def _recognise_rudder(t, psi, r, command, commanded: bool, switch_t, read: bool 
         return None, (), (f"the heading change at the {len(reversals)} rudder reversals spreads "
                       f"over {np.ptp(at):.1f} deg (more than {spread:.3g}): no common "
                       "check angle"), ()
+    # the rudder reverses as the heading passes the check angle on the side the leg's rudder
+    # turns it to: a reversal on the other side, or at the execute heading, is no zig-zag's
+    toward = psi[reversals] * np.sign([h[2] for h in chain[:-1]])
+    if np.any(toward < MIN_CHECK):
+        return None, (), (f"the heading at a rudder reversal is {float(np.min(toward)):.1f} deg "
+                          "toward the side the leg's rudder turns it, less than "
+                          f"{MIN_CHECK:g}: the rudder does not reverse at a check angle"), ()
     levels = [abs(h[2]) for h in chain]
     check = _roundest(float(np.median(before)), float(np.median(at)))
     rudder = _roundest(float(np.mean(levels)), float(np.mean(levels)))
@@ -486,11 +498,37 @@ class FlightStart:
         its first row.
     reason : str
         One sentence for reports.
+    zigzag : dict or None
+        A zig-zag's ``amplitude_deg``, ``check_deg``, ``first_sign`` and the angles its legs
+        held, ``levels_deg`` (None for a zig-zag from its first row with exact plateaus): what
+        the flight flies, so that the part from the execute is never recognised again.
     """
 
     time: float
     kind: str
     reason: str
+    zigzag: dict | None = None
+
+    def as_meta(self) -> dict:
+        """The start as a record's ``meta["flight_start"]`` keeps it."""
+        return {"time": self.time, "kind": self.kind, "reason": self.reason,
+                "zigzag": self.zigzag}
+
+
+def _zigzag_to_fly(record: Trajectory) -> tuple[float, dict] | None:
+    """The execute [s] and what a flight flies of a zig-zag (:attr:`FlightStart.zigzag`):
+    the strict recognition first, then the tolerant one (:func:`recognised_zigzag`)."""
+    strict = detect_zigzag(record)
+    if strict is not None:
+        rudder, check, sign = strict
+        return float(record.t[0]), {"amplitude_deg": rudder, "check_deg": check,
+                                    "first_sign": sign, "levels_deg": None}
+    found, held, _, _ = _recognise(record)
+    if found is None:
+        return None
+    rudder, check, sign, start = found
+    return float(start), {"amplitude_deg": rudder, "check_deg": check, "first_sign": sign,
+                          "levels_deg": [abs(level) for level in held]}
 
 
 def flight_start(record: Trajectory) -> FlightStart:
@@ -515,12 +553,14 @@ def flight_start(record: Trajectory) -> FlightStart:
     saved = record.meta.get("flight_start")
     t = record.t
     if saved is not None and t[0] - 1e-9 <= saved["time"] <= t[-1]:
-        return FlightStart(float(saved["time"]), saved["kind"], saved["reason"])
-    zigzag = recognised_zigzag(record)
+        return FlightStart(float(saved["time"]), saved["kind"], saved["reason"],
+                           saved.get("zigzag"))
+    zigzag = _zigzag_to_fly(record)
     if zigzag is not None:
-        rudder, check, _, start = zigzag
-        return FlightStart(float(start), "zigzag", f"a {rudder:g}/{check:g} zig-zag, flown "
-                           f"closed loop from its execute at t = {start:.6g} s")
+        start, flown = zigzag
+        return FlightStart(start, "zigzag", f"a {flown['amplitude_deg']:g}/"
+                           f"{flown['check_deg']:g} zig-zag, flown closed loop from its execute "
+                           f"at t = {start:.6g} s", flown)
     turn = recognise_turn(record)
     if turn is not None:
         return FlightStart(turn.start_time, "turn", f"a turn with {turn.rudder_deg:g} deg "

@@ -23,6 +23,7 @@ from sindyship.simulation import RudderCommand, simulate_batch
 from sindyship.trajectory import Trajectory
 from sindyship.trials import (
     explain_zigzag,
+    flight_start,
     recognise_zigzag,
     trim,
     underway_window,
@@ -541,6 +542,43 @@ def test_a_slow_servo_logged_fast_is_read_in_means_of_samples(protocol_runs, kcs
     for name, error in flown.items():
         assert error["flown_as"] == "zigzag"
         assert error["mean_distance_L"] < with_command[name]["mean_distance_L"] + 0.15, name
+
+
+@pytest.mark.parametrize(("seed", "hold", "duration", "dt"),
+                         [(10, (5.59, 27.94), 1117.6, 0.1), (11, (30.0, 120.0), 1200.0, 0.2)])
+def test_random_rudder_steps_are_no_zigzag(kcs, seed, hold, duration, dt):
+    """Random rudder steps logged with the actual rudder alone can hold three angles near one
+    size that alternate in sign; read in means of samples they had passed for a 5/40 or a
+    3.4/5 zig-zag and were flown closed loop (8 L off where the replay flies 0.7 L).  A
+    zig-zag's rudder reverses as the heading passes the check angle on the side the leg's
+    rudder turns it: theirs reversed on the other side."""
+    from sindyship.flights import flown_as
+
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("random", rudder=10, seed=seed, duration=duration,
+                                           dt=dt, hold=hold)])
+    record = Trajectory(run.data.drop(columns=["delta_c"]), "random")
+    zigzag, reason = explain_zigzag(record)
+    assert zigzag is None and "toward the side the leg's rudder turns it" in reason
+    assert flown_as(record)["flown_as"] == "replay-actual"
+
+
+def test_a_zigzag_is_flown_as_its_whole_record_recognised_it(kcs):
+    """The flight start recognises the zig-zag on the whole record and the flight flies that
+    recognition (it recognised the part from the execute again, which could differ)."""
+    from sindyship.flights import command_for, flown_as, flown_part
+    from sindyship.simulation import RecordedZigZag
+
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=800,
+                                           dt=0.1, approach=150.0, seed=3)])
+    record = Trajectory(run.data.drop(columns=["delta_c"]), "zz20_20")
+    start = flight_start(record)
+    assert start.kind == "zigzag" and 140.0 < start.time < 160.0
+    assert start.zigzag["amplitude_deg"] == 20.0 and start.zigzag["check_deg"] == 20.0
+    part = flown_part(record)
+    command = command_for(part)
+    assert isinstance(command, RecordedZigZag)
+    assert part.meta["flight_start"]["zigzag"] == start.zigzag
+    assert flown_as(record)["flown_as"] == "zigzag"
 
 
 def test_a_record_cut_after_its_execute_holds_no_turn(protocol_runs):
