@@ -311,7 +311,9 @@ def read_captive_csv(path: str | os.PathLike[str]) -> pd.DataFrame:
     (:mod:`sindyship.measurements`): ``r [deg/s]``, ``delta [deg]``, ``u [kn]``,
     ``n [rpm]``, ``X [kN]``, ``N [kNm]``.  The optional columns ``n``, and ``x``, ``y``
     [m], ``psi`` (where each condition is held, for a model whose terms depend on the
-    position or the heading) are kept; other columns are ignored.
+    position or the heading) are kept, and so is any other column of numbers, as a channel
+    a model's terms may read (``depth`` of a shallow-water test, heel ``phi``, ``wind_speed``);
+    columns holding text are ignored.
 
     Returns
     -------
@@ -344,6 +346,9 @@ def read_captive_csv(path: str | os.PathLike[str]) -> pd.DataFrame:
         )
     out = {}
     optional = [name for name in OPTIONAL_CAPTIVE_COLUMNS if name in by_name]
+    known = {*CAPTIVE_COLUMNS, *OPTIONAL_CAPTIVE_COLUMNS, *FORCE_COLUMNS}
+    optional += [c.name for position, c in enumerate(columns) if c.name not in known
+                 and pd.to_numeric(raw.iloc[:, position], errors="coerce").notna().all()]
     for name in [*CAPTIVE_COLUMNS, *optional, *FORCE_COLUMNS]:
         position, column = by_name[name]
         if name in _FORCE_QUANTITY and column.unit is not None:

@@ -48,6 +48,7 @@ from .errors import SindyshipInputError
 from .identify import ENVELOPE_VARIABLES, training_envelope
 from .model import AbkowitzModel, coriolis_of_values
 from .ships import Ship
+from .terms import DERIVED_SOURCES
 from .trajectory import Trajectory
 
 __all__ = [
@@ -109,6 +110,18 @@ def model_captive_forces(model: AbkowitzModel, captive: pd.DataFrame) -> pd.Data
     if missing:
         raise SindyshipInputError(
             f"the captive table lacks the column '{missing[0]}'; give u, v, r and delta."
+        )
+    needed = set(model.recorded_channels)
+    if "psi" in model.library.variables or set(DERIVED_SOURCES) & model.library.variables:
+        needed.add("psi")  # the heading, or the wind's direction relative to the bow
+    absent = sorted(needed - set(captive.columns))
+    if absent:
+        names = ", ".join(absent)
+        raise SindyshipInputError(
+            f"the model's terms read {names}, which the captive table does not give; add "
+            f"{'a column' if len(absent) == 1 else 'columns'} {names} with the value each "
+            "condition was held at (in a towing tank's still air, wind_speed 0), or compare a "
+            "model without that effect."
         )
     if {"x", "y"} & model.library.sources - set(captive.columns):
         raise SindyshipInputError(
@@ -207,6 +220,28 @@ def _check_speed_scale(captive: pd.DataFrame, ship) -> None:
         )
 
 
+#: Measured captive forces whose size (RMS) differs from the model's predicted ones by more
+#: than this factor are in another unit: a kN figure read as newtons is 1000 times too small,
+#: while a fitted model's forces come within some tens of the measured ones even where their
+#: shapes disagree (least squares fitted on gusty records: 30 times in Y).
+FORCE_SCALE_FACTOR = 300.0
+
+
+def _check_force_scale(captive: pd.DataFrame, predicted: pd.DataFrame) -> None:
+    """Refuse measured forces :data:`FORCE_SCALE_FACTOR` times or more larger or smaller than
+    the model predicts: a unit the header does not say (forces in kN under a bare ``X``)."""
+    for dof in FORCE_COLUMNS:
+        measured = float(np.sqrt(np.mean(np.square(captive[dof].to_numpy(float)))))
+        model = float(np.sqrt(np.mean(np.square(predicted[dof].to_numpy(float)))))
+        if measured > 0.0 and model > 0.0 and not (
+                1.0 / FORCE_SCALE_FACTOR < measured / model < FORCE_SCALE_FACTOR):
+            raise SindyshipInputError(
+                f"the measured {dof} is {measured / model:.3g} times the size the model "
+                "predicts (RMS), so the forces are likely in another unit than the header "
+                f"says; give it in the header, e.g. '{dof} [{'kNm' if dof == 'N' else 'kN'}]'."
+            )
+
+
 def compare_forces(model: AbkowitzModel, captive: pd.DataFrame,
                    training_records: Sequence[Trajectory] | None = None) -> ForceComparison:
     """Compare a model's predicted captive forces with measured ones.
@@ -242,6 +277,7 @@ def compare_forces(model: AbkowitzModel, captive: pd.DataFrame,
     ship = model.ship
     _check_speed_scale(captive, ship)
     predicted = model_captive_forces(model, captive)
+    _check_force_scale(captive, predicted)
     values = _nondimensional(captive, ship)
     envelope = (training_envelope(training_records, ship) if training_records
                 else model.info.get("envelope"))

@@ -62,6 +62,10 @@ UNITS: dict[str, tuple[str, float]] = {
     "N*m": ("moment", 1.0),
     "kNm": ("moment", 1000.0),
     "kN*m": ("moment", 1000.0),
+    "kN.m": ("moment", 1000.0),
+    "MNm": ("moment", 1.0e6),
+    "MN*m": ("moment", 1.0e6),
+    "N.m": ("moment", 1.0),
 }
 
 _SI_UNIT = {

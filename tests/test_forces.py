@@ -158,3 +158,51 @@ def test_the_coriolis_part_of_captive_forces_does_not_depend_on_the_speed_form(k
         np.testing.assert_allclose(forces["instantaneous"][dof], forces["design"][dof],
                                    rtol=1e-10, atol=1e-6 * largest)
     assert float(np.abs(forces["design"]["N"]).max()) > 0  # the Munk moment is there
+
+
+def test_a_wind_model_is_compared_with_captive_tests_given_the_wind_columns(kcs, tmp_path):
+    """A model with the wind's terms reads the true wind and the heading: a captive table
+    without them is refused naming the columns (the reader dropped them, and the message
+    asked for a column the file had), and with them (still air: wind_speed 0) it compares;
+    a column of text is ignored."""
+    from sindyship.captive import read_captive_csv, write_captive_csv
+    from sindyship.errors import SindyshipInputError
+    from sindyship.library import load_effect
+
+    reference = AbkowitzModel(kcs, load_library("abkowitz"), taylor_reference(kcs))
+    library = reference.library.extended(load_effect("wind"))
+    coefficients = {dof: dict(terms) for dof, terms in reference.coefficients.items()}
+    for dof, terms in load_effect("wind").terms.items():
+        for term in terms:
+            coefficients[dof][term.text] = 1e-4
+    windy = AbkowitzModel(kcs, library, coefficients)
+    captive = captive_tests(kcs, "all", points=5)
+    with pytest.raises(SindyshipInputError, match=r"^the model's terms read psi, wind_dir, "
+                       r"wind_speed, which the captive table does not give; add columns"):
+        compare_forces(windy, captive)
+    path = tmp_path / "tank.csv"
+    write_captive_csv(captive, path)
+    text = path.read_text().splitlines()
+    rows = [f"{line},wind_speed [m/s],wind_dir [deg],psi,note" if k == 0
+            else f"{line},0,0,0,run {k}" for k, line in enumerate(text)]
+    path.write_text("\n".join(rows) + "\n")
+    read = read_captive_csv(path)
+    assert {"wind_speed", "wind_dir", "psi"} <= set(read.columns) and "note" not in read.columns
+    result = compare_forces(windy, read)
+    still = compare_forces(reference, read)
+    # in still air the apparent wind is the carriage speed: the wind terms add a force
+    assert result.overall["X"]["relative_rms"] != still.overall["X"]["relative_rms"]
+
+
+def test_forces_in_kilonewtons_under_bare_headers_are_refused(kcs):
+    """Forces a thousand times smaller than the model predicts are in a unit the header does
+    not say (they were read as newtons: relative errors near 1000 and a correlation of 0.99)."""
+    from sindyship.errors import SindyshipInputError
+
+    reference = AbkowitzModel(kcs, load_library("abkowitz"), taylor_reference(kcs))
+    captive = captive_tests(kcs, "all", points=5)
+    compare_forces(reference, captive)
+    in_kilo = captive.assign(X=captive["X"] / 1e3, Y=captive["Y"] / 1e3, N=captive["N"] / 1e3)
+    with pytest.raises(SindyshipInputError, match=r"^the measured X is 0\.00\d+ times the size "
+                       r"the model predicts \(RMS\).*'X \[kN\]'"):
+        compare_forces(reference, in_kilo)
