@@ -11,6 +11,7 @@ import shlex
 import textwrap
 from pathlib import Path
 
+from ._diagnosis_thresholds import MEANINGFUL_SHARE
 from .errors import SindyshipInputError
 from .library import DOFS
 
@@ -289,9 +290,12 @@ _REMEDIES = (
 
 
 def _closer(score) -> str:
-    """How much closer an effect's confirmation flies the training records, as a factor."""
+    """What re-flying the training records with an effect does: how much closer it flies
+    them, as a factor, or that it cures a divergence (the others no farther off)."""
     ratio = score.confirmation.ratio("training")
-    return f"{1.0 / ratio:.2g} times" if ratio > 0 else "much"
+    if not 0.0 < ratio < 1.0:
+        return "cures a divergence of the training flights without flying the others farther"
+    return f"brings them {1.0 / ratio:.2g} times closer"
 
 
 def _held_out_caution(score) -> str:
@@ -335,7 +339,7 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
         top = diagnosis.top
         why = "" if top.meaningful else (
             f" (its share of the force error is below the threshold, but re-flying the training "
-            f"records with it brings them {_closer(top)} closer)")
+            f"records with it {_closer(top)})")
         given = diagnosis.library.effects if effect_arguments is None else effect_arguments
         options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
         text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... {options}; then "
@@ -345,6 +349,8 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
         found = " and ".join(f.family for f in diagnosis.discovery.accepted)
         given = list(diagnosis.library.effects if effect_arguments is None else effect_arguments)
         options = _fit_options(diagnosis, ship_argument, given, optimizer=False)
+        if diagnosis.threshold != MEANINGFUL_SHARE:  # the search the diagnosis ran
+            options += f" --threshold {diagnosis.threshold:g}"
         effects = ",".join(e if isinstance(e, str) else e.name for e in [*given, "effect.toml"])
         text = (f"Verdict: {diagnosis.no_catalogued_effect}, but {found} was discovered "
                 f"beyond the catalogue (above): sindyship discover DATA.csv... {options} "

@@ -264,7 +264,7 @@ def test_the_verdicts_fit_command_repeats_the_diagnosis_settings(kcs_rounds, tmp
     from sindyship.library import load_effect
 
     first = kcs_rounds.rounds[0].diagnosis
-    assert first.verdict == "add-effect"
+    assert first.verdict == "add-effect" and first.to_json()["effect_to_add"] == "asymmetry"
     assert ("sindyship fit DATA.csv... --ship kcs --effects asymmetry; then"
             in " ".join(first.report().split()))
     own = tmp_path / "lean.toml"
@@ -535,8 +535,11 @@ def test_a_divergence_cured_near_the_end_does_not_confirm_flights_flown_farther_
     flights cover, come out clearly farther off (more than 1 / CONFIRMING_RATIO): a spiral
     cured 67 s before the end of 3200 s had confirmed cross-flow drag that flew every other
     training flight 1.29 times as far off."""
+    from types import SimpleNamespace
+
     from sindyship._diagnosis_thresholds import CONFIRMING_RATIO
     from sindyship.diagnose import BeforeAfter
+    from sindyship.diagnose.diagnosis import flight_confirmed
     from sindyship.evaluation import compare_flights, error_summary
 
     (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=35, duration=600)])
@@ -553,11 +556,15 @@ def test_a_divergence_cured_near_the_end_does_not_confirm_flights_flown_farther_
                 "common": compare_flights(before, after, run, kcs.L)}
 
     cured = row("cured", flight(0.1, diverged=580.0), flight(0.1))
-    for factor, confirmed in ((1.05, True), (1.3, False)):
+    for factor, confirmed, named in ((0.95, True, True), (1.05, True, False),
+                                     (1.3, False, False)):
         other = row("other", flight(0.1), flight(0.1 * factor))
         change = BeforeAfter("abkowitz", "abkowitz+x", ("x",), [cured, other])
         assert (change.ratio("training") <= 1.0 / CONFIRMING_RATIO) is confirmed
         assert change.confirmed is confirmed, factor
+        # named by its flights alone (not meaningful by its forces) only when the others
+        # fly no farther off: a verdict had read "brings them 0.95 times closer"
+        assert flight_confirmed(SimpleNamespace(confirmation=change)) is named, factor
 
 
 def test_held_out_flights_that_contradict_a_confirmed_effect_are_said_so(kcs):

@@ -436,3 +436,10 @@ def test_an_effect_only_the_flights_favour_yields_to_a_discovery(symmetric):
     assert ("sindyship discover DATA.csv... --ship SHIP.toml --library abkowitz-noconst "
             "--effects crossflow --out effect.toml") in verdict
     assert verdict.endswith("--effects crossflow,effect.toml.")
+    assert other.to_json()["effect_to_add"] is None
+    # a threshold of its own is the search the diagnosis ran: the command repeats it
+    import copy
+
+    stricter = copy.copy(other)
+    stricter.threshold = 0.1
+    assert "--threshold 0.1 --out effect.toml" in " ".join(stricter.report().split())

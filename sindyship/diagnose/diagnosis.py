@@ -188,7 +188,8 @@ class Diagnosis:
             return None
         flown = [score for score in self.ranking if not score.meaningful
                  and flight_confirmed(score)]
-        return min(flown, key=lambda score: score.confirmation.ratio("training"), default=None)
+        return min(flown, key=lambda score: _finite_or_inf(score.confirmation.ratio("training")),
+                   default=None)
 
     @property
     def no_catalogued_effect(self) -> str:
@@ -262,6 +263,7 @@ class Diagnosis:
                 "threshold": self.threshold,
                 "complete": self.complete,
                 "verdict": self.verdict,
+                "effect_to_add": None if self.top is None else self.top.effect.name,
                 "diverged": self.diverged,
                 "stability": None if self.stability is None else self.stability.to_json(),
                 "collinear_terms": self.collinear,
@@ -284,16 +286,23 @@ class Diagnosis:
 
     # ------------------------------------------------------------------------------- figures
 
+def _finite_or_inf(value: float) -> float:
+    """A ratio to rank by: one without a window to compare (NaN) ranks last."""
+    return value if math.isfinite(value) else math.inf
+
+
 def flight_confirmed(score: EffectScore) -> bool:
     """Whether re-flying the training records with an effect brings them closer by a clear
     margin (geometric mean of after over before at most :data:`FLIGHT_OVERRIDE_RATIO`, no new
-    divergence), whatever its share of the force error."""
+    divergence; or a divergence cured and the flights no farther off), whatever its share of
+    the force error."""
     confirmation = score.confirmation
     if confirmation is None or confirmation.confirmed is not True:
         return False
-    return bool(confirmation.ratio("training") <= FLIGHT_OVERRIDE_RATIO
-                or confirmation.divergences("training")[1]
-                < confirmation.divergences("training")[0])
+    ratio = confirmation.ratio("training")
+    before, after = confirmation.divergences("training")
+    return bool(ratio <= FLIGHT_OVERRIDE_RATIO
+                or (after < before and not ratio > 1.0))  # cured, the others no farther off
 
 
 def _stability(model: AbkowitzModel) -> Stability | None:

@@ -19,9 +19,11 @@ ACCELERATIONS = tuple(sympy.Symbol(name, real=True) for name in ("u_dot'", "v_do
 _ACC_TEXT = ("u_dot'", "v_dot'", "r_dot'")
 _ACC_LATEX = (r"\dot{u}'", r"\dot{v}'", r"\dot{r}'")
 _DU, _V, _R = (sympy.Symbol(name, real=True) for name in ("du", "v", "r"))
-#: U/U0 of the ``instantaneous`` speed form, in its own variables (v = v/U): u/U = cos(beta)
-#: and v/U = sin(beta), so U/U0 = (u/U0) / sqrt(1 - (v/U)^2).
-SPEED_RATIO = (1 + _DU) / sympy.sqrt(1 - _V**2)
+#: U/U0 of the ``instantaneous`` speed form, in its own variables (v = v/U): |u|/U =
+#: |cos(beta)| and v/U = sin(beta), so U/U0 = |u/U0| / sqrt(1 - (v/U)^2), ahead or astern; the
+#: model holds U/U0 at :data:`sindyship.library.SPEED_FLOOR` or more, where its v/U is no
+#: longer sin(beta), so the expression holds from that speed up.
+SPEED_RATIO = sympy.Abs(1 + _DU) / sympy.sqrt(1 - _V**2)
 #: How the Coriolis terms' total surge speed u' = 1 + du is written.
 _U_TOTAL = sympy.Symbol("u_total", real=True)
 _CORIOLIS_TEXT = {"u_total": "(1 + du)", "v": "v", "r": "r"}
@@ -117,8 +119,8 @@ def model_equations(model: AbkowitzModel, numeric: bool = False) -> dict[str, sy
     Inertia values are numbers; coefficients are symbols unless ``numeric``.  A library of
     the ``instantaneous`` speed form reads v, r (and the channels' speeds and rates) over the
     instantaneous speed U: its forces are multiplied by (U/U0)^2 and its Coriolis terms take
-    (U/U0) v and (U/U0) r, with U/U0 = :data:`SPEED_RATIO` (at least
-    :data:`sindyship.library.SPEED_FLOOR`, as the model's flights take it).
+    (U/U0) v and (U/U0) r, with U/U0 = :data:`SPEED_RATIO` (exact while the ship makes
+    :data:`sindyship.library.SPEED_FLOOR` U0 or more, where the model's flights floor it).
 
     Examples
     --------

@@ -12,6 +12,7 @@ import numpy as np
 from .. import __version__
 from ..errors import SindyshipInputError
 from ..targets import DOFS, abkowitz_mass_matrix
+from ..terms import SPEED_FLOOR
 from .symbolic import (
     _ACC_LATEX,
     _ACC_TEXT,
@@ -107,8 +108,8 @@ def _equation_words(model: AbkowitzModel, dof: str, *, latex: bool, numeric: boo
         coriolis_pieces.append((math.copysign(1.0, value), body.strip()))
     words = _join(hydrodynamic) if hydrodynamic else []
     if instantaneous and words:
-        words[0] = f"{ratio}^{{2}} \\big[ {words[0]}" if latex else f"{ratio}^2 [{words[0]}"
-        words[-1] += r" \big]" if latex else "]"
+        words[0] = f"{ratio}^{{2}} [ {words[0]}" if latex else f"{ratio}^2 [{words[0]}"
+        words[-1] += " ]" if latex else "]"
     words += _join(coriolis_pieces, first=not words)
     return lhs, words or ["0"], len(coriolis_pieces)
 
@@ -140,7 +141,7 @@ def _header(model: AbkowitzModel) -> str:
     if model.library.speed == "instantaneous":
         text += ("; forces over the instantaneous speed U = sqrt(u^2 + v^2): v, r and the "
                  "channels' speeds and rates over U, every hydrodynamic term times (U/U0)^2, "
-                 "with U/U0 = (1 + du) / sqrt(1 - v^2)")
+                 f"with U/U0 = |1 + du| / sqrt(1 - v^2) (from {SPEED_FLOOR:g} U0 up)")
     return " ".join(text.split())
 
 
@@ -233,8 +234,10 @@ def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool =
             rows.append(start + " ".join(chunk) + end)
     if model.library.speed == "instantaneous":  # what the variables are over
         rows[-1] += r" \\"
-        rows.append(r"\frac{U}{U_0} &= \frac{1 + \Delta u'}{\sqrt{1 - v'^2}}, \qquad "
-                    r"v' = \frac{v}{U}, \quad r' = \frac{r L}{U} \nonumber")
+        rows.append(r"\frac{U}{U_0} &= \frac{|1 + \Delta u'|}{\sqrt{1 - v'^2}}, \qquad "
+                    r"v' = \frac{v}{U}, \quad r' = \frac{r L}{U} \quad \text{(the "
+                    r"channels' speeds and rates over } U \text{ too; from } "
+                    f"{SPEED_FLOOR:g}" r"\,U_0 \text{ up)} \nonumber")
     rows.append(r"\end{align}")
     return "\n".join(rows)
 

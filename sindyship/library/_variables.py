@@ -11,6 +11,7 @@ from sindyship.errors import SindyshipInputError
 from sindyship.terms import (
     CORE_VARIABLES,
     DERIVED_SOURCES,
+    SPEED_FLOOR,
     Term,
     describe_variable,
     is_shape_name,
@@ -38,8 +39,6 @@ SPEED_FORMS = ("design", "instantaneous")
 #: The key of the speed factor (U/U0)^2 in a dictionary of variables of the ``instantaneous``
 #: form (no variable can be named so).
 SPEED_FACTOR = "_U2"
-#: The least speed U/U0 of the ``instantaneous`` form: a ship at rest has no U to divide by.
-SPEED_FLOOR = 0.05
 
 
 def speed_ratio(u, v, U0: float):

@@ -129,6 +129,10 @@ VARIABLES: Mapping[str, Variable] = MappingProxyType(
     }
 )
 
+#: The least speed U/U0 of the ``instantaneous`` speed form (variables over the speed U): a
+#: ship at rest has no U to divide by.
+SPEED_FLOOR = 0.05
+
 #: Variables made from the ship's motion and recorded channels, with the channels they need:
 #: in a flight they follow the flown motion, never the recorded one.
 DERIVED_SOURCES: Mapping[str, tuple[str, ...]] = MappingProxyType({
