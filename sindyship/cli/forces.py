@@ -44,10 +44,10 @@ def run(args) -> int:
     from .._io import check_output, output_folder, save_figure, write_text_atomic
     from ..captive import read_captive_csv
     from ..forces import compare_forces, plot_captive_forces
-    from ..measurements import read_csv
     from ..model import AbkowitzModel
     from ..reports import forces_report
     from ._common import check_inputs, load_cli_ship, ship_file
+    from ._records import read_records
 
     inputs = [args.model, args.captive, *(args.training or []), *ship_file(args.ship)]
     check_inputs(inputs)  # a FIFO or a device never reaches a reader
@@ -58,7 +58,9 @@ def run(args) -> int:
     ship = load_cli_ship(args.ship) if args.ship else None
     model = AbkowitzModel.load(args.model, ship=ship)
     captive = read_captive_csv(args.captive)
-    training = [read_csv(p) for p in args.training] if args.training else None
+    # the training records read as fit reads them: checked against the model's ship (another
+    # ship's records would move the envelope silently) and cut to the part under way
+    training = read_records(args.training, ship=model.ship) if args.training else None
     try:
         result = compare_forces(model, captive, training_records=training)
     except SindyshipInputError as exc:
