@@ -579,3 +579,21 @@ def test_pysindy_plug_in(name):
     coef = dict(zip(names, model.coefficients()[1], strict=True))
     assert coef["1"] == pytest.approx(0.01, rel=1e-2)
     assert coef["x0"] == pytest.approx(2.0, rel=1e-3)
+
+
+def test_least_squares_drops_a_direction_held_only_by_rounding():
+    """Revolutions at two settings make 1, n and n^2 exactly dependent: the default rank
+    threshold (1e-12 of the largest singular value of the scaled columns) gives the
+    minimum-norm coefficients, which fit as well; LAPACK's machine-precision threshold had
+    kept the rounding and given coefficients near 1e8 that cancel."""
+    from sindyship.optimizers import LeastSquares
+
+    rng = np.random.default_rng(0)
+    n = np.where(rng.uniform(size=4000) < 0.5, 25.3, 32.6)  # n L / U0 at two settings
+    v = rng.uniform(-0.2, 0.2, size=4000)
+    X = np.column_stack([np.ones_like(n), n, n**2, v, n * v, n**2 * v])
+    y = X @ np.array([1e-3, -2e-5, 3e-7, -1.2e-2, 1e-5, -2e-7])
+    model = LeastSquares().fit(X, y)
+    assert model.rank_ == 4
+    assert np.max(np.abs(model.coef_)) < 1.0
+    assert np.max(np.abs(model.predict(X) - y)) < 1e-12

@@ -26,9 +26,12 @@ class LeastSquares(_LinearModel):
         same norms after).  This equilibrates monomials of very different size (``v`` ~ 0.1,
         ``du^2 v`` ~ 1e-5), which makes the rank decision of ``cond`` meaningful and the
         solution less sensitive to rounding; all-zero columns are left alone (coefficient 0).
-    cond : float or None, default=None
+    cond : float or None, default=1e-12
         Singular values below ``cond`` times the largest are treated as zero (minimum-norm
-        solution).  ``None`` uses LAPACK's machine-precision default.
+        solution).  ``None`` uses LAPACK's machine-precision default, which keeps a direction
+        the scaled columns hold only by rounding: with revolutions n at two settings, ``1``,
+        ``n`` and ``n^2`` are exactly dependent, and it gave coefficients near 1e8 that cancel
+        (the default gives at most 0.83 and flies the held-out records within 0.07 L of them).
 
     Attributes
     ----------
@@ -63,7 +66,7 @@ class LeastSquares(_LinearModel):
         "cond": [Interval(Real, 0, None, closed="left"), None],
     }
 
-    def __init__(self, *, column_scaling: bool = True, cond: float | None = None) -> None:
+    def __init__(self, *, column_scaling: bool = True, cond: float | None = 1e-12) -> None:
         self.column_scaling = column_scaling
         self.cond = cond
 
