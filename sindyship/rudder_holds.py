@@ -125,24 +125,30 @@ def cut_short(command: np.ndarray, raw: list, chain: list, amplitude: float) -> 
     rudder that a servo brings to its command slowly can be reversed at the check angle on
     its way out, before it settles (a 35/10 zig-zag's first leg peaks near 26 deg).  Such a
     leg peaks at least half the amplitude out on the other side, after the last hold before
-    the first plateau that is not on its way (the servo creeping out holds on the leg's side
-    at half the amplitude or more, short of the plateaus); it is taken to have been
-    commanded to the amplitude, from the first of those holds (else from its peak)."""
+    the first plateau; it is taken to have been commanded to the amplitude."""
     if not chain:
         return chain
     sign = -np.sign(chain[0][2])
-    before = [h for h in raw if h[1] < chain[0][0]]
-    on_the_way = []
-    while before and np.sign(before[-1][2]) == sign and abs(before[-1][2]) >= 0.5 * amplitude:
-        on_the_way.insert(0, before.pop())
-    begin = before[-1][1] + 1 if before else 0
+    end = _last_hold_end(raw, chain[0][0])
+    begin = 0 if end is None else end + 1
     if begin >= chain[0][0]:
         return chain
     peak = begin + int(np.argmax(sign * command[begin:chain[0][0]]))
     if sign * command[peak] < 0.5 * amplitude:
         return chain
-    first = on_the_way[0][0] if on_the_way else peak
-    return [(first, peak, float(sign * amplitude)), *chain]
+    return [(peak, peak, float(sign * amplitude)), *chain]
+
+
+def _on_the_way(command: np.ndarray, hold: tuple, index: int, sign: float) -> bool:
+    """Whether ``hold`` is a servo creeping toward the angle the rudder holds at ``index``:
+    on its side, within two :data:`HOLD_RANGE` short of it (as :func:`settled` merges such
+    holds), and never fallen back from by more than a hold range before ``index`` (a
+    helmsman's wheel held a few degrees off, such as weather helm, is a hold of its own)."""
+    first, last, level = hold
+    target = sign * command[index]
+    return bool(np.sign(level) == sign and last < index
+                and 0.0 <= target - abs(level) <= 2 * HOLD_RANGE
+                and np.min(sign * command[last:index + 1]) >= abs(level) - HOLD_RANGE)
 
 
 def _last_hold_end(raw: list, index: int) -> int | None:
@@ -196,11 +202,13 @@ def longest_alternation(plateaus):
 
 def ramp_start(command: np.ndarray, raw: list, plateau: int, sign: int) -> int:
     """The first sample at which the rudder left its previous value toward a plateau: where
-    it left the last hold before (:func:`left_hold`), else back over the ramp's end while it is
+    it left the last hold before that is not on its way (:func:`left_hold`,
+    :func:`_on_the_way`), else back over the ramp's end while it is
     more than half way from the record's first value (a servo's slow approach) and then while
     it moves toward the plateau by more than :data:`_MOVING` per sample; sample 0 when the
     record starts on the ramp."""
-    end = _last_hold_end(raw, plateau)
+    end = _last_hold_end([h for h in raw if not _on_the_way(command, h, plateau, sign)],
+                         plateau)
     if end is not None:
         return left_hold(command, end, plateau, sign)
     index = plateau
@@ -270,3 +278,4 @@ def read_in_blocks(command: np.ndarray,
     with np.errstate(invalid="ignore", divide="ignore"):
         means = np.where(counts > 0, sums / np.maximum(counts, 1.0), np.nan)
     return first, centre, means
+

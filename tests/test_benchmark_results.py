@@ -261,7 +261,7 @@ def test_zigzags_from_the_actual_rudder_are_recognised_at_any_sampling():
     """One run of benchmarks/bench_recognition.py: the five zig-zags of the KCS and of the
     KVLCC2 model logged with the actual rudder alone, at six sampling steps and three noise
     levels.  Read in means of samples, at least 80 of 90 are recognised right on each ship,
-    at most 2 wrong, and more of them than read sample by sample (32 and 72 of 90); of 120
+    at most 2 wrong, and more of them than read sample by sample (31 and 72 of 90); of 120
     random-rudder records, which are no zig-zag, at most 2 are recognised as one."""
     result = _load("recognition.json")
     for name, ship in result["ships"].items():

@@ -562,6 +562,23 @@ def test_random_rudder_steps_are_no_zigzag(kcs, seed, hold, duration, dt):
     assert flown_as(record)["flown_as"] == "replay-actual"
 
 
+def test_a_helmsmans_held_wheel_before_the_execute_is_no_first_leg():
+    """The campaign's 10/10 zig-zag to port logged at 0.1 s without the command: the helmsman
+    held the wheel a few degrees to starboard for a minute before the execute; that hold was
+    taken for a first leg the servo was creeping out to, and the zig-zag was refused (read
+    from it: 10/155 from t = 14.9 s).  A servo creeping toward an angle holds within two hold
+    ranges of it and never falls back."""
+    from sindyship.campaign import campaign_trials, fly_trials
+
+    trial = campaign_trials(0)["train"][1]
+    (record,) = fly_trials(load_ship("kvlcc2"), [trial], dt=0.1)
+    actual = Trajectory(record.data.drop(columns=["delta_c"]), trial.name)
+    zigzag = recognise_zigzag(actual)
+    assert zigzag is not None, explain_zigzag(actual)[1]
+    assert zigzag[:3] == (10.0, 10.0, -1)
+    assert abs(zigzag.start_time - recognise_zigzag(record).start_time) < 0.5
+
+
 def test_a_zigzag_is_flown_as_its_whole_record_recognised_it(kcs):
     """The flight start recognises the zig-zag on the whole record and the flight flies that
     recognition (it recognised the part from the execute again, which could differ)."""
