@@ -28,7 +28,7 @@ Thresholds (module constants) and why:
   rounded to the nearest multiple of 5 deg when one lies within ``ROUNDING = 1.5`` deg,
   else to 0.1 deg.  The heading change (from the execute) at the rudder reversals must
   agree within ``CHECK_SPREAD = 3`` deg plus the largest yaw rate times the sampling step
-  (a reversal falls between two samples), and each must lie at least ``MIN_CHECK = 1`` deg
+  (a reversal falls between two samples), and each must lie at least ``MIN_CHECK = 0.5`` deg
   toward the side the leg's rudder turns the ship (a rudder reversed on the other side, or
   at the execute heading, as random steps of a rudder can be, is no zig-zag's).  An actual
   rudder logged alone whose holds are
@@ -103,7 +103,7 @@ TURN_SHARE = 0.25
 #: A record whose first sample turns faster than this share of its fastest starts in a turn.
 MID_TURN = 0.25
 #: Least heading change [deg] toward a leg's side at which a zig-zag's rudder reverses.
-MIN_CHECK = 1.0
+MIN_CHECK = 0.5
 
 
 class Window(NamedTuple):
@@ -398,7 +398,7 @@ def _recognise_rudder(t, psi, r, command, commanded: bool, switch_t, read: bool 
     # turns it to: a reversal on the other side, or at the execute heading, is no zig-zag's
     toward = psi[reversals] * np.sign([h[2] for h in chain[:-1]])
     if np.any(toward < MIN_CHECK):
-        return None, (), (f"the heading at a rudder reversal is {float(np.min(toward)):.1f} deg "
+        return None, (), (f"the heading at a rudder reversal is {float(np.min(toward)):.2f} deg "
                           "toward the side the leg's rudder turns it, less than "
                           f"{MIN_CHECK:g}: the rudder does not reverse at a check angle"), ()
     levels = [abs(h[2]) for h in chain]
@@ -411,10 +411,11 @@ def _recognise_rudder(t, psi, r, command, commanded: bool, switch_t, read: bool 
 
 
 def _roundest(low: float, high: float) -> float:
-    """The multiple of 5 deg within ROUNDING of [low, high], else the midpoint to 0.1 deg."""
+    """The multiple of 5 deg within ROUNDING of [low, high], else the midpoint to 0.1 deg;
+    never 0 (a 1 or 2 deg check angle is not rounded to none)."""
     middle = 0.5 * (low + high)
     candidate = 5.0 * round(middle / 5.0)
-    if low - ROUNDING <= candidate <= high + ROUNDING:
+    if candidate > 0.0 and low - ROUNDING <= candidate <= high + ROUNDING:
         return float(candidate)
     return round(middle, 1)
 

@@ -562,6 +562,21 @@ def test_random_rudder_steps_are_no_zigzag(kcs, seed, hold, duration, dt):
     assert flown_as(record)["flown_as"] == "replay-actual"
 
 
+def test_a_one_degree_check_angle_is_not_rounded_to_none():
+    """A 10/1 zig-zag after a course kept by hand read its check angle as 0 (rounded to the
+    nearest multiple of 5) and flew closed loop reversing at the execute heading; a 20/1 is
+    recognised although its reversals lie 1 deg off the execute heading."""
+    kvlcc2 = load_ship("kvlcc2")
+    unit = kvlcc2.L / kvlcc2.U0
+    for rudder in (10, 20):
+        (run,) = fly(MMGModel(kvlcc2), [Manoeuvre("zigzag", rudder=rudder, check=1,
+                                                   duration=30 * unit, dt=0.05 * unit,
+                                                   approach=8 * unit, seed=2)])
+        zigzag = recognise_zigzag(run)
+        assert zigzag is not None and zigzag[0] == rudder, explain_zigzag(run)[1]
+        assert 0.8 <= zigzag.check_deg <= 1.2
+
+
 def test_a_helmsmans_held_wheel_before_the_execute_is_no_first_leg():
     """The campaign's 10/10 zig-zag to port logged at 0.1 s without the command: the helmsman
     held the wheel a few degrees to starboard for a minute before the execute; that hold was
