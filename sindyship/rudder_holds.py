@@ -6,9 +6,10 @@ least ``HOLD_SAMPLES = 5`` samples.  A step command holds exactly; an actual rud
 each angle through its steering gear (a rate-limited ramp, then a servo's slow approach that
 holds a few samples at every degree on the way, :func:`settled`); a helmsman's wheel wanders
 before the execute.  The execute and each reversal are where the rudder left its last hold
-(:func:`left_hold`).  An actual rudder logged alone and sampled finer than its steering gear
-moves is first read in means of consecutive samples (:func:`read_in_blocks`), so that a
-servo's slow approach neither breaks into a hold at every degree nor is lost in the noise.
+(:func:`left_hold`).  An actual rudder logged alone whose holds are fragments (a servo's slow
+approach logged so fast that it holds at every degree, or noise that breaks every hold) is
+first read in means of consecutive samples (:func:`samples_per_reading`,
+:func:`read_in_blocks`).
 """
 
 from __future__ import annotations
@@ -16,10 +17,9 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["FRAGMENTED_HOLDS", "HOLD_RANGE", "HOLD_SAMPLES", "MIN_SAMPLES_PER_READING",
-           "READINGS_PER_LEG",
-           "back_to_peak", "cut_short", "execute", "find_holds", "leg_time", "left_hold",
-           "longest_alternation", "ramp_start", "read_in_blocks", "samples_per_reading",
-           "settled", "stretch_end"]
+           "READINGS_PER_LEG", "back_to_peak", "cut_short", "execute", "find_holds",
+           "leg_time", "left_hold", "longest_alternation", "ramp_start", "read_in_blocks",
+           "samples_per_reading", "settled", "stretch_end"]
 
 HOLD_RANGE = 1.0  # deg
 HOLD_SAMPLES = 5
@@ -144,7 +144,7 @@ def _on_the_way(command: np.ndarray, hold: tuple, index: int, sign: float) -> bo
     on its side, within two :data:`HOLD_RANGE` short of it (as :func:`settled` merges such
     holds), and never fallen back from by more than a hold range before ``index`` (a
     helmsman's wheel held a few degrees off, such as weather helm, is a hold of its own)."""
-    first, last, level = hold
+    _, last, level = hold
     target = sign * command[index]
     return bool(np.sign(level) == sign and last < index
                 and 0.0 <= target - abs(level) <= 2 * HOLD_RANGE
@@ -203,10 +203,10 @@ def longest_alternation(plateaus):
 def ramp_start(command: np.ndarray, raw: list, plateau: int, sign: int) -> int:
     """The first sample at which the rudder left its previous value toward a plateau: where
     it left the last hold before that is not on its way (:func:`left_hold`,
-    :func:`_on_the_way`), else back over the ramp's end while it is
-    more than half way from the record's first value (a servo's slow approach) and then while
-    it moves toward the plateau by more than :data:`_MOVING` per sample; sample 0 when the
-    record starts on the ramp."""
+    :func:`_on_the_way`), else back over the ramp's end while it is more than half way from
+    the record's first value (a servo's slow approach) and then while it moves toward the
+    plateau by more than :data:`_MOVING` per sample; sample 0 when the record starts on the
+    ramp."""
     end = _last_hold_end([h for h in raw if not _on_the_way(command, h, plateau, sign)],
                          plateau)
     if end is not None:

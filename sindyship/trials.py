@@ -31,10 +31,9 @@ Thresholds (module constants) and why:
   (a reversal falls between two samples), and each must lie at least ``MIN_CHECK = 0.5`` deg
   toward the side the leg's rudder turns the ship (a rudder reversed on the other side, or
   at the execute heading, as random steps of a rudder can be, is no zig-zag's).  An actual
-  rudder logged alone whose holds are
-  fragments (more than ``FRAGMENTED_HOLDS = 4`` to a leg) is read in means of consecutive
-  samples first, about ``READINGS_PER_LEG = 80`` to a leg
-  (:func:`sindyship.rudder_holds.samples_per_reading`): a full-scale servo approaches its
+  rudder logged alone whose holds are fragments (more than ``FRAGMENTED_HOLDS = 4`` to a
+  leg) is read in means of consecutive samples first, about ``READINGS_PER_LEG = 80`` to a
+  leg (:func:`sindyship.rudder_holds.samples_per_reading`): a full-scale servo approaches its
   angle so slowly that, logged at 20 Hz, every degree on the way holds for five samples, and
   0.3 deg of noise breaks every hold.  Its readings may leave a hold one reading either way
   of the rudder, so the heading tolerance takes twice the reading step.
@@ -342,9 +341,9 @@ def explain_zigzag(record: Trajectory) -> tuple[ZigZag | None, str]:
 def _recognise(record: Trajectory) -> tuple[ZigZag | None, tuple[float, ...], str, tuple]:
     """The zig-zag, the levels of its plateaus, the sentence of :func:`explain_zigzag` and the
     samples where the rudder was put over (the execute, then each reversal).  An actual
-    rudder logged alone and sampled finer than a leg of its zig-zag needs is recognised on its
-    readings (:func:`sindyship.rudder_holds.samples_per_reading`), each switch where its
-    reading begins (:func:`sindyship.rudder_holds.read_in_blocks`)."""
+    rudder logged alone whose holds are fragments is recognised on its readings
+    (:func:`sindyship.rudder_holds.samples_per_reading`), each switch where its reading
+    begins (:func:`sindyship.rudder_holds.read_in_blocks`)."""
     commanded = record.has("delta_c")
     command = np.degrees(record["delta_c"] if commanded else record.rudder)
     t, psi, r = record.t, record["psi"], record["r"]
