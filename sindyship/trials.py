@@ -30,13 +30,16 @@ Thresholds (module constants) and why:
   agree within ``CHECK_SPREAD = 3`` deg plus the largest yaw rate times the sampling step
   (a reversal falls between two samples), and each must lie at least ``MIN_CHECK = 0.5`` deg
   toward the side the leg's rudder turns the ship (a rudder reversed on the other side, or
-  at the execute heading, as random steps of a rudder can be, is no zig-zag's).  An actual
-  rudder logged alone whose holds are fragments (more than ``FRAGMENTED_HOLDS = 4`` to a
-  leg) is read in means of consecutive samples first, about ``READINGS_PER_LEG = 80`` to a
-  leg (:func:`sindyship.rudder_holds.samples_per_reading`): a full-scale servo approaches its
-  angle so slowly that, logged at 20 Hz, every degree on the way holds for five samples, and
-  0.3 deg of noise breaks every hold.  Its readings may leave a hold one reading either way
-  of the rudder, so the heading tolerance takes twice the reading step.
+  at the execute heading, as random steps of a rudder can be, is no zig-zag's).  A logged
+  command's execute is its step to the first plateau (flown from the first sample after it,
+  whatever the wheel did before); an actual rudder's is where it left its last hold not on
+  its way to the plateau.  An actual rudder logged alone whose holds are fragments (more
+  than ``FRAGMENTED_HOLDS = 4`` to a leg) is read in means of consecutive samples first,
+  about ``READINGS_PER_LEG = 80`` to a leg (:func:`sindyship.rudder_holds.samples_per_reading`):
+  a full-scale servo approaches its angle so slowly that, logged at 20 Hz, every degree on
+  the way holds for five samples, and 0.3 deg of noise breaks every hold.  Its readings may
+  leave a hold one reading either way of the rudder, so the heading tolerance takes twice
+  the reading step.
 - Turn: the record holds a rudder angle of at least ``TURN_RUDDER = 5`` deg for at least
   ``TURN_SHARE = 0.25`` of its samples (a spiral's steps last a seventh of it each; a
   turning circle may end in a pull-out); its execute is the last sample at the approach value
@@ -376,7 +379,11 @@ def _recognise_rudder(t, psi, r, command, commanded: bool, switch_t, read: bool 
         return None, (), (f"the rudder holds no run of three or more alternating angles near "
                       f"+-{amplitude:.1f} deg (longest: {len(chain)})"), ()
     first_sign = int(np.sign(chain[0][2]))
-    start = ramp_start(command, raw, chain[0][0], first_sign)
+    # a command steps from its approach value at the execute, flown from its first sample
+    # after the step (a helmsman's wheel may wander more than half a degree before it); an
+    # actual rudder leaves its last hold
+    start = (min(execute(command, chain[0][0], first_sign) + 1, chain[0][0]) if commanded
+             else ramp_start(command, raw, chain[0][0], first_sign))
     reversals = [left_hold(command, before[1], h[0], int(np.sign(h[2])))
                  for before, h in zip(chain[:-1], chain[1:], strict=True)]
     if not commanded:  # a slow servo leaves a hold only after it has turned: back to its peak

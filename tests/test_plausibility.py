@@ -562,6 +562,21 @@ def test_random_rudder_steps_are_no_zigzag(kcs, seed, hold, duration, dt):
     assert flown_as(record)["flown_as"] == "replay-actual"
 
 
+@pytest.mark.parametrize("seed", [6, 7])
+def test_a_commanded_zigzag_starts_at_the_step_of_its_command(seed):
+    """With the command logged, a course kept by hand before the execute wanders: the execute
+    had been placed where the wheel first moved half a degree after the helmsman's last hold
+    of 1 deg or more (7.2 and 1.15 L/U0 early); the command steps at the execute."""
+    kvlcc2 = load_ship("kvlcc2")
+    unit = kvlcc2.L / kvlcc2.U0
+    (run,) = fly(MMGModel(kvlcc2), [Manoeuvre("zigzag", rudder=10, check=10,
+                                               duration=30 * unit, dt=0.05 * unit,
+                                               approach=8 * unit, seed=seed)])
+    zigzag = recognise_zigzag(run)
+    assert zigzag is not None and zigzag[:3] == (10.0, 10.0, 1)
+    assert 0.0 <= zigzag.start_time - 8 * unit <= 0.05 * unit + 1e-9
+
+
 def test_a_one_degree_check_angle_is_not_rounded_to_none():
     """A 10/1 zig-zag after a course kept by hand read its check angle as 0 (rounded to the
     nearest multiple of 5) and flew closed loop reversing at the execute heading; a 20/1 is
