@@ -36,38 +36,32 @@ from .simulation import (
     simulate_batch,
 )
 from .trajectory import Trajectory
-from .trials import (  # noqa: F401  (detect_zigzag and recognised_zigzag are used here)
+from .trials import (  # noqa: F401  (detect_zigzag and recognised_zigzag are re-exported)
     FlightStart,
     detect_zigzag,
     flight_start,
-    recognise_zigzag,
     recognised_zigzag,
     trim,
-    zigzag_levels,
+    zigzag_to_fly,
 )
 
 
 def command_for(record: Trajectory):
-    """The rudder command that re-flies a record (see the module docstring): a zig-zag its
-    flight start recognised (on the whole record, :func:`flight_start`) as recognised there."""
+    """The rudder command that re-flies a record (see the module docstring): a zig-zag as its
+    flight start recognised it on the whole record (:func:`flight_start`), else as the record
+    itself is recognised (:func:`zigzag_to_fly`)."""
     saved = record.meta.get("flight_start") or {}
     zigzag = saved.get("zigzag")
-    if zigzag is not None and abs(saved["time"] - float(record.t[0])) <= 1e-9:
+    if zigzag is None or abs(saved["time"] - float(record.t[0])) > 1e-9:
+        found = zigzag_to_fly(record)
+        zigzag = None if found is None else found[1]
+    if zigzag is not None:
         angles = (math.radians(zigzag["amplitude_deg"]), math.radians(zigzag["check_deg"]),
                   int(zigzag["first_sign"]))
         if zigzag["levels_deg"] is None:
             return ZigZagCommand(*angles)
         return RecordedZigZag(*angles, levels=tuple(math.radians(level)
                                                     for level in zigzag["levels_deg"]))
-    strict = detect_zigzag(record)
-    if strict is not None:
-        rudder, check, first = strict
-        return ZigZagCommand(math.radians(rudder), math.radians(check), first)
-    logged = recognise_zigzag(record)
-    if logged is not None:
-        levels = tuple(math.radians(abs(level)) for level in zigzag_levels(record))
-        return RecordedZigZag(math.radians(logged.amplitude_deg), math.radians(logged.check_deg),
-                              logged.first_sign, levels=levels)
     if record.has("delta_c"):
         return StepCommand(record.t, record["delta_c"])
     return PrescribedRudder(record.t, record["delta"])
@@ -298,9 +292,9 @@ def flown_as(record: Trajectory) -> dict:
     """
     start = flight_start(record)
     zigzag = start.zigzag
-    if zigzag is None and start.kind != "zigzag":
-        found = recognised_zigzag(_part_from(record, start))
-        zigzag = None if found is None else {"amplitude_deg": found[0], "check_deg": found[1]}
+    if zigzag is None and start.kind != "zigzag":  # as command_for flies the part
+        found = zigzag_to_fly(_part_from(record, start))
+        zigzag = None if found is None else found[1]
     if zigzag is not None:
         out = {"flown_as": "zigzag", "amplitude_deg": zigzag["amplitude_deg"],
                "check_deg": zigzag["check_deg"]}

@@ -90,6 +90,7 @@ __all__ = [
     "recognise_zigzag",
     "zigzag_command",
     "zigzag_levels",
+    "zigzag_to_fly",
     "trim",
     "underway_window",
 ]
@@ -485,11 +486,11 @@ def recognised_zigzag(record: Trajectory) -> tuple[float, float, int, float] | N
     the tolerant one of logged trials (:func:`sindyship.trials.recognise_zigzag`: a manual
     lead-in, plateaus a degree or two off the nominal angle).
     """
-    strict = detect_zigzag(record)
-    if strict is not None:
-        return (*strict, float(record.t[0]))
-    found = recognise_zigzag(record)
-    return None if found is None else tuple(found)
+    found = zigzag_to_fly(record)
+    if found is None:
+        return None
+    start, zigzag = found
+    return zigzag["amplitude_deg"], zigzag["check_deg"], zigzag["first_sign"], start
 
 
 @dataclass(frozen=True)
@@ -522,7 +523,7 @@ class FlightStart:
                 "zigzag": self.zigzag}
 
 
-def _zigzag_to_fly(record: Trajectory) -> tuple[float, dict] | None:
+def zigzag_to_fly(record: Trajectory) -> tuple[float, dict] | None:
     """The execute [s] and what a flight flies of a zig-zag (:attr:`FlightStart.zigzag`):
     the strict recognition first, then the tolerant one (:func:`recognised_zigzag`)."""
     strict = detect_zigzag(record)
@@ -562,7 +563,7 @@ def flight_start(record: Trajectory) -> FlightStart:
     if saved is not None and t[0] - 1e-9 <= saved["time"] <= t[-1]:
         return FlightStart(float(saved["time"]), saved["kind"], saved["reason"],
                            saved.get("zigzag"))
-    zigzag = _zigzag_to_fly(record)
+    zigzag = zigzag_to_fly(record)
     if zigzag is not None:
         start, flown = zigzag
         return FlightStart(start, "zigzag", f"a {flown['amplitude_deg']:g}/"

@@ -186,10 +186,16 @@ class Diagnosis:
             return meaningful
         if self.discovery is not None and self.discovery.accepted:
             return None
-        flown = [score for score in self.ranking if not score.meaningful
-                 and flight_confirmed(score)]
-        return min(flown, key=lambda score: _finite_or_inf(score.confirmation.ratio("training")),
+        return min(self.flight_favoured,
+                   key=lambda score: _finite_or_inf(score.confirmation.ratio("training")),
                    default=None)
+
+    @property
+    def flight_favoured(self) -> list[EffectScore]:
+        """The effects that are not meaningful by their share of the force error but whose
+        re-flown training flights come clearly closer (:func:`flight_confirmed`)."""
+        return [score for score in self.ranking if not score.meaningful
+                and flight_confirmed(score)]
 
     @property
     def no_catalogued_effect(self) -> str:
@@ -201,8 +207,7 @@ class Diagnosis:
         text = ("no catalogued effect is meaningful" if not refuted else
                 f"re-flying the training records refutes {', '.join(refuted)}, the catalogued "
                 f"effect{'s' if len(refuted) > 1 else ''} the force error singles out")
-        flown = [s.effect.name for s in self.ranking if not s.meaningful
-                 and flight_confirmed(s)]
+        flown = [score.effect.name for score in self.flight_favoured]
         if flown:
             one = len(flown) == 1
             text += (f" ({', '.join(flown)} bring{'s' if one else ''} the training flights "
