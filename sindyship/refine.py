@@ -61,23 +61,14 @@ from .levenberg_marquardt import levenberg_marquardt
 from .model import AbkowitzModel
 from .optimizers import one_blas_thread
 from .refine_checks import carries_over, turns_kept
-from .shooting import (
-    CHANNEL_SCALES,
-    active_keys,
-    fly_segments,
-    make_segments,
-    model_slots,
-)
+from .refine_problem import DIVERGED_RESIDUAL, ShootingProblem, cost, penalty_rows
+from .shooting import active_keys
 from .stability import straight_run_stability
-from .targets import DOFS
 from .trajectory import Trajectory
 
 __all__ = ["DIVERGED_RESIDUAL", "PRIOR_WEIGHT", "SEGMENT_TIMES", "default_segments",
            "force_change", "refine"]
 
-#: The residual of every channel at a sample after a segment diverged (non-dimensional: ten
-#: ship lengths of position, ten times the design speed).
-DIVERGED_RESIDUAL = 10.0
 #: Default lengths of the shooting segments, stage by stage, in units of L/U0 (for the KCS
 #: 93, 279 and 838 s; for the KVLCC2 model 30, 89 and 267 s).
 SEGMENT_TIMES = (5.0, 15.0, 45.0)
@@ -86,7 +77,6 @@ SEGMENT_TIMES = (5.0, 15.0, 45.0)
 #: refined coefficients no longer move, whatever the machine's rounding).
 STAGE_TOLERANCE = 1e-3
 TOLERANCE = 1e-7
-PENALTY_SCALE = "fit"
 #: Fewest records a refinement is validated on (two halves of two records or more each).
 VALIDATION_RECORDS = 4
 #: Most a coefficient moves, relative to its fitted value (None: no bound).
@@ -137,10 +127,6 @@ def _stages(ship, records, segment_s) -> list[float | None]:
         return default_segments(ship, records)
     given = [segment_s] if isinstance(segment_s, str | numbers.Real) else list(segment_s)
     return [None if value == "whole" else float(value) for value in given]
-
-
-def _cost(residuals: np.ndarray) -> float:
-    return 0.5 * float(residuals @ residuals)
 
 
 def _check_arguments(model, records, max_evaluations, segment_s, prior_weight) -> None:
@@ -220,10 +206,11 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
     Returns
     -------
     AbkowitzModel
-        The refined model.  ``info["refined"]`` holds the records flown, the segments, the
-        cost (half the sum of squared residuals, flights and penalty) before and after, the
-        flight error alone (root mean square over the compared samples) before and after, the
-        evaluations and Jacobians used, why the search stopped and whether it converged, the
+        The refined model.  ``info["refined"]`` holds the records flown, the segments, each
+        stage's search (none where the validation refused the refinement), the cost (half the
+        sum of squared residuals, flights and penalty) before and after, the flight error alone
+        (root mean square over the compared samples) before and after, the evaluations and
+        Jacobians used, why the search stopped and whether it converged, the
         coefficient that moved most for its size, how far each equation's force moved
         (:func:`force_change`), whether the refined model is stable in straight running
         (:func:`sindyship.stability.straight_run_stability`) and whether a refinement was
@@ -257,6 +244,7 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
         kept = _refined(model, records, **{**settings, "max_evaluations": 0, "progress": None,
                                            "segment_s": "whole" if last is None else last})
         kept.info["refined"].update(
+            stages=[],  # its fitted flights were flown once, to report them; no stage ran
             stopped=("refined on half of the records, the model flew the other half "
                      f"{check['ratio']:.3f} times as far off as fitted ({check['why']}); the "
                      "fitted coefficients are kept"),
@@ -276,7 +264,7 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
     the line each accepted step writes on stderr (None: silent)."""
     stages = _stages(model.ship, records, segment_s)
     problems = _design(model, records)  # the penalty's and the report's design
-    penalty = _penalty_rows(model, problems) if prior_weight > 0 else None
+    penalty = penalty_rows(model, problems) if prior_weight > 0 else None
     p, done, evaluations, jacobians, problem = _search_stages(
         model, records, stages, penalty, max_evaluations, prior_weight, progress, n_jobs)
     last = done[-1]
@@ -360,10 +348,11 @@ def _search_stages(model, records, stages, penalty, max_evaluations, prior_weigh
                        int(max_evaluations) // (2 * max(len(stages) - 1, 1))))
     for stage, length in enumerate(stages):
         final = stage == len(stages) - 1
-        problem = _Problem(model, list(records), length, float(prior_weight), penalty, n_jobs)
-        start_cost = _cost(problem.residuals(np.zeros_like(p)))
+        problem = ShootingProblem(model, list(records), length, float(prior_weight), penalty,
+                                  n_jobs)
+        start_cost = cost(problem.residuals(np.zeros_like(p)))
         start_rms = problem.flight_rms
-        entry_cost = _cost(problem.residuals(p))
+        entry_cost = cost(problem.residuals(p))
         entry_rms = problem.flight_rms
         allowed = budget if final else min(budget, early)
         search = levenberg_marquardt(problem.residuals, problem.normal, p,
@@ -378,7 +367,7 @@ def _search_stages(model, records, stages, penalty, max_evaluations, prior_weigh
         budget -= 0 if search is None else search.evaluations
         evaluations += 0 if search is None else search.evaluations
         jacobians += 0 if search is None else search.jacobians
-        cost_after = _cost(problem.residuals(p))  # and problem.flight_rms at p
+        cost_after = cost(problem.residuals(p))  # and problem.flight_rms at p
         done.append({"segment_s": length, "segments": problem.n_segments,
                      "cost_fitted": start_cost, "flight_rms_fitted": start_rms,
                      "cost_before": entry_cost, "cost_after": cost_after,
@@ -388,150 +377,6 @@ def _search_stages(model, records, stages, penalty, max_evaluations, prior_weigh
                          "no evaluations left" if search is None else search.message),
                      "converged": search is not None and search.converged})
     return p, done, evaluations, jacobians, problem
-
-
-class _Problem:
-    """The least-squares problem of a refinement: the flight residuals of the segments and
-    the penalty rows, as functions of the relative changes ``p`` of the active coefficients
-    (coefficient = fitted x (1 + p))."""
-
-    def __init__(self, model, records, segment_s, prior_weight, penalty, n_jobs):
-        self.model = model
-        self.keys = active_keys(model)
-        self.fitted = np.array([model.coefficients[d][t] for d, t in self.keys])
-        self.slots = model_slots(model)
-        self.batches, self.segment_s = make_segments(model, records, segment_s), segment_s
-        if not self.batches:
-            raise SindyshipInputError("the records are too short to fly: each needs at least "
-                                      "two samples from its flight start.")
-        self.n_segments = sum(b.n_segments for b in self.batches)
-        L, U0 = model.ship.L, model.ship.U0
-        self.scales = np.array([L**a * U0**b for a, b in CHANNEL_SCALES])
-        self.n_compared = sum(int(b.valid.sum()) * 6 for b in self.batches)
-        self.penalty = penalty
-        self.n_jobs = n_jobs
-        self.flight_rms = math.nan
-        self._last = None  # (p, flights) of the last flight without sensitivities
-        # both parts relative to their values at the fitted coefficients: the flights' mean
-        # squared error, and the fit's own objective, each 1 there
-        self.flight_norm = self.penalty_norm = 1.0
-        start = np.zeros(len(self.keys))
-        flights, _, _ = self._flight_part(self._flights(start, False))
-        self.flight_norm = 1.0 / math.sqrt(max(float(flights @ flights), 1e-300))
-        self.weight = 1.0
-        if penalty is not None and PENALTY_SCALE == "fit":  # the objective's value there
-            rows, _ = self._penalty_part(start, False)
-            value = float(rows @ rows) + sum(part[5] for part in penalty.values())
-            self.weight = math.sqrt(prior_weight / max(value, 1e-12))
-        elif penalty is not None:  # over the forces' sum of squares
-            self.weight = math.sqrt(prior_weight)
-
-    def coefficients(self, p: np.ndarray) -> dict:
-        return dict(zip(self.keys, (self.fitted * (1.0 + p)).tolist(), strict=True))
-
-    def weights(self, p: np.ndarray) -> np.ndarray:
-        weights = self.model._weights.copy()
-        weights[self.slots] = self.fitted * (1.0 + p)
-        return weights
-
-    def _flights(self, p: np.ndarray, sensitivities: bool):
-        """The segments flown at ``p``; the last flight without sensitivities is kept, since
-        a stage asks for the same point more than once in a row (its start, the search's first
-        point, and the point the search ended at when its last trial was accepted)."""
-        if not sensitivities and self._last is not None and np.array_equal(self._last[0], p):
-            return self._last[1]
-        flown = _fly_batches(self.model, self.batches, self.weights(p), self.slots,
-                             sensitivities, self.n_jobs)
-        if not sensitivities:
-            self._last = (np.array(p, dtype=float), flown)
-        return flown
-
-    def _flight_part(self, flown) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-        """The flights' residuals and, from their sensitivities, their part of J^T J and
-        J^T r (with respect to the relative changes ``p``)."""
-        norm = self.flight_norm / math.sqrt(max(self.n_compared, 1))
-        residuals, gram, gradient = [], None, None
-        for batch, (states, jac) in zip(self.batches, flown, strict=True):
-            error = (states - batch.measured) * self.scales
-            error = np.where(np.isfinite(error), error, DIVERGED_RESIDUAL)
-            error[~batch.valid] = 0.0
-            residuals.append(error[batch.valid].ravel() * norm)
-            if jac is None:
-                continue
-            jac[~batch.valid] = 0.0
-            jac *= (self.scales * norm)[None, None, :, None]
-            flat = jac.reshape(-1, jac.shape[-1])
-            part = flat.T @ flat
-            step = flat.T @ (error.reshape(-1) * norm)
-            gram = part if gram is None else gram + part
-            gradient = step if gradient is None else gradient + step
-        r = np.concatenate(residuals)
-        unscaled = r / norm
-        self.flight_rms = float(np.sqrt(np.sum(unscaled**2) / max(self.n_compared, 1)))
-        if gram is None:
-            return r, None, None
-        outer = np.outer(self.fitted, self.fitted)  # d/dp = d/dtheta x fitted coefficient
-        return r, gram * outer, gradient * self.fitted
-
-    def _penalty_part(self, p: np.ndarray, with_jacobian: bool):
-        if self.penalty is None:
-            return np.empty(0), np.empty((0, len(self.keys)))
-        values, jac = [], []
-        theta = self.fitted * (1.0 + p)
-        for lhs, rhs, norm, positions, fixed, _ in self.penalty.values():
-            w = fixed.copy()
-            for k, j in positions:
-                w[j] = theta[k]
-            values.append(self.weight * (lhs @ w - rhs) / norm)
-            if with_jacobian:
-                block = np.zeros((lhs.shape[0], len(self.keys)))
-                for k, j in positions:
-                    block[:, k] = self.weight * lhs[:, j] * self.fitted[k] / norm
-                jac.append(block)
-        return np.concatenate(values), (np.vstack(jac) if with_jacobian else None)
-
-    def residuals(self, p: np.ndarray) -> np.ndarray:
-        flights, _, _ = self._flight_part(self._flights(p, False))
-        penalty, _ = self._penalty_part(p, False)
-        return np.concatenate([flights, penalty])
-
-    def normal(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """J^T J and J^T r of the residuals at ``p``: the flights' from their sensitivities,
-        the penalty's from its rows."""
-        _, gram, gradient = self._flight_part(self._flights(p, True))
-        penalty, jac = self._penalty_part(p, True)
-        return gram + jac.T @ jac, gradient + jac.T @ penalty
-
-    def report(self, step: int, cost: float, label: str) -> None:
-        """One line on stderr per accepted step of the search, beginning with ``label``."""
-        stage = "whole flights" if self.segment_s is None else f"{self.segment_s:.4g} s segments"
-        print(f"{label} ({stage}): step {step}, cost {cost:.6g}, flight error (rms) "
-              f"{self.flight_rms:.4g}", file=sys.stderr, flush=True)
-
-
-def _fly_batches(model, batches, weights, slots, sensitivities, n_jobs):
-    """Every batch of segments flown (split in chunks across joblib workers when asked)."""
-    if n_jobs == 1:
-        return [fly_segments(model, b, weights, slots, sensitivities=sensitivities)
-                for b in batches]
-    from joblib import Parallel, delayed
-
-    payload = model.to_dict()  # JSON-ready: a worker rebuilds the model from it
-    out = []
-    for batch in batches:
-        chunks = np.array_split(np.arange(batch.n_segments), max(2, min(batch.n_segments, 8)))
-        parts = Parallel(n_jobs=n_jobs)(
-            delayed(_fly_chunk)(payload, batch.take(idx), weights, slots, sensitivities)
-            for idx in chunks if len(idx))
-        states = np.concatenate([s for s, _ in parts])
-        jac = np.concatenate([j for _, j in parts]) if sensitivities else None
-        out.append((states, jac))
-    return out
-
-
-def _fly_chunk(payload, segments, weights, slots, sensitivities):
-    return fly_segments(AbkowitzModel.from_dict(payload), segments, weights, slots,
-                        sensitivities=sensitivities)
 
 
 def _design(model, records) -> dict:
@@ -559,35 +404,6 @@ def force_change(fitted: AbkowitzModel, refined: AbkowitzModel, records, *,
         measured = rms(problem.target)
         out[dof] = (rms(problem.features @ change) / measured
                     if measured > 1e-3 * rms(problem.features * before) else None)
-    return out
-
-
-def _penalty_rows(model, problems) -> dict:
-    """Per degree of freedom, the fit's own objective as rows on its design ``problems``: the
-    force error of eq. 16 and, for a ``prior`` fit, its prior; ``(lhs, rhs, ||y||, [(key
-    index, column)], fixed coefficients, the objective's part no row reaches over ||y||^2)``."""
-    from .optimizers import PriorRidge
-
-    info = model.info
-    prior = model.optimizer.get("name") == "prior" and "prior" in info
-    strength = info.get("straight_run", {}).get(
-        "strength", model.optimizer["params"].get("strength")) if prior else 0.0
-    keys = active_keys(model)
-    out = {}
-    for dof in DOFS:
-        setting = info["prior"][dof] if prior else {"mean": None, "scale": None,
-                                                    "relations": None}
-        estimator = PriorRidge(strength=strength, mean=setting["mean"],
-                               scale=None if setting["scale"] is None else
-                               [np.nan if s is None else s for s in setting["scale"]],
-                               relations=setting["relations"])
-        lhs, rhs, norm2, offset = estimator.objective_rows(problems[dof].features,
-                                                           problems[dof].target)
-        terms = list(problems[dof].terms)
-        positions = [(k, terms.index(t)) for k, (d, t) in enumerate(keys) if d == dof]
-        fixed = np.array([model.coefficients[dof][t] for t in terms])
-        out[dof] = (lhs, rhs, math.sqrt(max(norm2, 1e-300)), positions, fixed,
-                    offset / max(norm2, 1e-300))
     return out
 
 

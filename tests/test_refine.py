@@ -314,19 +314,19 @@ def test_a_refinement_flies_a_point_it_just_flew_once_and_ends_as_flying_it_agai
     """A stage asks for the same point several times in a row (its start, the search's first
     point, the point the search ended at): the flight is reused, and the refinement ends
     exactly where flying every request again ends."""
-    module = importlib.import_module("sindyship.refine")
-    flown, fly_batches = [], module._fly_batches
+    module = importlib.import_module("sindyship.refine_problem")
+    flown, fly_batches = [], module.fly_batches
 
     def counted(model, batches, weights, slots, sensitivities, n_jobs):
         flown.append(sensitivities)
         return fly_batches(model, batches, weights, slots, sensitivities, n_jobs)
 
-    monkeypatch.setattr(module, "_fly_batches", counted)
+    monkeypatch.setattr(module, "fly_batches", counted)
     settings = {"max_evaluations": 12, "segment_s": [100.0, 300.0], "validate": False}
     reused = refine(fitted, runs, **settings)
     plain, jacobians = flown.count(False), flown.count(True)
     flown.clear()
-    monkeypatch.setattr(module._Problem, "_flights", lambda self, p, sensitivities: counted(
+    monkeypatch.setattr(module.ShootingProblem, "_flights", lambda self, p, sensitivities: counted(
         self.model, self.batches, self.weights(p), self.slots, sensitivities, self.n_jobs))
     again = refine(fitted, runs, **settings)
     assert flown.count(True) == jacobians > 0
@@ -341,14 +341,14 @@ def test_a_refinement_flies_with_one_blas_thread(runs, fitted, monkeypatch):
     of J^T J would take their cores."""
     from threadpoolctl import threadpool_info
 
-    module = importlib.import_module("sindyship.refine")
-    seen, fly_batches = set(), module._fly_batches
+    module = importlib.import_module("sindyship.refine_problem")
+    seen, fly_batches = set(), module.fly_batches
 
     def watched(*args):
         seen.update(p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas")
         return fly_batches(*args)
 
-    monkeypatch.setattr(module, "_fly_batches", watched)
+    monkeypatch.setattr(module, "fly_batches", watched)
     refine(fitted, runs, max_evaluations=3, segment_s=100.0, validate=False)
     assert seen <= {1}
 
@@ -455,7 +455,7 @@ def test_a_refinement_that_does_not_carry_over_keeps_the_fit(four, kcs, monkeypa
     assert "the fitted coefficients are kept" in report["stopped"]
     assert report["flight_rms_after"] == report["flight_rms_before"]
     # the check comes first: a refused refinement is never made on all four records
-    assert report["evaluations"] == 0 and report["jacobians"] == 0
+    assert report["evaluations"] == 0 and report["jacobians"] == 0 and report["stages"] == []
     assert report["refused_unstable"] is False and report["refused_turning"] is None
     assert kept.info["straight_run"] == prior.info["straight_run"]
     assert report["flight_rms_before"] > 0 and report["segments"] >= 4
