@@ -567,6 +567,41 @@ def test_a_divergence_cured_near_the_end_does_not_confirm_flights_flown_farther_
         assert flight_confirmed(SimpleNamespace(confirmation=change)) is named, factor
 
 
+def test_a_discovery_must_outfly_the_effects_the_flights_favour(tmp_path, capsys):
+    """Turning circles to both sides: leaving one out, the asymmetry of the KCS rudder takes
+    no share of the force error (the other side's turns cannot tell its even terms from the
+    odd ones), but re-flying the training records with it cures their divergences.  A
+    discovered family is named only when it flies the manoeuvres left out better than such
+    an effect; two turns a side make that contest undecided, and the verdict adds the
+    asymmetry (a discovered `motion` had been named without ever being flown)."""
+    from sindyship.cli import main
+
+    runs = fly(MMGModel(load_ship("kcs")), [Manoeuvre("turning-circle", rudder=r, duration=400)
+                                             for r in (35, -35, 20, -20)])
+    paths = []
+    for run in runs:
+        write_csv(run, tmp_path / f"{run.name}.csv")
+        paths.append(str(tmp_path / f"{run.name}.csv"))
+
+    def verdict(files):
+        capsys.readouterr()
+        assert main(["diagnose", *files, "--ship", "kcs", "--resample", "2", "--json"]) == 0
+        return json.loads(capsys.readouterr().out)
+
+    three = verdict(paths[:3])
+    (score,) = [s for s in three["ranking"] if s["effect"] == "asymmetry"]
+    assert not score["meaningful"] and score["confirmation"]["confirmed"] is True
+    contests = three["discovery"]["contests"]
+    assert [c["catalogued"] for c in contests] == ["asymmetry"]
+    # with one port turn, the asymmetry fitted without it cannot fly it: the finding wins
+    assert contests[0]["winner"] == "finding" and three["verdict"] == "add-discovered"
+    four = verdict(paths)
+    assert [(c["catalogued"], c["winner"]) for c in four["discovery"]["contests"]] == [
+        ("asymmetry", "undecided")]
+    assert four["discovery"]["accepted"] == []
+    assert four["verdict"] == "add-effect" and four["effect_to_add"] == "asymmetry"
+
+
 def test_held_out_flights_that_contradict_a_confirmed_effect_are_said_so(kcs):
     """Confirmation judges the training flights alone (never selecting on the test set); when
     the held-out flights then diverge with the effect, the confirmation line and the verdict

@@ -412,8 +412,9 @@ def test_an_effect_only_the_flights_favour_yields_to_a_discovery(symmetric):
     effect is meaningful, and re-flying favours crossflow and environment over the windows
     before the divergences.  That stopped the search beyond the catalogue and named one of
     them (environment left the zig-zag 1.9 L off); the search now runs and finds the lag,
-    and the verdict says why no catalogued effect is named and repeats the diagnosis's
-    library and effects in its command."""
+    which flies the manoeuvres left out better than either, and the verdict says why no
+    catalogued effect is named and repeats the diagnosis's library and effects in its
+    command."""
     from sindyship.diagnose import diagnose
     from sindyship.identify import resolve_library
 
@@ -428,7 +429,12 @@ def test_an_effect_only_the_flights_favour_yields_to_a_discovery(symmetric):
     assert result.discovery.best.delays["delta"] == pytest.approx(4.0, abs=0.5)
     verdict = " ".join(result.report().split("Verdict:", 1)[1].split())
     assert verdict.startswith("no catalogued effect is meaningful (crossflow, environment "
-                              "bring the training flights closer but explain too little")
+                              "bring the training flights closer but explain little of the "
+                              "force error, and the discovery flies the manoeuvres left out "
+                              "better)")
+    # the lag was flown against both, leaving one manoeuvre out, and flew better
+    assert [(c.catalogued, c.winner) for c in result.discovery.contests] == [
+        ("crossflow", "finding"), ("environment", "finding")]
     library = resolve_library("abkowitz-noconst", ["crossflow"])
     other = diagnose(train, symmetric, library=library, effects=["asymmetry"])
     assert other.verdict == "add-discovered"

@@ -180,7 +180,8 @@ class Diagnosis:
         discovered one, the other effect whose confirmation brings the training flights
         closest, by a clear margin (:func:`flight_confirmed`): the verdict never disagrees
         with the flights.  An effect its forces do not single out yields to a discovered one,
-        which they do."""
+        which they do and which flies the manoeuvres left out better than it does (the
+        search beyond the catalogue contests them)."""
         meaningful = self.meaningful_top
         if meaningful is not None:
             return meaningful
@@ -201,7 +202,7 @@ class Diagnosis:
     def no_catalogued_effect(self) -> str:
         """Why no catalogued effect is named, for the verdict: none is meaningful, or
         re-flying the training records refutes those that are; and the effects the flights
-        alone favour, which explain too little of the force to stand against a discovery."""
+        alone favour, which a discovery out-flew on the manoeuvres left out."""
         refuted = [s.effect.name for s in self.ranking if s.meaningful
                    and s.confirmation is not None and s.confirmation.confirmed is False]
         text = ("no catalogued effect is meaningful" if not refuted else
@@ -211,8 +212,8 @@ class Diagnosis:
         if flown:
             one = len(flown) == 1
             text += (f" ({', '.join(flown)} bring{'s' if one else ''} the training flights "
-                     f"closer but explain{'s' if one else ''} too little of the force error to "
-                     "stand against a discovery)")
+                     f"closer but explain{'s' if one else ''} little of the force error, and "
+                     "the discovery flies the manoeuvres left out better)")
         return text
 
     @property
@@ -502,13 +503,18 @@ def _check_arguments(records: Sequence[Trajectory], test: Sequence[Trajectory],
 def _search_beyond(result: Diagnosis, fitted: Sequence[Trajectory], settings: Mapping,
                    n_jobs: int | None) -> None:
     """Run :func:`discover` into ``result.discovery`` when no catalogued effect is meaningful
-    (one the flights alone favour does not stop the search) and the model is visibly wrong (a
-    training flight diverged, or an equation's error stands clearly above its noise floor)."""
+    and the model is visibly wrong (a training flight diverged, or an equation's error stands
+    clearly above its noise floor).  The effects the flights alone favour do not stop the
+    search, but a finding must fly the manoeuvres left out better than each of them to be
+    discovered (:func:`sindyship.diagnose.contest.flight_contest`)."""
     floor = result.noise_floor
     visibly_wrong = bool(result.diverged) or any(floor[dof] < NOISE_VISIBLE for dof in DOFS)
     if result.meaningful_top is None and visibly_wrong:
+        favoured = sorted(result.flight_favoured,
+                          key=lambda score: _finite_or_inf(score.confirmation.ratio("training")))
         result.discovery = discover(fitted, result.ship, library=result.library,
                                     threshold=result.threshold, check_catalogue=False,
+                                    rivals=[score.effect.name for score in favoured],
                                     n_jobs=n_jobs, **settings)
 
 

@@ -322,6 +322,7 @@ def discover(
     threshold: float = MEANINGFUL_SHARE,
     max_rounds: int = 1,
     check_catalogue: bool = True,
+    rivals: Sequence[str] = (),
     n_jobs: int | None = 1,
 ) -> Discovery:
     """Search the force residual of a fitted library for an effect no catalogue lists.
@@ -352,6 +353,10 @@ def discover(
         (:func:`sindyship.diagnose.contest.flight_contest`; a family can stand in for a
         missing catalogued effect: position terms for an asymmetry, say).
         :func:`sindyship.diagnose.diagnose` searches only when none is meaningful.
+    rivals : sequence of str
+        Catalogued effects the best finding must also fly better than in that contest,
+        after the meaningful ones (:func:`sindyship.diagnose.diagnose` names those its
+        re-flown training flights favour although their share of the force error is small).
     n_jobs : int or None
         joblib workers for the refits of the delay grid (``None``: from a
         ``joblib.parallel_config`` block, e.g. a Dask cluster's; the result is the same).
@@ -394,6 +399,7 @@ def discover(
     catalogue = (_meaningful_catalogue(records, ship, base, threshold, settings)
                  if check_catalogue else {})
     stand_ins = sorted(catalogue, key=lambda name: -catalogue[name])
+    stand_ins += [name for name in rivals if name not in stand_ins]
     rounds, accepted, contests, library_now = [], [], [], base
     for _ in range(max(int(max_rounds), 1)):
         findings, floor = _search(records, ship, library_now, settings, threshold, n_jobs)
