@@ -246,7 +246,9 @@ def classify_tests(frame: pd.DataFrame, ship: Ship) -> np.ndarray:
     """The test type of every captive row, from which of v', r' and delta are non-zero.
 
     ``static-drift`` (v only), ``rudder`` (delta only), ``pure-yaw`` (r only), ``drift-yaw``
-    (v and r), ``combined`` (the rudder with v or r) and ``straight`` (none).
+    (v and r), ``combined`` (the rudder with v or r) and ``straight`` (none), all going ahead;
+    ``astern`` for a row whose surge speed u is zero or negative, whatever else it holds (a
+    four-quadrant test's second quadrant).
 
     Examples
     --------
@@ -264,6 +266,7 @@ def classify_tests(frame: pd.DataFrame, ship: Ship) -> np.ndarray:
     names[~v & ~r & d] = "rudder"
     names[~v & r & ~d] = "pure-yaw"
     names[v & r & ~d] = "drift-yaw"
+    names[~(frame["u"].to_numpy(float) > 0.0)] = "astern"
     return names
 
 

@@ -62,12 +62,13 @@ __all__ = [
     "training_envelope",
 ]
 
-#: Variables whose training ranges make the envelope (non-dimensional v', r'; delta [rad]).
+#: The horizontal axis of each test type's panels: a column of the table and its label.
 _AXIS = {"static-drift": ("beta", "drift angle beta [deg]"),
          "rudder": ("delta_deg", "rudder angle delta [deg]"),
          "pure-yaw": ("r_nd", "yaw rate r' [-]"),
          "drift-yaw": ("beta", "drift angle beta [deg] (one line per r')"),
-         "combined": ("index", "condition"), "straight": ("index", "condition")}
+         "combined": ("index", "condition"), "straight": ("index", "condition"),
+         "astern": ("index", "condition going astern")}
 _UNITS = {"X": "X [MN]", "Y": "Y [MN]", "N": "N [MN m]"}
 
 
@@ -177,11 +178,14 @@ class ForceComparison:
     ----------
     overall : dict
         ``{"X": {"n", "correlation", "relative_rms"}, "Y": ..., "N": ...}`` over all
-        conditions (None where undefined, e.g. a correlation of a constant force).
+        conditions going ahead (None where undefined, e.g. a correlation of a constant force).
     by_test : dict
-        The same per test type (:func:`sindyship.captive.classify_tests`).
+        The same per test type (:func:`sindyship.captive.classify_tests`); the conditions
+        going astern (u <= 0), which no other entry counts, are the test ``astern``: a model
+        identified from a ship going ahead expands its forces about the design speed ahead.
     inside, outside : dict or None
-        The same inside and outside the training envelope; None when no envelope is known.
+        The same inside and outside the training envelope, going ahead; None when no envelope
+        is known.
     envelope : dict or None
         ``{"v": [min, max], "r": [...], "delta": [...]}`` (v', r' over U0; delta [rad]).
     table : pandas.DataFrame
@@ -298,14 +302,14 @@ def compare_forces(model: AbkowitzModel, captive: pd.DataFrame,
     for dof in FORCE_COLUMNS:
         table[f"{dof}_measured"] = captive[dof].to_numpy(float)
         table[f"{dof}_predicted"] = predicted[dof].to_numpy()
-    every = np.ones(len(table), dtype=bool)
+    ahead = (table["test"] != "astern").to_numpy()
     tests = [t for t in ("static-drift", "rudder", "pure-yaw", "drift-yaw", "combined",
-                         "straight") if np.any(table["test"] == t)]
+                         "straight", "astern") if np.any(table["test"] == t)]
     return ForceComparison(
-        overall=_stats(table, every),
+        overall=_stats(table, ahead),
         by_test={t: _stats(table, (table["test"] == t).to_numpy()) for t in tests},
-        inside=None if inside is None else _stats(table, inside),
-        outside=None if inside is None else _stats(table, ~inside),
+        inside=None if inside is None else _stats(table, inside & ahead),
+        outside=None if inside is None else _stats(table, ~inside & ahead),
         envelope=None if envelope is None else {k: list(map(float, v))
                                                 for k, v in envelope.items()},
         table=table,

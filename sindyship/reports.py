@@ -575,12 +575,18 @@ def forces_report(result) -> str:
         r = "    n/a" if rel is None else f"{rel:7.3f}"
         return f"{c} {r}"
 
-    rows = [("all", result.overall)]
-    rows += [(test, stats) for test, stats in result.by_test.items()]
+    astern = result.by_test.get("astern")
+    rows = [("all ahead" if astern else "all", result.overall)]
+    rows += [(test, stats) for test, stats in result.by_test.items() if test != "astern"]
     if result.inside is not None:
         rows += [("inside envelope", result.inside), ("outside envelope", result.outside)]
     lines = [f"{'conditions':<18}" + "".join(f"{dof + ' corr  relRMS':>16}"
                                              for dof in ("X", "Y", "N"))]
     for name, stats in rows:
         lines.append(f"{name:<18}" + "".join(f"  {cell(stats[dof])}" for dof in ("X", "Y", "N")))
+    if astern:
+        lines.append(f"{'astern (u <= 0)':<18}"
+                     + "".join(f"  {cell(astern[dof])}" for dof in ("X", "Y", "N")))
+        lines.append(f"{astern['X']['n']} condition(s) going astern are compared apart: the "
+                     "model's forces are expanded about its design speed ahead.")
     return "\n".join(lines)

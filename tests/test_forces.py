@@ -208,6 +208,33 @@ def test_forces_in_kilonewtons_under_bare_headers_are_refused(kcs):
         compare_forces(reference, in_kilo)
 
 
+def test_conditions_going_astern_are_compared_apart(kcs, tmp_path):
+    """A model identified going ahead expands its forces about the design speed ahead: captive
+    rows going astern (a four-quadrant test) are their own test type, counted in no other
+    statistic, and the report says so; they had been mixed into 'all' and 'static-drift'."""
+    import pandas as pd
+
+    from sindyship.captive import classify_tests
+    from sindyship.reports import forces_report
+
+    reference = AbkowitzModel(kcs, load_library("abkowitz"), taylor_reference(kcs))
+    ahead = captive_tests(kcs, "static-drift", points=5)
+    astern = ahead.assign(u=-ahead["u"])
+    both = pd.concat([ahead, astern], ignore_index=True)
+    assert list(classify_tests(both, kcs)[5:]) == ["astern"] * 5
+    alone, mixed = compare_forces(reference, ahead), compare_forces(reference, both)
+    assert mixed.overall == alone.overall and mixed.by_test["static-drift"] == \
+        alone.by_test["static-drift"]
+    assert mixed.by_test["astern"]["Y"]["n"] == 5
+    assert mixed.by_test["astern"]["X"]["relative_rms"] > 1.0  # far from what it measures
+    text = forces_report(mixed)
+    assert text.splitlines()[1].startswith("all ahead ")
+    assert "5 condition(s) going astern are compared apart" in text
+    assert "astern" not in forces_report(alone)
+    figure = plot_captive_forces(mixed)
+    assert [ax.get_title() for ax in figure.axes][-3].startswith("astern: X")
+
+
 def test_the_taylor_reference_sets_the_floor_the_docs_state(kcs):
     """docs/captive-csv.md: even the MMG's exact Taylor coefficients miss its virtual captive
     forces (the added masses of Table 6 against Table 2's, and the cubic series): about 4 %
