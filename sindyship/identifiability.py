@@ -133,8 +133,12 @@ class CollinearGroup:
             amount = _amount(free)
             advice.append(f"adding {free['test']} " + ("leaves it infinite" if amount is None
                                                        else f"lowers it {amount}"))
-        if captive is not None:
-            advice.append(f"{captive['test']} {_amount(captive) or 'leave it infinite'}")
+        if captive is not None:  # fit takes trajectories only: captive tests check forces
+            amount = _amount(captive)
+            advice.append(f"{captive['test']} would lower it {amount} (fit takes "
+                          "trajectories only: check the model's forces against such tests with "
+                          "sindyship forces)" if amount is not None else
+                          f"{captive['test']} would leave it infinite")
         return line + (f"; {', '.join(advice)}." if advice else ".")
 
 
