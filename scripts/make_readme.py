@@ -207,9 +207,9 @@ def _saved_campaign() -> dict | None:
         return None
     result = json.loads(path.read_text())
     return {"named": result["named"], "recommended": result["recommended"],
-            "speed": result["diagnosis"]["speed"], "against_commit": result["against_commit"],
+            "speed": result["diagnosis"]["speed"],
             "workflows": {k: {"errors": v["errors"], "geometric_mean_L": v["geometric_mean_L"]}
-                          for k, v in result["workflows"].items()}}
+                          for k, v in result["workflows"].items() if k != "default before"}}
 
 
 def _saved_pysindy() -> dict | None:
@@ -648,10 +648,6 @@ def _campaign(n: dict) -> str:
                      f"(geometric mean {work[everything]['geometric_mean_L']:.3f} L).")
     else:
         text += "."
-    if "default before" in work:
-        text += (f" On the same files the default `fit` and `evaluate` of commit "
-                 f"{result['against_commit']} (least squares on the paper's library) fly "
-                 f"{flights('default before')}.")
     return text
 
 

@@ -117,12 +117,19 @@ def _coefficients_of(coefficients, library: TermLibrary, source: str
             raise SindyshipInputError(
                 f"{source}: coefficients {dof!r} must be an object of term: value pairs."
             )
-        known = {t.text for t in library.terms[dof]}
-        unknown = sorted(set(coefficients[dof]) - known)
+        known = [t.text for t in library.terms[dof]]
+        unknown = sorted(set(coefficients[dof]) - set(known))
         if unknown:
             raise SindyshipInputError(
                 f"{source}: coefficient {dof}[{unknown[0]!r}] is not a term of the model's "
                 f"library {library.name!r}; the file was edited."
+            )
+        missing = [term for term in known if term not in coefficients[dof]]
+        if missing:
+            raise SindyshipInputError(
+                f"{source}: coefficient {dof}[{missing[0]!r}] is missing: every term of the "
+                f"model's library {library.name!r} has a value (0 for a term the optimizer "
+                "dropped); the file was edited."
             )
         clean[dof] = {}
         for term, value in coefficients[dof].items():

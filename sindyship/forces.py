@@ -226,6 +226,28 @@ def _check_speed_scale(captive: pd.DataFrame, ship) -> None:
         )
 
 
+def _check_revolutions_scale(captive: pd.DataFrame, model: AbkowitzModel) -> None:
+    """Refuse captive revolutions far above the ship's own, where the model's terms read them:
+    rpm under a bare ``n`` header are 60 times too high, and the forces would be blamed."""
+    from .plausibility import MAX_REVOLUTION_RATIO
+
+    ship = model.ship
+    if "n" not in captive.columns or "n" not in model.recorded_channels or not ship.has_mmg:
+        return
+    own = ship.propeller.n_P
+    typical = float(np.median(np.abs(captive["n"].to_numpy(float))))
+    if typical <= MAX_REVOLUTION_RATIO * own:
+        return
+    hint = ("they look like rpm: write the header as 'n [rpm]'"
+            if typical / 60.0 <= MAX_REVOLUTION_RATIO * own else
+            "check the unit of n and that the ship (full or model scale) is right")
+    raise SindyshipInputError(
+        f"the captive tests' revolutions n have a median of {typical:.4g}, {typical / own:.3g} "
+        f"times the propeller revolutions n = {own:.4g} rps of the model's ship "
+        f"{ship.name!r}; {hint}."
+    )
+
+
 #: Measured captive forces whose size (RMS) differs from the model's predicted ones by more
 #: than this factor are in another unit: a kN figure read as newtons is 1000 times too small,
 #: while a fitted model's forces come within some tens of the measured ones even where their
@@ -282,6 +304,7 @@ def compare_forces(model: AbkowitzModel, captive: pd.DataFrame,
         )
     ship = model.ship
     _check_speed_scale(captive, ship)
+    _check_revolutions_scale(captive, model)
     predicted = model_captive_forces(model, captive)
     _check_force_scale(captive, predicted)
     values = _nondimensional(captive, ship)

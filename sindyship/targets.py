@@ -91,6 +91,36 @@ def five_point_derivative(y: np.ndarray, dt: float) -> np.ndarray:
     return d / dt
 
 
+def savgol_points(window: float, dt: float, order: int, n_samples: int, what: str) -> int:
+    """The odd number of samples of a Savitzky-Golay window of ``window`` seconds at the step
+    ``dt``, refusing a window too short for a polynomial of ``order`` (it had been widened
+    silently) or longer than the record of ``n_samples`` (it had been cut to the record);
+    ``what`` begins the message (the record's name).
+
+    Examples
+    --------
+    >>> savgol_points(21.0, 1.0, 3, 3200, "zz20")
+    21
+    >>> savgol_points(3.0, 1.0, 3, 3200, "zz20")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: zz20: a Savitzky-Golay window of 3 s ... 4 s or more.
+    """
+    points, least = int(round(window / dt)) | 1, (order + 2) | 1
+    if points < least:
+        raise SindyshipInputError(
+            f"{what}: a Savitzky-Golay window of {window:g} s holds {points} sample"
+            f"{'' if points == 1 else 's'} at {dt:g} s, too few for a polynomial of order "
+            f"{order}; give a window of {(least - 1) * dt:g} s or more."
+        )
+    if points > n_samples:
+        raise SindyshipInputError(
+            f"{what}: a Savitzky-Golay window of {window:g} s is longer than the record "
+            f"({(n_samples - 1) * dt:g} s); give a window shorter than the record."
+        )
+    return points
+
+
 def derivative(y: np.ndarray, dt: float, method: str = "five-point", window: float = 21.0,
                order: int = 3) -> np.ndarray:
     """Time derivative of a uniformly sampled channel.
@@ -106,12 +136,7 @@ def derivative(y: np.ndarray, dt: float, method: str = "five-point", window: flo
     if method == "savgol":
         from scipy.signal import savgol_filter
 
-        n = max(int(round(window / dt)) | 1, order + 2 | 1)
-        n = min(n, len(y) - (1 - len(y) % 2))
-        if n <= order:
-            raise SindyshipInputError(
-                f"the Savitzky-Golay window of {window} s is too short for order {order}."
-            )
+        n = savgol_points(window, dt, order, len(y), "the derivative")
         return savgol_filter(np.asarray(y, dtype=float), n, order, deriv=1, delta=dt,
                              mode="interp")
     raise SindyshipInputError(
@@ -126,9 +151,7 @@ def smoothed_states(traj: Trajectory, method: str = "five-point", window: float 
     if method == "savgol":
         from scipy.signal import savgol_filter
 
-        dt = traj.dt
-        n = max(int(round(window / dt)) | 1, order + 2 | 1)
-        n = min(n, traj.n_samples - (1 - traj.n_samples % 2))
+        n = savgol_points(window, traj.dt, order, traj.n_samples, traj.name or "the record")
         out = {c: savgol_filter(v, n, order, mode="interp") for c, v in out.items()}
     return out
 
@@ -156,6 +179,12 @@ def regression_targets(traj: Trajectory, ship: Ship, *, method: str = "five-poin
         ``{"X": ..., "Y": ..., "N": ...}`` arrays over the samples.
     """
     L, U0 = ship.L, ship.U0
+    if method == "five-point" and traj.n_samples < 5 and accelerations is None:
+        raise SindyshipInputError(
+            f"{traj.name or 'the record'} has {traj.n_samples} sample"
+            f"{'' if traj.n_samples == 1 else 's'}; 5-point differences need at least 5: give "
+            "a longer record."
+        )
     dt = traj.dt
     states = smoothed_states(traj, method, window, order)
     u = states["u"] / U0

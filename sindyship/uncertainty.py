@@ -314,10 +314,13 @@ def ensemble(records: Sequence[Trajectory], ship: Ship, optimizer: str = "ls",
     """
     from joblib import Parallel, delayed, effective_n_jobs
 
+    from .arguments import as_ship
+
     if scheme not in SCHEMES:
         raise SindyshipInputError(
             f"unknown ensemble scheme {scheme!r}; choose one of {', '.join(SCHEMES)}."
         )
+    ship = as_ship(ship)
     records = list(records)
     rudder_signal = resolve_rudder_signal(records, rudder_signal)
     if problems is None:

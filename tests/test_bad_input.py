@@ -172,6 +172,25 @@ def test_csv_irregular_sampling(new_folder, good_csv, data, factor):
     assert_one_line(code, out, err, 2, str(path), "irregular", "--resample")
 
 
+def test_resampling_is_refused_by_the_memory_of_all_records_together(new_folder, good_csv,
+                                                                     monkeypatch):
+    """The memory guard of --resample had counted each record alone: eight records that
+    together needed more than the machine's memory each passed.  120 s at 1 ms is 120,000
+    samples a record, 120 MB; three together exceed half of 600 MB, one does not."""
+    import sindyship.cli._common as common
+
+    folder = new_folder()
+    paths = [folder / f"zz{k}.csv" for k in range(3)]
+    for path in paths:
+        path.write_text(good_csv)
+    monkeypatch.setattr(common, "physical_memory", lambda: 600_000_000)
+    code, out, err = run_sindyship("fit", *paths, "--resample", "0.001", "--out",
+                                   folder / "m.json")
+    assert_one_line(code, out, err, 2, "resampling 3 records (357 s) at 0.001 s would make "
+                    "3.57e+05 samples, about 0.357 GB, more than half of this machine's 0.6 GB")
+    assert not (folder / "m.json").exists()
+
+
 @PROPERTY
 @given(keep=st.integers(0, 1), blank_lines=st.integers(0, 3), header=st.booleans())
 def test_csv_empty_or_one_row(new_folder, good_csv, keep, blank_lines, header):
@@ -631,12 +650,13 @@ def _edited(saved_model: str, edit) -> str:
 @pytest.mark.parametrize(("edit", "words"), [
     (lambda d: d["coefficients"]["Y"].update({"v": 1e30}), "magnitude"),
     (lambda d: d["coefficients"]["N"].update({"v^9": 0.1}), "not a term"),
+    (lambda d: d["coefficients"]["N"].pop("r"), "coefficient N['r'] is missing"),
     (lambda d: d.update(format_version=0), "does not exist"),
     (lambda d: d.update(format_version=-1), "does not exist"),
     (lambda d: d.update(format_version="2"), 'must be a whole number such as 2, not "2"'),
     (lambda d: d["ship_definition"]["particulars"].update(L=231.0), "digest"),
-], ids=["huge-coefficient", "unknown-term", "version-0", "version-minus-1", "version-text",
-        "edited-ship"])
+], ids=["huge-coefficient", "unknown-term", "missing-term", "version-0", "version-minus-1",
+        "version-text", "edited-ship"])
 def test_an_edited_model_is_refused(new_folder, good_csv, saved_model, edit, words):
     code, out, err, model = evaluate_model(new_folder(), good_csv, _edited(saved_model, edit))
     assert_one_line(code, out, err, 2, str(model), words)

@@ -429,6 +429,18 @@ def test_fit_refine_flies_the_records_and_says_what_it_did(records, tmp_path, ca
     assert "--segment sets the refinement, which is off" in capsys.readouterr().err
 
 
+def test_fit_says_when_n_jobs_is_not_used(records, tmp_path, capsys):
+    """--n-jobs sets the workers of --smoothing auto and --stream; elsewhere it had been
+    ignored without a word (the refinement flies on numba's threads already)."""
+    train = [str(records[k]) for k in ("tc35", "zz20")]
+    for given, said in ((["--n-jobs", "-1"], True), ([], False)):
+        assert main(["fit", *train, "--ship", "kcs", "--refine", "0", "--no-identifiability",
+                     *given, "--out", str(tmp_path / "m.json")]) == 0
+        err = " ".join(capsys.readouterr().err.split())
+        assert ("note: --n-jobs -1 is not used: it sets the workers of --smoothing auto and "
+                "--stream" in err) is said
+
+
 def test_the_in_process_runner_shows_what_a_fresh_process_would(monkeypatch):
     """The tests' in-process runner: warnings on stderr where they are raised (a library's
     DeprecationWarning hidden, as Python hides it), exit status of SystemExit as a process's."""

@@ -293,6 +293,10 @@ def test_the_generated_simulator_flies_recorded_channels(kcs, tmp_path):
     source = generate_python(with_n)
     assert "CHANNEL_N = math.nan" in source and "CHANNEL_SCALING" in source
     sim = load_module(source, tmp_path / "sim_n.py")
+    # its docstring example passes the ship's design revolutions (it had failed, asking for n)
+    import doctest
+
+    assert doctest.testmod(sim).failed == 0 and ">>> n = " in sim.__doc__
     (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=20, duration=300)])
     n = np.linspace(1.5, 2.2, run.n_samples)  # revolutions [rps] that change in the record
     data = run.data.copy()
@@ -318,12 +322,38 @@ def test_the_generated_simulator_flies_recorded_channels(kcs, tmp_path):
                           {"n": np.full(run.n_samples, 1.8)})
     assert flight.diverged_at is None
     assert np.allclose(flight.states, steady.states, rtol=0, atol=1e-9 * kcs.L)
+    # the command line takes the default in SI, as channels= and the CSV do (it had taken the
+    # library's n L/U0, and n=1.8 flew a ship with its propeller nearly stopped)
+    from sindyship.cli import main
+
+    with_n.save(tmp_path / "with_n.json")
+    assert main(["export", str(tmp_path / "with_n.json"), "--python",
+                 str(tmp_path / "sim_n_cli.py"), "--channel", "n=1.8"]) == 0
+    cli = load_module((tmp_path / "sim_n_cli.py").read_text(), tmp_path / "sim_n_cli_run.py")
+    assert cli.CHANNEL_N == pytest.approx(1.8 * kcs.L / kcs.U0, rel=1e-12)
+    assert np.allclose(cli.simulate(record.t, record["delta_c"], record.state()[:, 0]).states,
+                       flight.states, rtol=0, atol=1e-9 * kcs.L)
+
+
+def test_the_generated_simulator_refuses_a_wrong_state_or_an_angle_in_degrees(kcs, tmp_path):
+    """A six-value state raised numpy's "cannot reshape", and 15 "rad" (degrees given by
+    mistake) flew hard over: both are one clear sentence now."""
+    sim = load_module(generate_python(paper_model(kcs)), tmp_path / "sim_checks.py")
+    t = np.arange(0.0, 10.0)
+    with pytest.raises(ValueError, match=r"^state0 has shape \(6,\); give 7 finite values"):
+        sim.simulate(t, 0.1, [kcs.U0, 0, 0, 0, 0, 0])
+    with pytest.raises(ValueError, match=r"^state has shape \(14,\); give the 7 values"):
+        sim.rhs(0.0, np.zeros(14), 0.1)
+    with pytest.raises(ValueError, match=r"^delta_c reaches 15 rad, more than a quarter turn: "
+                       r"give the rudder angle in radians"):
+        sim.simulate(t, 15.0)
+    assert sim.simulate(t, np.radians(15.0)).diverged_at is None
 
 
 @pytest.mark.parametrize(("options", "message"), [
-    (["--channel", "N=35.86", "--python", "sim.py"],
+    (["--channel", "N=10.3", "--python", "sim.py"],
      "--channel N: the model's library uses no channel of that name (it uses: none)"),
-    (["--channel", "n=35.86"], "--channel sets the simulator's default value"),
+    (["--channel", "n=10.3"], "--channel sets the simulator's default value"),
 ])
 def test_export_refuses_a_channel_the_model_does_not_use(model, tmp_path, capsys, options,
                                                           message):

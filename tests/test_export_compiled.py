@@ -161,7 +161,7 @@ def test_arguments_that_need_no_conversion_take_the_short_way_with_the_same_resu
         assert compiled_sim._rhs_as_given(state, command) is None
     with pytest.raises(ValueError, match="delta_c has 3 values"):
         compiled_sim.rhs(0.0, states, delta_c[:3])
-    with pytest.raises(ValueError, match="cannot reshape"):
+    with pytest.raises(ValueError, match=r"state has shape \(6, 5\); give the 7 values"):
         compiled_sim.rhs(0.0, states[:6], 0.1)
 
 

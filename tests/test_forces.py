@@ -21,7 +21,7 @@ from sindyship.forces import (
     training_envelope,
 )
 from sindyship.identify import fit
-from sindyship.library import load_library
+from sindyship.library import load_effect, load_library
 from sindyship.model import AbkowitzModel
 from sindyship.taylor import taylor_reference
 
@@ -233,6 +233,25 @@ def test_conditions_going_astern_are_compared_apart(kcs, tmp_path):
     assert "astern" not in forces_report(alone)
     figure = plot_captive_forces(mixed)
     assert [ax.get_title() for ax in figure.axes][-3].startswith("astern: X")
+
+
+def test_revolutions_in_rpm_under_a_bare_header_are_named_not_the_forces(kcs):
+    """A captive file with n in rpm under a bare header was blamed on the forces ("the measured
+    X is 8e-05 times the size the model predicts ... 'X [kN]'")."""
+    from sindyship.errors import SindyshipInputError
+
+    base = AbkowitzModel(kcs, load_library("abkowitz"), taylor_reference(kcs))
+    library = base.library.extended(load_effect("propeller"))
+    coefficients = {dof: {t.text: base.coefficients[dof].get(t.text, 0.0)
+                          for t in library.terms[dof]} for dof in "XYN"}
+    model = AbkowitzModel(kcs, library, coefficients)
+    captive = captive_tests(kcs, "all", points=5)
+    compare_forces(model, captive)  # rps: compared
+    with pytest.raises(SindyshipInputError, match=r"^the captive tests' revolutions n have a "
+                       r"median of [\d.]+, 60 times the propeller revolutions .* they look like "
+                       r"rpm: write the header as 'n \[rpm\]'\.$"):
+        compare_forces(model, captive.assign(n=captive["n"] * 60.0))
+    compare_forces(base, captive.assign(n=captive["n"] * 60.0))  # its terms do not read n
 
 
 def test_the_taylor_reference_sets_the_floor_the_docs_state(kcs):

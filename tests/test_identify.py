@@ -189,3 +189,20 @@ def test_records_without_the_actual_rudder_are_fitted_on_the_command(kcs, protoc
     assert distance_errors(flown, protocol_runs["test"][2], kcs.L)["mean_distance_L"] < 3.0
     with pytest.raises(SindyshipInputError, match="spiral_port has no actual rudder angle"):
         fit(train[:-1] + commanded_only[-1:], kcs)
+
+
+def test_a_record_too_short_to_difference_is_named(kcs):
+    """Fewer than five samples cannot be differenced; the message names the record (it had
+    said only "a record needs at least 5 samples")."""
+    from dataclasses import replace
+
+    from sindyship.errors import SindyshipInputError
+    from sindyship.manoeuvres import Manoeuvre
+    from sindyship.mmg import MMGModel
+
+    runs = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=100),
+                               Manoeuvre("turning-circle", rudder=20, duration=100)])
+    tiny = replace(runs[1], data=runs[1].data.iloc[:3].reset_index(drop=True), name="tiny")
+    with pytest.raises(SindyshipInputError, match=r"^tiny has 3 samples; 5-point differences "
+                       r"need at least 5: give a longer record\.$"):
+        fit([runs[0], tiny], kcs)

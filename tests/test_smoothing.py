@@ -193,3 +193,58 @@ def test_choose_smoothing_prefers_smoothing_on_noisy_runs(kcs, protocol_runs, se
     assert table.loc[0, "score_L"] > 2.0 * table.loc[1, "score_L"]
     with pytest.raises(SindyshipInputError, match="at least two training records"):
         choose_smoothing(noisy[:1], kcs)
+
+
+def test_a_savgol_window_longer_than_the_record_or_too_short_is_refused(kcs):
+    """A window longer than the record had been cut to the record and one too short for the
+    polynomial widened, both silently (a 5000 s window over 3200 s records gave N'_r > 0);
+    the smoother and the derivative now refuse both, naming the record."""
+    from sindyship.identify import fit
+
+    runs = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=300),
+                               Manoeuvre("zigzag", rudder=10, check=10, duration=300)])
+    with pytest.raises(SindyshipInputError, match=r"^zz20_20: smoothing: a Savitzky-Golay "
+                       r"window of 5000 s is longer than the record \(299 s\); give a window "
+                       r"shorter than the record\.$"):
+        smooth_records(runs, SmoothingSetting("savgol", 5000.0))
+    with pytest.raises(SindyshipInputError, match=r"^zz20_20: smoothing: a Savitzky-Golay "
+                       r"window of 1 s holds 1 sample at 1 s, too few for a polynomial of "
+                       r"order 3; give a window of 4 s or more\.$"):
+        smooth_records(runs, SmoothingSetting("savgol", 1.0))
+    with pytest.raises(SindyshipInputError, match=r"^zz20_20: a Savitzky-Golay window of 600 s "
+                       r"is longer than the record"):
+        fit(runs, kcs, derivative="savgol", window=600.0)
+    assert smooth_records(runs, SmoothingSetting("savgol", 299.0))[0].n_samples == 300
+
+
+def test_automatic_smoothing_leaves_out_windows_the_records_cannot_hold(kcs, monkeypatch):
+    """The default candidates a record is too short for are not tried (they had been cut to
+    the record), and the candidates' fits use the fit's own derivative and rudder signal."""
+    import sindyship.identify as identify
+
+    runs = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=60),
+                               Manoeuvre("zigzag", rudder=10, check=10, duration=60)])
+    seen, fit = [], identify.fit
+
+    def watched(*args, **kwargs):
+        seen.append({k: kwargs[k] for k in ("derivative", "window", "rudder_signal")})
+        return fit(*args, **kwargs)
+
+    monkeypatch.setattr(identify, "fit", watched)
+    best, table = choose_smoothing(runs, kcs, derivative="savgol", window=11.0,
+                                   rudder_signal="commanded", n_jobs=1)
+    # no 81 s window in records of 59 s
+    assert table["window_s"].dropna().tolist() == [11.2, 21.0, 41.0, 21.0, 41.0]
+    assert seen and all(s == {"derivative": "savgol", "window": 11.0,
+                              "rudder_signal": "commanded"} for s in seen)
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ("auto:21", "gives auto a window; write auto alone"),
+    ("none:5", "gives none a window; write none alone"),
+    ("rts:21:3", "gives the RTS smoother an order, which only the Savitzky-Golay filter has"),
+])
+def test_a_smoothing_setting_with_parts_its_method_does_not_take_is_refused(text, fragment):
+    """Parts a method does not take had been dropped silently (rts:21:3 smoothed as rts:21)."""
+    with pytest.raises(SindyshipInputError, match=fragment):
+        SmoothingSetting.parse(text)

@@ -216,6 +216,36 @@ def test_fit_stream_takes_a_glob_and_writes_the_in_memory_model(files, records, 
     assert gap(fit(records, kcs, optimizer="stlsq"), AbkowitzModel.load(out)) <= RTOL
 
 
+def test_a_streamed_fit_too_large_to_refine_is_saved_as_fitted(files, records, kcs, client,
+                                                                tmp_path, capsys, monkeypatch):
+    """The refinement (on by default for the prior fit) flies every record from memory: where
+    they would take more than half of it, the streamed fit is saved unrefined with a notice and
+    the records are never read into this process; where they fit, the notice says they are."""
+    import sindyship._io as io
+    import sindyship.cli.fit as fit_verb
+
+    def never(*args, **kwargs):
+        raise AssertionError("the records were read into memory")
+
+    out = tmp_path / "model.json"
+    scheduler = ["--stream", "--scheduler", client.scheduler.address]
+    monkeypatch.setattr(io, "physical_memory", lambda: 1_000_000)  # 1 MB
+    monkeypatch.setattr(fit_verb, "read_records", never)
+    assert main(["fit", str(files["folder"] / "*.parquet"), *scheduler, "--out", str(out)]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    assert (f"not refined: the refinement flies the records from memory, "
+            f"{sum(r.n_samples for r in records):.3g} samples") in err
+    assert "the streamed fit is saved as fitted" in err
+    saved = AbkowitzModel.load(out)
+    assert "refined" not in saved.info
+    assert gap(fit(records, kcs, library=saved.library, optimizer="prior"), saved) <= RTOL
+    monkeypatch.undo()
+    assert main(["fit", str(files["folder"] / "*.parquet"), *scheduler, "--refine", "2",
+                 "--out", str(out)]) == 0
+    assert "the refinement reads the records into memory" in capsys.readouterr().err
+    assert AbkowitzModel.load(out).info["refined"]["records"]
+
+
 def one_line_error(capsys) -> str:
     err = capsys.readouterr().err.strip().splitlines()
     assert err and err[-1].startswith("sindyship fit: error: ")

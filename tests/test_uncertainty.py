@@ -138,3 +138,13 @@ def test_bad_arguments_are_input_errors(kcs, protocol_runs, problems, bagged):
         ensemble(protocol_runs["train"][:1], kcs, scheme="lomo")
     with pytest.raises(SindyshipInputError, match="unknown equation 'K'"):
         bagged.std("K")
+
+
+def test_an_ensemble_takes_a_ship_by_name(kcs, protocol_runs, problems):
+    """A built-in ship's name stands for the ship, as in fit (it had raised AttributeError)."""
+    by_name = ensemble(protocol_runs["train"], "kcs", n_models=2, seed=1, n_jobs=1,
+                       problems=problems)
+    by_ship = ensemble(protocol_runs["train"], kcs, n_models=2, seed=1, n_jobs=1,
+                       problems=problems)
+    for dof in DOFS:
+        assert np.array_equal(by_name.coefficients[dof], by_ship.coefficients[dof])

@@ -68,27 +68,40 @@ def record_keys(paths) -> list[str]:
     return keys
 
 
-def _check_resample_memory(path: Path, resample: float) -> None:
-    """Refuse resampling that would need more memory than the machine has, before reading:
-    the time span comes from the first and last rows' ``t`` (in seconds when unmarked)."""
+def _record_span(path: Path) -> float | None:
+    """The time a measurement CSV spans [s], from its first and last rows' ``t`` (in seconds
+    when unmarked); None for a Parquet file or one the reader will report on."""
+    from ..records import PARQUET_SUFFIXES
+
+    if path.suffix.lower() in PARQUET_SUFFIXES:
+        return None
     try:
         with open(path, encoding="utf-8-sig", newline="") as handle:
             reader = csv.reader(handle)
             header = next(reader)
             names = [h.split("[")[0].strip() for h in header]
             if "t" not in names or header[names.index("t")].strip() not in ("t", "t [s]"):
-                return
+                return None
             column = names.index("t")
             first = last = None
             for row in reader:
                 if len(row) > column and row[column].strip():
                     last = row[column]
                     first = first if first is not None else row[column]
-            span = float(last) - float(first)
+            return float(last) - float(first)
     except (OSError, UnicodeDecodeError, StopIteration, ValueError, TypeError, csv.Error):
-        return  # the reader reports what is wrong with the file
-    if span > 0:
-        check_memory(span / resample, f"{path}: resampling {span:g} s at {resample:g} s")
+        return None  # the reader reports what is wrong with the file
+
+
+def _check_resample_memory(paths: list[Path], resample: float) -> None:
+    """Refuse resampling that would need more memory than the machine has, before reading:
+    the samples of every record together (each record's span from its CSV)."""
+    spans = [span for span in map(_record_span, paths) if span is not None and span > 0]
+    if not spans:
+        return
+    what = (f"{paths[0]}: resampling {spans[0]:g} s" if len(paths) == 1 else
+            f"resampling {len(spans)} records ({sum(spans):g} s)")
+    check_memory(sum(spans) / resample, f"{what} at {resample:g} s")
 
 
 def reading(args, ship) -> dict:
@@ -105,10 +118,8 @@ def _time_range(text: str) -> tuple[float, float] | str:
 def _read_one(path: Path, resample, ship, skip, window, time_range):
     """One record (a measurement CSV or a Parquet file), checked, with its notes on stderr,
     cut to the time range."""
-    from ..records import PARQUET_SUFFIXES, read_record
+    from ..records import read_record
 
-    if resample is not None and path.suffix.lower() not in PARQUET_SUFFIXES:
-        _check_resample_memory(path, resample)
     record, notes, cut = read_record(path, ship=ship, resample=resample, skip_checks=skip,
                                      time_range=window)
     report_reading(path, notes, cut)
@@ -149,6 +160,8 @@ def read_records(paths, resample=None, *, keys=None, ship=None, skip_checks=(),
     keys = record_keys(paths) if keys is None else list(keys)
     window = _time_range(time_range)
     skip = "all" if "all" in skip_checks else tuple(skip_checks)
+    if resample is not None:
+        _check_resample_memory(paths, resample)
     records = []
     for path, key in zip(paths, keys, strict=True):
         record = _read_one(path, resample, ship, skip, window, time_range)
@@ -161,6 +174,8 @@ def read_record_sets(*path_sets, resample=None, **options):
     records anywhere share a name and no file is in two lists."""
     flat = [Path(p) for paths in path_sets for p in paths]
     _refuse_repeats(flat)
+    if resample is not None:  # all the sets together
+        _check_resample_memory(flat, resample)
     keys = record_keys(flat)
     out, start = [], 0
     for paths in path_sets:

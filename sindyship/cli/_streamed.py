@@ -12,7 +12,8 @@ def add_stream_options(p) -> None:
     """``--stream`` and ``--scheduler``."""
     p.add_argument("--stream", action="store_true",
                    help="fit from per-record factors reduced on a Dask cluster (one record "
-                   "file at a time, never all samples in memory); needs the cluster extra, "
+                   "file at a time, never all samples in memory; a refinement, on by "
+                   "default for the prior fit, reads them); needs the cluster extra, "
                    'python3 -m pip install "sindyship[cluster]" (default: read every record '
                    "into memory)")
     p.add_argument("--scheduler", type=scheduler_address, default=None, metavar="ADDRESS",

@@ -46,10 +46,11 @@ def add_parser(sub) -> None:
                    "(default 4)")
     add_ship(p, default=None)
     p.add_argument("--channel", action="append", default=[], metavar="NAME=VALUE",
-                   help="default value (library scaling) of a recorded channel the library "
-                   "uses, repeatable; the generated simulate() and zigzag() take the channels "
-                   "as time series (channels=...), and without a default they must be passed "
-                   "there (default: no defaults)")
+                   help="default value of a recorded channel the library uses, in SI as the "
+                   "measurement CSV gives it (n=10.3 for revolutions in rps), repeatable; the "
+                   "generated simulate() and zigzag() take the channels as time series in SI "
+                   "(channels=...), and without a default they must be passed there (default: "
+                   "no defaults)")
     add_json(p)
 
 
@@ -63,7 +64,7 @@ def _parse_channels(items: list[str]) -> dict[str, float]:
             number = math.nan
         if not sep or not name or not math.isfinite(number):
             raise SindyshipInputError(
-                f"--channel {item!r} is not NAME=VALUE with a finite number (e.g. n=35.86)."
+                f"--channel {item!r} is not NAME=VALUE with a finite number (e.g. n=10.3)."
             )
         out[name.strip()] = number
     return out
@@ -117,8 +118,14 @@ def run(args) -> int:
             f"uses: {uses}); give the library's channels or drop --channel."
         )
     if args.python:
+        from ..terms import channel_scaling
+
+        scaled = {}  # SI, as the CSV and the generated channels=, to the library's scaling
+        for name, value in channels.items():
+            factor, offset = channel_scaling(name, model.ship.L, model.ship.U0)
+            scaled[name] = value * factor + offset
         code = generate_python(model, source_note=f"Exported from {Path(args.model).name}.",
-                               channels=channels, compiled=args.compile)
+                               channels=scaled, compiled=args.compile)
         _write(args.python, code)
         progress(f"wrote {args.python}: simulator of {model!r}"
                  + (" (compiled by numba where it runs)" if args.compile else ""))

@@ -78,7 +78,10 @@ def _smoothing(args, records, ship, effects, params, speed):
         return SmoothingSetting.parse(args.smoothing)
     setting, table = choose_smoothing(records, ship, optimizer=args.optimizer,
                                       library=resolve_library(args.library, (), speed),
-                                      effects=effects, params=params, n_jobs=args.n_jobs)
+                                      effects=effects, params=params,
+                                      rudder_signal=args.rudder_signal,
+                                      derivative=args.derivative, window=args.window,
+                                      n_jobs=args.n_jobs)
     progress(table.to_string())
     return setting
 
@@ -156,6 +159,10 @@ def run(args) -> int:
         resolve_cli_rudder_signal(args, [(Path(path).stem, "delta" in names)
                                          for path, names in columns.items() if names is not None])
         return _run_streamed(args, ship, params, speed)
+    if args.n_jobs not in (None, 1) and args.smoothing != "auto":
+        progress(f"note: --n-jobs {args.n_jobs} is not used: it sets the workers of --smoothing "
+                 "auto and --stream (the refinement flies its segments on numba's threads, "
+                 "every core).")
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
     resolve_cli_rudder_signal(args, delta_recorded(records))
@@ -241,14 +248,18 @@ def _refined(model, records, args, n_jobs=1):
 
 def _run_streamed(args, ship, params: dict, speed: str) -> int:
     """``fit --stream`` (or ``--scheduler``): the model from per-record factors reduced on a
-    Dask cluster; a refinement then reads the records and flies their segments on the
-    cluster's workers."""
+    Dask cluster; a refinement then reads the records into memory (unless they would fill
+    more than half of it) and flies their segments on the cluster's workers."""
     effects = split_names(args.effects)
     model, summary = streamed_fit(args, ship, effects, params, speed)
     report_prior_fit(model)
+    if args.refine and _too_many_to_refine(summary["samples"]):
+        args.refine = 0
     if args.refine:
         from ._common import on_cluster
 
+        progress("the refinement reads the records into memory (the fit streamed them; "
+                 "--refine 0 streams throughout)")
         records = read_records(args.data, args.resample, ship=ship,
                                skip_checks=args.skip_check, time_range=args.time_range)
         if args.smoothing not in ("none", None):
@@ -269,6 +280,23 @@ def _run_streamed(args, ship, params: dict, speed: str) -> int:
               "optimizer": model.optimizer["name"], "identifiability": None,
               "streamed": summary, "refined": model.info.get("refined")})
     return 0
+
+
+def _too_many_to_refine(samples: int) -> bool:
+    """Whether a streamed fit's records are too many to refine: the refinement flies them from
+    memory, and more than half of the machine's memory is skipped with a notice (the fit is
+    saved as fitted)."""
+    from .._io import physical_memory
+    from ._common import BYTES_PER_SAMPLE
+
+    need, have = samples * BYTES_PER_SAMPLE, physical_memory()
+    if not have or need <= 0.5 * have:
+        return False
+    progress(f"not refined: the refinement flies the records from memory, {samples:.3g} "
+             f"samples, about {need / 1e9:.3g} GB, more than half of this machine's "
+             f"{have / 1e9:.3g} GB; the streamed fit is saved as fitted (refine it on a "
+             "subset of the records in memory, or pass --refine 0 to stream throughout).")
+    return True
 
 
 def report_prior_fit(model) -> None:

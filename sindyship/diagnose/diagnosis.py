@@ -402,13 +402,17 @@ def diagnose(
         be evaluated on.
     """
     start = time.perf_counter()
+    from ..arguments import as_ship
+
+    ship = as_ship(ship)
     records, test = list(records), list(test)
     _check_arguments(records, test, threshold)
     base = resolve_library(library)
     rudder_signal = resolve_rudder_signal(records, rudder_signal)
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
     smoothing = resolve_smoothing(smoothing, records, ship, library=base, optimizer=optimizer,
-                                  rudder_signal=rudder_signal, n_jobs=n_jobs)
+                                  rudder_signal=rudder_signal, derivative=derivative,
+                                  window=window, n_jobs=n_jobs)
     fitted = records if smoothing is None else smooth_records(records, smoothing)
     ranked = rank_effects(fitted, records, ship, base, effects, settings, optimizer=optimizer,
                           threshold=threshold, n_jobs=n_jobs)

@@ -379,10 +379,11 @@ def discover(
     >>> found.best.family, round(found.best.delays["delta"])
     ('delay:delta', 4)
     """
-    from ..arguments import check_distinct_names, check_two_records
+    from ..arguments import as_ship, check_distinct_names, check_two_records
     from ..library import load_effect
 
     start = time.perf_counter()
+    ship = as_ship(ship)
     records = list(records)
     check_two_records(records, "discover")
     check_distinct_names(records)
@@ -391,7 +392,8 @@ def discover(
     base = base.extended(*added) if added else base
     rudder_signal = resolve_rudder_signal(records, rudder_signal)
     setting = resolve_smoothing(smoothing, records, ship, library=base,
-                                rudder_signal=rudder_signal)
+                                rudder_signal=rudder_signal, derivative=derivative,
+                                window=window)
     measured = records
     if setting is not None:
         records = smooth_records(records, setting)

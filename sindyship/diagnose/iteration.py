@@ -171,8 +171,11 @@ def diagnose_iteratively(
     if options.get("smoothing") == "auto":  # choose once, on the plain library
         from ..smoothing import choose_smoothing
 
+        chosen_with = {key: options[key] for key in ("rudder_signal", "derivative", "window")
+                       if key in options}
         setting, _ = choose_smoothing(records, ship, optimizer=options.get("optimizer", "ls"),
-                                      library=lib, n_jobs=options.get("n_jobs", 1))
+                                      library=lib, n_jobs=options.get("n_jobs", 1),
+                                      **chosen_with)
         options["smoothing"] = setting
     rounds: list[Round] = []
     stopped = f"after {max_rounds} rounds"

@@ -16,6 +16,7 @@ from .. import __version__
 from ..targets import DOFS, abkowitz_mass_matrix
 from ..terms import channel_scaling
 from . import _compiled
+from ._runtime import RUNTIME
 from .symbolic import _active_terms, _coriolis_polynomials, coefficient_symbol, force_expressions
 
 if TYPE_CHECKING:
@@ -59,6 +60,36 @@ def _constant(value: float) -> str:
     """A float as Python source that reads back to the same double (NaN as ``math.nan``)."""
     value = float(value)
     return "math.nan" if math.isnan(value) else repr(value)
+
+
+def _example_lines(model: AbkowitzModel, channel_names: Mapping[str, str],
+                   channels: Mapping[str, float] | None) -> list[str]:
+    """The generated module's docstring example: a turn and the right-hand side.  Channels
+    exported without a value are passed in SI: the propeller's design revolutions for ``n``
+    where the ship file gives them; for any other the example is shown, not run."""
+    unset = sorted(name for name in channel_names if name not in (channels or {}))
+    design_n = getattr(getattr(model.ship, "propeller", None), "n_P", None)
+    state = "np.tile([[U0], [0.0], [0.0], [0.0], [0.0], [0.0], [0.0]], 3)"
+    lines = [">>> import numpy as np", ">>> t = np.arange(0.0, 120.0)"]
+    if not unset:
+        return [*lines, ">>> flight = simulate(t, np.radians(15.0), [U0, 0, 0, 0, 0, 0, 0])",
+                ">>> flight.states.shape", "(7, 120)", f">>> rhs(0.0, {state}, 0.0).shape",
+                "(7, 3)"]
+    if unset == ["n"] and design_n is not None and math.isfinite(design_n):
+        return [*lines,
+                f">>> n = {_constant(design_n)}  # propeller revolutions [rps], the ship's design",
+                ">>> flight = simulate(t, np.radians(15.0), [U0, 0, 0, 0, 0, 0, 0],",
+                "...                   {'n': np.full(t.size, n)})",
+                ">>> flight.states.shape", "(7, 120)",
+                f">>> rhs(0.0, {state}, 0.0, {{'n': np.full(3, n)}}).shape", "(7, 3)"]
+    given = ", ".join(unset)
+    return [*_wrap(f"The library uses the channel{'s' if len(unset) > 1 else ''} {given}, "
+                   "exported without a value: pass each over t, in SI (channels=...)."), "",
+            *lines,
+            ">>> channels = {name: your_values_over_t for name in CHANNEL_SCALING}"
+            "  # doctest: +SKIP",
+            ">>> flight = simulate(t, np.radians(15.0), [U0, 0, 0, 0, 0, 0, 0], channels)"
+            "  # doctest: +SKIP"]
 
 
 def _forces_source(channel_names: Mapping[str, str], body: list[str]) -> list[str]:
@@ -156,189 +187,6 @@ def _accelerations_body(forces_call: str, coriolis_lines: list[str]) -> list[str
         "    a_r = INV_RV * Y + INV_RR * N",
         "    return a_u * ACC_SCALE, a_v * ACC_SCALE, a_r * ACC_SCALE / L",
     ]
-
-
-_RUNTIME = '''
-
-# ---------------------------------------------------------------------------------------------
-# The model as the kernel flies it, and the public functions
-# ---------------------------------------------------------------------------------------------
-class _Model:
-    \"\"\"The generated dynamics in the form the kernel's integrator flies: recorded channels
-    as time series (``series``, one row per flight) or values (``values``), library scaling.\"\"\"
-
-    rudder_input = RUDDER_INPUT
-    current = (0.0, 0.0)
-    switching = None
-
-    def __init__(self, series=None, values=None):
-        self.series = series
-        self.values = values
-        self.time_varying = series is not None
-
-    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None):
-        channels = self.values if self.series is None else self.series.at(t, members)
-        return accelerations(u, v, r, delta, psi, branch, channels)
-
-
-def _scaled(channels):
-    \"\"\"Channels given in SI (as in the measurement CSV) in the library's scaling; None
-    keeps the CHANNEL_ constants, which must then have values.\"\"\"
-    if channels is None:
-        unset = sorted(name for name, value in CHANNEL_DEFAULTS.items() if math.isnan(value))
-        if unset:
-            raise ValueError(f"give the channel {unset[0]!r} (channels=...): the model's "
-                             "library uses it, and it was exported without a value")
-        return None
-    missing = sorted(set(CHANNEL_SCALING) - set(channels))
-    if missing:
-        raise ValueError(f"give the channel {missing[0]!r} (the model's library uses it)")
-    return {name: np.asarray(channels[name], dtype=float) * factor + offset
-            for name, (factor, offset) in CHANNEL_SCALING.items()}
-
-
-_SERVO = (T_SERVO, RATE_MAX, DELTA_MAX)
-
-
-class Flight(NamedTuple):
-    \"\"\"States of one simulated manoeuvre at the output times.
-
-    Attributes
-    ----------
-    t : ndarray, shape (N,)
-        Output times [s].
-    states : ndarray, shape (7, N)
-        ``[u, v, r, x, y, psi, delta]`` (SI); NaN after a divergence.
-    delta_c : ndarray, shape (N,)
-        Commanded rudder angle held at each output time [rad].
-    diverged_at : float or None
-        Time of the first output sample where the state left the plausible range.
-    \"\"\"
-
-    t: np.ndarray
-    states: np.ndarray
-    delta_c: np.ndarray
-    diverged_at: float | None
-
-
-def rhs(t, state, delta_c, channels=None):
-    \"\"\"Time derivative of the state (paper eq. 12-14 and the kinematics).
-
-    Parameters
-    ----------
-    t : float
-        Time [s] (the model is time invariant).
-    state : array_like, shape (7,) or (7, N)
-        ``[u, v, r, x, y, psi, delta]`` (SI).
-    delta_c : float or ndarray of shape (N,)
-        Commanded rudder angle [rad].
-    channels : mapping of str to float or ndarray of shape (N,), optional
-        The recorded channels the library uses, SI as in the measurement CSV (default: the
-        CHANNEL_ constants).
-
-    Returns
-    -------
-    ndarray
-        d(state)/dt, the shape of ``state``.
-    \"\"\"
-    state = np.asarray(state, dtype=float)
-    columns = state.reshape(N_STATE, -1)
-    commands = np.broadcast_to(np.asarray(delta_c, dtype=float), columns.shape[1]).copy()
-    members = np.arange(columns.shape[1])
-    model = _Model(values=_scaled(channels))
-    out = _Integrator(model, [], _SERVO).rhs(t, columns, commands, members, None)
-    return out.reshape(state.shape)
-
-
-def _fly(command, t, state0, step, check_divergence, channels):
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1 or t.size == 0:
-        raise ValueError("t must be a one-dimensional array of output times")
-    if t.size > 1 and np.any(np.diff(t) <= 0):
-        raise ValueError("output times must increase")
-    y = np.array([U0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0] if state0 is None else state0,
-                 dtype=float).reshape(N_STATE)
-    h_max = DEFAULT_STEP if step is None else float(step)
-    scaled = _scaled(channels)
-    series = None if scaled is None else ChannelSeries(t, {
-        name: np.broadcast_to(values, t.shape)[None, :] for name, values in scaled.items()})
-    integ = _Integrator(_Model(series=series), [command], _SERVO)
-    (result,) = integrate(integ, [command], t, y, h_max, check_divergence, L, U0)
-    return Flight(result.t, result.states, result.delta_c, result.diverged_at)
-
-
-def simulate(t, delta_c, state0=None, channels=None, *, step=None, check_divergence=True):
-    \"\"\"Fly the model with a commanded rudder through the servo (paper eq. 12-14).
-
-    Parameters
-    ----------
-    t : array_like, shape (N,)
-        Increasing output times [s]; the first is the initial time.
-    delta_c : float, array_like of shape (N,), or callable
-        Commanded rudder angle [rad]: one value per output time, held until the next
-        sample where it changes (zero-order hold); a constant; or a function
-        ``f(t, state) -> angle`` evaluated at the start of every integration step and held
-        over it (feedback control).
-    state0 : array_like, shape (7,), optional
-        Initial ``[u, v, r, x, y, psi, delta]`` (SI); default straight ahead at U0.
-    channels : mapping of str to array_like of shape (N,), optional
-        The recorded channels the library uses, over ``t``, SI as in the measurement CSV,
-        interpolated at the integrator's stage times (default: the CHANNEL_ constants).
-    step : float, optional
-        Runge-Kutta step [s]; default ``DEFAULT_STEP``.  States at output times inside a
-        step come from its cubic Hermite interpolant; steps are split exactly where the
-        command changes.
-    check_divergence : bool
-        Stop at the first output sample where the state is implausible (``diverged``).
-
-    Returns
-    -------
-    Flight
-    \"\"\"
-    t = np.asarray(t, dtype=float)
-    if callable(delta_c):
-        return _fly(FeedbackCommand(delta_c), t, state0, step, check_divergence, channels)
-    angles = np.asarray(delta_c, dtype=float)
-    if angles.ndim == 0:
-        angles = np.full(t.shape, float(angles))
-    if angles.shape != t.shape:
-        raise ValueError(
-            f"delta_c has shape {angles.shape}; give one angle per output time {t.shape}"
-        )
-    if not np.all(np.isfinite(angles)):
-        raise ValueError("delta_c must be finite")
-    return _fly(StepCommand(t, angles), t, state0, step, check_divergence, channels)
-
-
-def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, channels=None, *, step=None,
-           check_divergence=True):
-    \"\"\"Fly a zig-zag closed loop: rudder +-rudder_deg, reversed at +-check_deg of heading.
-
-    The rudder is reversed exactly when the heading change from its initial value reaches
-    the check angle (located by bisection on the step's Hermite interpolant).
-
-    Parameters
-    ----------
-    t : array_like, shape (N,)
-        Increasing output times [s].
-    rudder_deg, check_deg : float
-        Rudder amplitude and heading check angle [deg].
-    state0 : array_like, shape (7,), optional
-        Initial state (SI); default straight ahead at U0.
-    first_sign : int
-        +1: first rudder to starboard; -1: to port.
-    channels : mapping of str to array_like of shape (N,), optional
-        As for ``simulate``.
-    step, check_divergence
-        As for ``simulate``.
-
-    Returns
-    -------
-    Flight
-    \"\"\"
-    command = ZigZagCommand(math.radians(rudder_deg), math.radians(check_deg), first_sign)
-    return _fly(command, t, state0, step, check_divergence, channels)
-'''
 
 
 def _kernel_source() -> str:
@@ -464,13 +312,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "",
         "Examples",
         "--------",
-        ">>> import numpy as np",
-        ">>> t = np.arange(0.0, 120.0)",
-        ">>> flight = simulate(t, np.radians(15.0), [U0, 0, 0, 0, 0, 0, 0])",
-        ">>> flight.states.shape",
-        "(7, 120)",
-        ">>> rhs(0.0, np.tile([[U0], [0.0], [0.0], [0.0], [0.0], [0.0], [0.0]], 3), 0.0).shape",
-        "(7, 3)",
+        *_example_lines(model, channel_names, channels),
         '"""',
     ]
 
@@ -570,7 +412,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         '    """',
         *_accelerations_body("forces(un - 1.0, vn, rn, delta, psi, channels)", coriolis_lines),
     ]
-    runtime, tail = _RUNTIME.rstrip(), []
+    runtime, tail = RUNTIME.rstrip(), []
     if compiled:
         runtime = _compiled.compiled_runtime(runtime)
         tail = _compiled.compiled_section(

@@ -179,8 +179,8 @@ class _LinearModel(MultiOutputMixin, RegressorMixin, BaseEstimator):
         if self._needs_rows:
             raise SindyshipInputError(
                 f"{name} needs every sample (its loss is not a least-squares one), so it cannot "
-                "be fitted from factors of the records; use ls, stlsq or lasso, or fit in memory "
-                "(without --stream)."
+                "be fitted from factors of the records; use ls, stlsq, lasso or prior, or fit in "
+                "memory (without --stream)."
             )
         self._check_grid()
         if self.cross_validates and getattr(self, "cv", None) is not None:

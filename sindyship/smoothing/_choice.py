@@ -10,6 +10,7 @@ import pandas as pd
 
 from ..errors import SindyshipInputError
 from ..ships import Ship
+from ..targets import savgol_points
 from ..trajectory import Trajectory
 from ._apply import smooth_records
 from ._settings import SmoothingSetting, default_candidates
@@ -31,7 +32,7 @@ def _as_setting(candidate: SmoothingSetting | str | Mapping | tuple) -> Smoothin
 
 
 def _fold_task(smoothed: Sequence[Trajectory], raw: Trajectory, held_out: int, ship: Ship,
-               library, optimizer: str, params: dict | None, rudder_signal: str,
+               library, optimizer: str, params: dict | None, fit_settings: Mapping,
                step: float | None) -> dict:
     """Fit on all smoothed records but one, fly like the raw held-out one, measure."""
     from threadpoolctl import threadpool_limits
@@ -44,9 +45,22 @@ def _fold_task(smoothed: Sequence[Trajectory], raw: Trajectory, held_out: int, s
     start = _with_initial_state(raw, smoothed[held_out])
     with threadpool_limits(limits=1, user_api="blas"):
         model = fit(train, ship, library=library, optimizer=optimizer, params=params,
-                    rudder_signal=rudder_signal)
+                    **fit_settings)
         (flown,) = fly_like(model, [start], step=step)
     return distance_errors(flown, raw, ship.L)
+
+
+def _fits_every(setting: SmoothingSetting, records: Sequence[Trajectory]) -> bool:
+    """Whether a Savitzky-Golay setting's window holds enough samples of every record for its
+    polynomial and is no longer than any record (:func:`sindyship.targets.savgol_points`)."""
+    if setting.method != "savgol":
+        return True
+    try:
+        for record in records:
+            savgol_points(setting.window, record.dt, setting.order, record.n_samples, "")
+    except SindyshipInputError:
+        return False
+    return True
 
 
 def _with_initial_state(raw: Trajectory, smoothed: Trajectory) -> Trajectory:
@@ -87,6 +101,7 @@ def choose_smoothing(records: Sequence[Trajectory], ship: Ship,
                      candidates: Iterable[SmoothingSetting | str] | None = None,
                      optimizer: str = "ls", *, library="abkowitz", effects: Sequence[str] = (),
                      params: dict | None = None, rudder_signal: str = "actual",
+                     derivative: str = "five-point", window: float = 21.0,
                      n_jobs: int | None = None, step: float | None = None
                      ) -> tuple[SmoothingSetting, pd.DataFrame]:
     """The smoothing setting with the smallest leave-one-manoeuvre-out flight error.
@@ -104,10 +119,11 @@ def choose_smoothing(records: Sequence[Trajectory], ship: Ship,
         The ship (L, U0, inertia, rudder servo).
     candidates : iterable of SmoothingSetting or str, optional
         Settings to compare (``"savgol:21"`` style text is accepted); default
-        :func:`default_candidates` of the ship (windows in ship time).
+        :func:`default_candidates` of the ship (windows in ship time), those a record is too
+        short or too coarsely sampled for left out.
     optimizer : str
         Regression method of the folds (:func:`sindyship.optimizers.make_optimizer`).
-    library, effects, params, rudder_signal
+    library, effects, params, rudder_signal, derivative, window
         As for :func:`sindyship.identify.fit`.
     n_jobs : int, optional
         joblib workers for the smoothing and the folds (``None``: joblib's default, one
@@ -134,26 +150,29 @@ def choose_smoothing(records: Sequence[Trajectory], ship: Ship,
     """
     from joblib import Parallel, delayed
 
+    from ..arguments import as_ship
     from ..identify import resolve_library
 
+    ship = as_ship(ship)
     records = list(records)
     if len(records) < 2:
         raise SindyshipInputError(
             "choosing the smoothing by leave-one-manoeuvre-out cross-validation needs at "
             f"least two training records, not {len(records)}."
         )
-    settings = [_as_setting(c) for c in (default_candidates(ship) if candidates is None
-                                         else candidates)]
+    settings = ([s for s in default_candidates(ship) if _fits_every(s, records)]
+                if candidates is None else [_as_setting(c) for c in candidates])
     if not settings:
         raise SindyshipInputError("give at least one smoothing candidate.")
     names = [r.name or f"record {k}" for k, r in enumerate(records)]
     lib = resolve_library(library, effects)
 
+    fit_settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
     parallel = Parallel(n_jobs=n_jobs)
     smoothed = parallel(delayed(smooth_records)(records, setting) for setting in settings)
     folds = parallel(
         delayed(_fold_task)(smoothed[i], records[k], k, ship, lib, optimizer, params,
-                            rudder_signal, step)
+                            fit_settings, step)
         for i in range(len(settings)) for k in range(len(records))
     )
     n_rec = len(records)
@@ -181,6 +200,7 @@ def choose_smoothing(records: Sequence[Trajectory], ship: Ship,
 
 def resolve_smoothing(smoothing, records: Sequence[Trajectory], ship: Ship, *, library="abkowitz",
                       optimizer: str = "ls", rudder_signal: str = "actual",
+                      derivative: str = "five-point", window: float = 21.0,
                       n_jobs: int | None = None) -> SmoothingSetting | None:
     """The smoothing to apply: None (for None or ``"none"``), the given setting (a
     :class:`SmoothingSetting` or its text, ``"savgol:W"``, ``"rts:W"``), or the one
@@ -197,7 +217,8 @@ def resolve_smoothing(smoothing, records: Sequence[Trajectory], ship: Ship, *, l
         return None
     if smoothing == "auto":
         setting, _ = choose_smoothing(records, ship, optimizer=optimizer, library=library,
-                                      rudder_signal=rudder_signal, n_jobs=n_jobs)
+                                      rudder_signal=rudder_signal, derivative=derivative,
+                                      window=window, n_jobs=n_jobs)
     elif isinstance(smoothing, SmoothingSetting):
         setting = smoothing
     else:

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import SindyshipInputError
+from ..targets import savgol_points
 from ..trajectory import Trajectory
 from ._settings import _UNIFORM_TOLERANCE, SAVGOL_CHANNELS, SmoothingSetting
 
@@ -24,24 +25,14 @@ def _uniform_dt(record: Trajectory, what: str) -> float:
     return dt
 
 
-def _savgol_points(window: float, dt: float, order: int, n: int) -> int:
-    """Odd number of samples of a window, at least order + 2 and at most the record."""
-    points = max(int(round(window / dt)) | 1, (order + 2) | 1)
-    return min(points, n if n % 2 else n - 1)
-
-
 def _savgol_record(record: Trajectory, setting: SmoothingSetting,
                    channels: Sequence[str] | None) -> Trajectory:
     from scipy.signal import savgol_filter
 
     name = record.name or "the record"
     dt = _uniform_dt(record, "Savitzky-Golay smoothing")
-    points = _savgol_points(setting.window, dt, setting.order, record.n_samples)
-    if points <= setting.order:
-        raise SindyshipInputError(
-            f"{name}: {record.n_samples} samples are too few for a Savitzky-Golay filter of "
-            f"order {setting.order}."
-        )
+    points = savgol_points(setting.window, dt, setting.order, record.n_samples,
+                           f"{name}: smoothing")
     data = record.data.copy()
     for column in SAVGOL_CHANNELS if channels is None else channels:
         if column == "t":

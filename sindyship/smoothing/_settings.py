@@ -101,6 +101,16 @@ class SmoothingSetting:
             raise SindyshipInputError(
                 f"cannot read the smoothing setting {text!r}; write METHOD[:WINDOW_S[:ORDER]]."
             )
+        if method in ("none", "auto") and len(parts) > 1:
+            raise SindyshipInputError(
+                f"the smoothing setting {text!r} gives {method} a window; write {method} alone "
+                "(or savgol:W or rts:W for a window of your own)."
+            )
+        if method == "rts" and len(parts) > 2:
+            raise SindyshipInputError(
+                f"the smoothing setting {text!r} gives the RTS smoother an order, which only "
+                "the Savitzky-Golay filter has; write rts:W."
+            )
         return cls(method, window, order)
 
 

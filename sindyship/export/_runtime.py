@@ -1,0 +1,194 @@
+"""The runtime of a generated simulator (:func:`sindyship.export.generate_python`): the
+model as the kernel flies it and the public functions, as source text appended to the
+generated module after its constants and forces."""
+
+RUNTIME = '''
+
+# ---------------------------------------------------------------------------------------------
+# The model as the kernel flies it, and the public functions
+# ---------------------------------------------------------------------------------------------
+class _Model:
+    \"\"\"The generated dynamics in the form the kernel's integrator flies: recorded channels
+    as time series (``series``, one row per flight) or values (``values``), library scaling.\"\"\"
+
+    rudder_input = RUDDER_INPUT
+    current = (0.0, 0.0)
+    switching = None
+
+    def __init__(self, series=None, values=None):
+        self.series = series
+        self.values = values
+        self.time_varying = series is not None
+
+    def accelerations(self, u, v, r, delta, psi, branch=None, t=None, members=None):
+        channels = self.values if self.series is None else self.series.at(t, members)
+        return accelerations(u, v, r, delta, psi, branch, channels)
+
+
+def _scaled(channels):
+    \"\"\"Channels given in SI (as in the measurement CSV) in the library's scaling; None
+    keeps the CHANNEL_ constants, which must then have values.\"\"\"
+    if channels is None:
+        unset = sorted(name for name, value in CHANNEL_DEFAULTS.items() if math.isnan(value))
+        if unset:
+            raise ValueError(f"give the channel {unset[0]!r} (channels=...): the model's "
+                             "library uses it, and it was exported without a value")
+        return None
+    missing = sorted(set(CHANNEL_SCALING) - set(channels))
+    if missing:
+        raise ValueError(f"give the channel {missing[0]!r} (the model's library uses it)")
+    return {name: np.asarray(channels[name], dtype=float) * factor + offset
+            for name, (factor, offset) in CHANNEL_SCALING.items()}
+
+
+_SERVO = (T_SERVO, RATE_MAX, DELTA_MAX)
+
+
+class Flight(NamedTuple):
+    \"\"\"States of one simulated manoeuvre at the output times.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Output times [s].
+    states : ndarray, shape (7, N)
+        ``[u, v, r, x, y, psi, delta]`` (SI); NaN after a divergence.
+    delta_c : ndarray, shape (N,)
+        Commanded rudder angle held at each output time [rad].
+    diverged_at : float or None
+        Time of the first output sample where the state left the plausible range.
+    \"\"\"
+
+    t: np.ndarray
+    states: np.ndarray
+    delta_c: np.ndarray
+    diverged_at: float | None
+
+
+def rhs(t, state, delta_c, channels=None):
+    \"\"\"Time derivative of the state (paper eq. 12-14 and the kinematics).
+
+    Parameters
+    ----------
+    t : float
+        Time [s] (the model is time invariant).
+    state : array_like, shape (7,) or (7, N)
+        ``[u, v, r, x, y, psi, delta]`` (SI).
+    delta_c : float or ndarray of shape (N,)
+        Commanded rudder angle [rad].
+    channels : mapping of str to float or ndarray of shape (N,), optional
+        The recorded channels the library uses, SI as in the measurement CSV (default: the
+        CHANNEL_ constants).
+
+    Returns
+    -------
+    ndarray
+        d(state)/dt, the shape of ``state``.
+    \"\"\"
+    if np.ndim(state) not in (1, 2) or np.shape(state)[0] != N_STATE:
+        raise ValueError(f"state has shape {np.shape(state)}; give the {N_STATE} values "
+                         "[u, v, r, x, y, psi, delta] (SI), or one column of them per state")
+    state = np.asarray(state, dtype=float)
+    columns = state.reshape(N_STATE, -1)
+    commands = np.broadcast_to(np.asarray(delta_c, dtype=float), columns.shape[1]).copy()
+    members = np.arange(columns.shape[1])
+    model = _Model(values=_scaled(channels))
+    out = _Integrator(model, [], _SERVO).rhs(t, columns, commands, members, None)
+    return out.reshape(state.shape)
+
+
+def _fly(command, t, state0, step, check_divergence, channels):
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or t.size == 0:
+        raise ValueError("t must be a one-dimensional array of output times")
+    if t.size > 1 and np.any(np.diff(t) <= 0):
+        raise ValueError("output times must increase")
+    y = np.array([U0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0] if state0 is None else state0,
+                 dtype=float)
+    if y.shape != (N_STATE,) or not np.all(np.isfinite(y)):
+        raise ValueError(f"state0 has shape {y.shape}; give {N_STATE} finite values "
+                         "[u, v, r, x, y, psi, delta] (SI)")
+    h_max = DEFAULT_STEP if step is None else float(step)
+    scaled = _scaled(channels)
+    series = None if scaled is None else ChannelSeries(t, {
+        name: np.broadcast_to(values, t.shape)[None, :] for name, values in scaled.items()})
+    integ = _Integrator(_Model(series=series), [command], _SERVO)
+    (result,) = integrate(integ, [command], t, y, h_max, check_divergence, L, U0)
+    return Flight(result.t, result.states, result.delta_c, result.diverged_at)
+
+
+def simulate(t, delta_c, state0=None, channels=None, *, step=None, check_divergence=True):
+    \"\"\"Fly the model with a commanded rudder through the servo (paper eq. 12-14).
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Increasing output times [s]; the first is the initial time.
+    delta_c : float, array_like of shape (N,), or callable
+        Commanded rudder angle [rad]: one value per output time, held until the next
+        sample where it changes (zero-order hold); a constant; or a function
+        ``f(t, state) -> angle`` evaluated at the start of every integration step and held
+        over it (feedback control).
+    state0 : array_like, shape (7,), optional
+        Initial ``[u, v, r, x, y, psi, delta]`` (SI); default straight ahead at U0.
+    channels : mapping of str to array_like of shape (N,), optional
+        The recorded channels the library uses, over ``t``, SI as in the measurement CSV,
+        interpolated at the integrator's stage times (default: the CHANNEL_ constants).
+    step : float, optional
+        Runge-Kutta step [s]; default ``DEFAULT_STEP``.  States at output times inside a
+        step come from its cubic Hermite interpolant; steps are split exactly where the
+        command changes.
+    check_divergence : bool
+        Stop at the first output sample where the state is implausible (``diverged``).
+
+    Returns
+    -------
+    Flight
+    \"\"\"
+    t = np.asarray(t, dtype=float)
+    if callable(delta_c):
+        return _fly(FeedbackCommand(delta_c), t, state0, step, check_divergence, channels)
+    angles = np.asarray(delta_c, dtype=float)
+    if angles.ndim == 0:
+        angles = np.full(t.shape, float(angles))
+    if angles.shape != t.shape:
+        raise ValueError(
+            f"delta_c has shape {angles.shape}; give one angle per output time {t.shape}"
+        )
+    if not np.all(np.isfinite(angles)):
+        raise ValueError("delta_c must be finite")
+    if np.max(np.abs(angles), initial=0.0) > 0.5 * math.pi:
+        raise ValueError(f"delta_c reaches {np.max(np.abs(angles)):g} rad, more than a quarter "
+                         "turn: give the rudder angle in radians (np.radians(degrees))")
+    return _fly(StepCommand(t, angles), t, state0, step, check_divergence, channels)
+
+
+def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, channels=None, *, step=None,
+           check_divergence=True):
+    \"\"\"Fly a zig-zag closed loop: rudder +-rudder_deg, reversed at +-check_deg of heading.
+
+    The rudder is reversed exactly when the heading change from its initial value reaches
+    the check angle (located by bisection on the step's Hermite interpolant).
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Increasing output times [s].
+    rudder_deg, check_deg : float
+        Rudder amplitude and heading check angle [deg].
+    state0 : array_like, shape (7,), optional
+        Initial state (SI); default straight ahead at U0.
+    first_sign : int
+        +1: first rudder to starboard; -1: to port.
+    channels : mapping of str to array_like of shape (N,), optional
+        As for ``simulate``.
+    step, check_divergence
+        As for ``simulate``.
+
+    Returns
+    -------
+    Flight
+    \"\"\"
+    command = ZigZagCommand(math.radians(rudder_deg), math.radians(check_deg), first_sign)
+    return _fly(command, t, state0, step, check_divergence, channels)
+'''
