@@ -301,7 +301,13 @@ def compiled_section(channel_names: Mapping[str, str], forces_body: list[str],
     return text.splitlines()
 
 
-def forces_call(channel_names: Mapping[str, str]) -> str:
-    """The call of ``_forces_one`` in ``_accelerations_one``."""
-    return "_forces_one(un - 1.0, vn, rn, delta, psi{})".format(
-        "".join(f", ch_{name}" for name in channel_names))
+def forces_call(channel_names: Mapping[str, str], over_speed=None) -> str:
+    """The call of ``_forces_one`` in ``_accelerations_one``; with ``over_speed`` (the
+    instantaneous speed form: the channels read over the speed) v, r and those channels
+    divided by ``ratio``, U/U0."""
+    if over_speed is None:
+        return "_forces_one(un - 1.0, vn, rn, delta, psi{})".format(
+            "".join(f", ch_{name}" for name in channel_names))
+    return "_forces_one(un - 1.0, vn / ratio, rn / ratio, delta, psi{})".format(
+        "".join(f", ch_{name} / ratio" if name in over_speed else f", ch_{name}"
+                for name in channel_names))

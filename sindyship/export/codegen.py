@@ -14,7 +14,7 @@ from sympy.printing.numpy import NumPyPrinter
 
 from .. import __version__
 from ..targets import DOFS, abkowitz_mass_matrix
-from ..terms import channel_scaling
+from ..terms import SPEED_FLOOR, channel_scaling, describe_variable
 from . import _compiled
 from ._runtime import RUNTIME
 from .symbolic import _active_terms, _coriolis_polynomials, coefficient_symbol, force_expressions
@@ -169,14 +169,25 @@ def _coriolis_source(ship: Ship) -> tuple[list[str], list[str]]:
     return constants, lines
 
 
-def _accelerations_body(forces_call: str, coriolis_lines: list[str]) -> list[str]:
+def _accelerations_body(forces_call: str, coriolis_lines: list[str],
+                        speed_ratio: str | None = None) -> list[str]:
     """Lines of eq. 14 from SI ``u, v, r``: the forces (``forces_call``), the Coriolis terms,
-    the inverse mass matrix, and the return of the SI accelerations."""
+    the inverse mass matrix, and the return of the SI accelerations.  With ``speed_ratio``
+    (the expression of U/U0, the instantaneous speed form) the call reads ``ratio`` and the
+    forces are multiplied by its square."""
+    scaled = [] if speed_ratio is None else [
+        "    # the instantaneous speed form: v, r over U, the forces times (U/U0)^2",
+        f"    ratio = {speed_ratio}",
+        f"    X, Y, N = {forces_call}",
+        "    X = X * ratio * ratio",
+        "    Y = Y * ratio * ratio",
+        "    N = N * ratio * ratio",
+    ]
     return [
         "    un = u / U0",
         "    vn = v / U0",
         "    rn = r * L / U0",
-        f"    X, Y, N = {forces_call}",
+        *(scaled or [f"    X, Y, N = {forces_call}"]),
         "    # Coriolis terms, rigid body plus added mass (right-hand side of eq. 14)",
         *coriolis_lines,
         "    X = X + X_c",
@@ -263,12 +274,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
             "the model's terms use the apparent wind, which the generated simulator does not "
             "make from the flown motion; fly this model with sindyship evaluate instead."
         )
-    if model.library.speed != "design":
-        raise SindyshipInputError(
-            "the model's forces scale with the instantaneous speed, and the generated "
-            "simulator carries the design-speed form only; fly this model with sindyship "
-            "evaluate instead."
-        )
+    instantaneous = model.library.speed == "instantaneous"
     # channels without a default value must be given when the module flies (NaN until then)
     defaults = {name: math.nan for name in model.recorded_channels} | dict(channels or {})
     dynamics = model.dynamics(defaults)
@@ -276,6 +282,8 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     ship = model.ship
     channel_names = {name: f"CHANNEL_{name.upper()}" for name in sorted(model.library.channels)
                      if name != "psi"}
+    over_speed = [name for name in channel_names
+                  if describe_variable(name).scaling in ("speed", "rate")]
     body = _forces_body(model, channel_names)  # shared by the numpy and the compiled forces
     Minv = model.inverse_mass
     M = abkowitz_mass_matrix(ship)
@@ -305,6 +313,10 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "matrix times (du'/dt', dv'/dt', dr'/dt') equals the hydrodynamic forces of eq. 15 plus",
         "the Coriolis terms (rigid body plus added mass, with the Munk moment).  The rudder",
         "follows its command through a first-order servo with rate and angle limits.",
+        *(["In the library's instantaneous speed form, v and r (and the channels' speeds and",
+           "rates, OVER_SPEED) are taken over the instantaneous speed U = sqrt(u^2 + v^2), at",
+           "least SPEED_FLOOR U0, and the forces of eq. 15 are multiplied by (U/U0)^2."]
+          if instantaneous else []),
         "",
         "The state is [u, v, r, x, y, psi, delta] in SI units: body-fixed surge and sway [m/s]",
         "(v positive to starboard), yaw rate [rad/s], earth-fixed x north and y east [m],",
@@ -334,6 +346,11 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         f"DELTA_MAX = {_constant(integrator.delta_max)}  # largest rudder angle [rad]",
         f"RUDDER_INPUT = {_literal(integrator.rudder_input)}  # rudder angle the forces see",
         f"DEFAULT_STEP = {_constant(default_step(ship))}  # Runge-Kutta step [s]",
+        f"SPEED_FORM = {_literal(model.library.speed)}  # the forces over U0 or over U",
+        *([f"SPEED_FLOOR = {_constant(SPEED_FLOOR)}  # least U/U0 the forces are scaled with",
+           "#: Channels read over the speed U (their scaling with U0 divided by U/U0)",
+           "OVER_SPEED = (" + "".join(f"{_literal(name)}, " for name in over_speed) + ")"]
+          if instantaneous else []),
         "",
         "# Mass matrix of eq. 14 (Prime I) and its inverse",
         "MASS_MATRIX = (",
@@ -392,7 +409,9 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "    Parameters",
         "    ----------",
         "    du, v, r : float or ndarray",
-        "        u / U0 - 1, v / U0 and r L / U0.",
+        *(["        u / U0 - 1, v / U and r L / U (U the instantaneous speed; accelerations()",
+           "        multiplies these forces by (U/U0)^2)."] if instantaneous else
+          ["        u / U0 - 1, v / U0 and r L / U0."]),
         "    delta : float or ndarray",
         "        Rudder angle [rad].",
         "    psi : float or ndarray",
@@ -410,14 +429,29 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "    mass, with the Munk moment), times the inverse mass matrix; ``delta`` is the rudder",
         "    angle the forces see.  Vectorised over numpy arrays.",
         '    """',
-        *_accelerations_body("forces(un - 1.0, vn, rn, delta, psi, channels)", coriolis_lines),
+        *(_accelerations_body("forces(un - 1.0, vn / ratio, rn / ratio, delta, psi, "
+                              "_over_speed(channels, ratio))", coriolis_lines,
+                              "np.maximum(np.sqrt(un * un + vn * vn), SPEED_FLOOR)")
+          if instantaneous else
+          _accelerations_body("forces(un - 1.0, vn, rn, delta, psi, channels)",
+                              coriolis_lines)),
+        *(["", "", "def _over_speed(channels, ratio):",
+           '    """The channels (library scaling; None: the CHANNEL_ constants) with those in',
+           '    OVER_SPEED over the instantaneous speed (divided by U/U0 = ``ratio``)."""',
+           "    values = CHANNEL_DEFAULTS if channels is None else channels",
+           "    return {name: value / ratio if name in OVER_SPEED else value",
+           "            for name, value in values.items()}"] if instantaneous else []),
     ]
     runtime, tail = RUNTIME.rstrip(), []
     if compiled:
         runtime = _compiled.compiled_runtime(runtime)
         tail = _compiled.compiled_section(
             channel_names, body,
-            _accelerations_body(_compiled.forces_call(channel_names), coriolis_lines))
+            _accelerations_body(_compiled.forces_call(channel_names,
+                                                      over_speed if instantaneous else None),
+                                coriolis_lines,
+                                "max(math.sqrt(un * un + vn * vn), SPEED_FLOOR)"
+                                if instantaneous else None))
     # Exotic libraries (long channel names, many factors) can make a line long.
     lines, tail = ([line if len(line) <= 99 else line + "  # noqa: E501" for line in part]
                    for part in (lines, tail))
