@@ -595,11 +595,15 @@ def test_a_discovery_must_outfly_the_effects_the_flights_favour(tmp_path, capsys
     assert [c["catalogued"] for c in contests] == ["asymmetry"]
     # with one port turn, the asymmetry fitted without it cannot fly it: the finding wins
     assert contests[0]["winner"] == "finding" and three["verdict"] == "add-discovered"
+    # and the report says why the forces cannot score it
+    assert any(w.startswith("only tc35_port puts the rudder to port and none to both sides")
+               for w in three["warnings"])
     four = verdict(paths)
     assert [(c["catalogued"], c["winner"]) for c in four["discovery"]["contests"]] == [
         ("asymmetry", "undecided")]
     assert four["discovery"]["accepted"] == []
     assert four["verdict"] == "add-effect" and four["effect_to_add"] == "asymmetry"
+    assert not any("puts the rudder to" in w for w in four["warnings"])
 
 
 def test_held_out_flights_that_contradict_a_confirmed_effect_are_said_so(kcs):

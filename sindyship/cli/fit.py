@@ -161,8 +161,8 @@ def run(args) -> int:
         return _run_streamed(args, ship, params, speed)
     if args.n_jobs not in (None, 1) and args.smoothing != "auto":
         progress(f"note: --n-jobs {args.n_jobs} is not used: it sets the workers of --smoothing "
-                 "auto and --stream (the refinement flies its segments on numba's threads, "
-                 "every core).")
+                 "auto and --stream (with numba the refinement flies its segments on every core "
+                 "by itself).")
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
     resolve_cli_rudder_signal(args, delta_recorded(records))

@@ -78,6 +78,8 @@ class Diagnosis:
     speed : SpeedForms or None
         The records' speed range and which speed form they need
         (:func:`sindyship.diagnose.speed.speed_forms`).
+    sides : dict
+        Per training record, the side its rudder is put to (:func:`rudder_side`).
     """
 
     ship: Ship
@@ -98,6 +100,7 @@ class Diagnosis:
     noise_level: dict[str, float] = field(default_factory=dict)
     discovery: Discovery | None = None
     speed: SpeedForms | None = None
+    sides: dict[str, int] = field(default_factory=dict)
 
     @property
     def diverged(self) -> dict[str, float]:
@@ -165,6 +168,9 @@ class Diagnosis:
                 "unlike each other for one to be predicted from the rest, or physics no "
                 "catalogued effect describes"
             )
+        one_sided = self.one_sided
+        if one_sided:
+            out.append(one_sided)
         diverged = [c.name for c in self.comparisons if c.errors["diverged_at_s"] is not None]
         if diverged:
             out.append(
@@ -172,6 +178,23 @@ class Diagnosis:
                 "cover only the time before the divergence"
             )
         return out
+
+    @property
+    def one_sided(self) -> str:
+        """Why a difference between the sides cannot be scored, or "": no training record puts
+        the rudder to both sides, and one side has one record or none, so leaving it out no
+        other record shows that side."""
+        if not self.sides or any(side == 2 for side in self.sides.values()):
+            return ""
+        for side, name in ((1, "starboard"), (-1, "port")):
+            on_it = [record for record, turned in self.sides.items() if turned == side]
+            if len(on_it) <= 1:
+                held = f"only {on_it[0]} puts" if on_it else "no record puts"
+                return (f"{held} the rudder to {name} and none to both sides: left out "
+                        "manoeuvre by manoeuvre, effects that differ between the sides "
+                        "(asymmetry) cannot be scored by their share of the force error, only "
+                        "by re-flying; add a manoeuvre to each side, or a zig-zag")
+        return ""
 
     @property
     def top(self) -> EffectScore | None:
@@ -486,10 +509,26 @@ def diagnose(
         seconds=time.perf_counter() - start,
     )
     result.speed = speed_forms(fitted, ship, base, settings)
+    result.sides = {record.name: rudder_side(record) for record in records}
     if search_beyond:
         _search_beyond(result, fitted, settings, n_jobs)
         result.seconds = time.perf_counter() - start
     return result
+
+
+#: Share of a record's samples with the rudder put to one side (half a degree or more) for
+#: the record to count as putting it to that side.
+SIDE_SHARE = 0.1
+
+
+def rudder_side(record: Trajectory) -> int:
+    """The side a record puts its rudder to: 1 starboard, -1 port, 2 both (a zig-zag), 0
+    neither (a straight run): each side counts where a tenth of the samples or more hold the
+    rudder half a degree or more to it."""
+    rudder = record.rudder
+    starboard = float(np.mean(rudder > math.radians(0.5))) >= SIDE_SHARE
+    port = float(np.mean(rudder < -math.radians(0.5))) >= SIDE_SHARE
+    return 2 if starboard and port else 1 if starboard else -1 if port else 0
 
 
 def _check_arguments(records: Sequence[Trajectory], test: Sequence[Trajectory],
