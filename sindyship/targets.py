@@ -93,9 +93,8 @@ def five_point_derivative(y: np.ndarray, dt: float) -> np.ndarray:
 
 def savgol_points(window: float, dt: float, order: int, n_samples: int, what: str) -> int:
     """The odd number of samples of a Savitzky-Golay window of ``window`` seconds at the step
-    ``dt``, refusing a window too short for a polynomial of ``order`` (it had been widened
-    silently) or longer than the record of ``n_samples`` (it had been cut to the record);
-    ``what`` begins the message (the record's name).
+    ``dt``, refusing a window too short for a polynomial of ``order`` or longer than the
+    record of ``n_samples``; ``what`` begins the message (the record's name).
 
     Examples
     --------
@@ -151,7 +150,8 @@ def smoothed_states(traj: Trajectory, method: str = "five-point", window: float 
     if method == "savgol":
         from scipy.signal import savgol_filter
 
-        n = savgol_points(window, traj.dt, order, traj.n_samples, traj.name or "the record")
+        n = savgol_points(window, traj.dt, order, traj.n_samples,
+                          f"{traj.name or 'the record'}: the derivative (--window)")
         out = {c: savgol_filter(v, n, order, mode="interp") for c, v in out.items()}
     return out
 

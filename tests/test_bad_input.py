@@ -189,6 +189,10 @@ def test_resampling_is_refused_by_the_memory_of_all_records_together(new_folder,
     assert_one_line(code, out, err, 2, "resampling 3 records (357 s) at 0.001 s would make "
                     "3.57e+05 samples, about 0.357 GB, more than half of this machine's 0.6 GB")
     assert not (folder / "m.json").exists()
+    # training and held-out records together (each set alone would pass)
+    code, out, err = run_sindyship("diagnose", *paths[:2], "--test", paths[2], "--resample",
+                                   "0.001")
+    assert_one_line(code, out, err, 2, "resampling 3 records (357 s) at 0.001 s")
 
 
 @PROPERTY

@@ -598,12 +598,36 @@ def test_a_discovery_must_outfly_the_effects_the_flights_favour(tmp_path, capsys
     # and the report says why the forces cannot score it
     assert any(w.startswith("only tc35_port puts the rudder to port and none to both sides")
                for w in three["warnings"])
+    # an effect file of one's own among the favoured is flown against the finding too (its
+    # name had been looked up in the catalogue, and the diagnosis failed at its end)
+    own = tmp_path / "myasym.toml"
+    catalogue = Path(__file__).resolve().parents[1] / "libraries" / "effects"
+    own.write_text((catalogue / "asymmetry.toml").read_text().replace(
+        'name = "asymmetry"', 'name = "myasym"'))
+    capsys.readouterr()
+    assert main(["diagnose", *paths[:3], "--ship", "kcs", "--resample", "2", "--candidates",
+                 str(own), "--json"]) == 0
+    mine = json.loads(capsys.readouterr().out)
+    assert [c["catalogued"] for c in mine["discovery"]["contests"]] == ["myasym"]
     four = verdict(paths)
     assert [(c["catalogued"], c["winner"]) for c in four["discovery"]["contests"]] == [
         ("asymmetry", "undecided")]
     assert four["discovery"]["accepted"] == []
     assert four["verdict"] == "add-effect" and four["effect_to_add"] == "asymmetry"
     assert not any("puts the rudder to" in w for w in four["warnings"])
+
+
+def test_the_side_a_record_puts_its_rudder_to(kcs):
+    """A tenth of the samples with the rudder half a degree or more to a side counts."""
+    from sindyship.diagnose.diagnosis import rudder_side
+
+    runs = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=10, check=10, duration=400),
+                               Manoeuvre("turning-circle", rudder=20, duration=200),
+                               Manoeuvre("turning-circle", rudder=-20, duration=200),
+                               Manoeuvre("straight", duration=200)])
+    assert [rudder_side(run) for run in runs] == [2, 1, -1, 0]
+    small = runs[1].data.assign(delta=np.radians(0.4))  # under half a degree: no side
+    assert rudder_side(Trajectory(small, name="small")) == 0
 
 
 def test_held_out_flights_that_contradict_a_confirmed_effect_are_said_so(kcs):

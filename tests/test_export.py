@@ -331,6 +331,10 @@ def test_the_generated_simulator_flies_recorded_channels(kcs, tmp_path):
     assert cli.CHANNEL_N == pytest.approx(1.8 * kcs.L / kcs.U0, rel=1e-12)
     assert np.allclose(cli.simulate(record.t, record["delta_c"], record.state()[:, 0]).states,
                        flight.states, rtol=0, atol=1e-9 * kcs.L)
+    # a value in the library's n L/U0, as the option once took, is refused as another unit
+    assert main(["export", str(tmp_path / "with_n.json"), "--python",
+                 str(tmp_path / "sim_n_old.py"), "--channel", "n=35.86"]) == 2
+    assert not (tmp_path / "sim_n_old.py").exists()
 
 
 @pytest.mark.parametrize("compiled", [False, True])
@@ -365,6 +369,16 @@ def test_an_instantaneous_speed_model_flies_as_sindyship_flies_it(kcs, tmp_path,
     assert relative_difference(sim.zigzag(t, 20.0, 20.0, state0).states,
                                refs[1].states) <= RTOL
     assert doctest.testmod(sim).failed == 0
+    # revolutions that change over a record, in SI, as sindyship flies the record
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=-30, duration=600)])
+    data = run.data.copy()
+    data["n"] = np.linspace(1.0, 1.3, run.n_samples) * n
+    record = Trajectory(data, name=run.name)
+    (ours,) = fly_like_batch(model, [record])
+    theirs = sim.simulate(record.t, record["delta_c"], record.state()[:, 0], {"n": data["n"]})
+    assert ours.meta["diverged_at"] is None and theirs.diverged_at is None
+    assert np.max(np.hypot(ours["x"] - theirs.states[3], ours["y"] - theirs.states[4])
+                  ) / kcs.L < 1e-9
 
 
 def test_the_generated_simulator_refuses_a_wrong_state_or_an_angle_in_degrees(kcs, tmp_path):
@@ -383,9 +397,9 @@ def test_the_generated_simulator_refuses_a_wrong_state_or_an_angle_in_degrees(kc
 
 
 @pytest.mark.parametrize(("options", "message"), [
-    (["--channel", "N=10.3", "--python", "sim.py"],
+    (["--channel", "N=1.93", "--python", "sim.py"],
      "--channel N: the model's library uses no channel of that name (it uses: none)"),
-    (["--channel", "n=10.3"], "--channel sets the simulator's default value"),
+    (["--channel", "n=1.93"], "--channel sets the simulator's default value"),
 ])
 def test_export_refuses_a_channel_the_model_does_not_use(model, tmp_path, capsys, options,
                                                           message):

@@ -211,8 +211,8 @@ def test_a_savgol_window_longer_than_the_record_or_too_short_is_refused(kcs):
                        r"window of 1 s holds 1 sample at 1 s, too few for a polynomial of "
                        r"order 3; give a window of 4 s or more\.$"):
         smooth_records(runs, SmoothingSetting("savgol", 1.0))
-    with pytest.raises(SindyshipInputError, match=r"^zz20_20: a Savitzky-Golay window of 600 s "
-                       r"is longer than the record"):
+    with pytest.raises(SindyshipInputError, match=r"^zz20_20: the derivative \(--window\): a "
+                       r"Savitzky-Golay window of 600 s is longer than the record"):
         fit(runs, kcs, derivative="savgol", window=600.0)
     assert smooth_records(runs, SmoothingSetting("savgol", 299.0))[0].n_samples == 300
 
@@ -248,3 +248,20 @@ def test_a_smoothing_setting_with_parts_its_method_does_not_take_is_refused(text
     """Parts a method does not take had been dropped silently (rts:21:3 smoothed as rts:21)."""
     with pytest.raises(SindyshipInputError, match=fragment):
         SmoothingSetting.parse(text)
+
+
+def test_fit_says_which_automatic_windows_it_left_out(kcs, tmp_path, capsys):
+    from sindyship.cli import main
+    from sindyship.measurements import write_csv
+
+    runs = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=60),
+                               Manoeuvre("zigzag", rudder=10, check=10, duration=60)])
+    paths = []
+    for run in runs:
+        write_csv(run, tmp_path / f"{run.name}.csv")
+        paths.append(str(tmp_path / f"{run.name}.csv"))
+    assert main(["fit", *paths, "--ship", "kcs", "--optimizer", "ls", "--smoothing", "auto",
+                 "--no-identifiability", "--out", str(tmp_path / "m.json")]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    assert ("--smoothing auto left out savgol 81 s: a window longer than a record, or holding "
+            "too few of its samples") in err

@@ -221,7 +221,7 @@ def test_a_streamed_fit_too_large_to_refine_is_saved_as_fitted(files, records, k
     """The refinement (on by default for the prior fit) flies every record from memory: where
     they would take more than half of it, the streamed fit is saved unrefined with a notice and
     the records are never read into this process; where they fit, the notice says they are."""
-    import sindyship._io as io
+    import sindyship.cli._common as common
     import sindyship.cli.fit as fit_verb
 
     def never(*args, **kwargs):
@@ -229,12 +229,13 @@ def test_a_streamed_fit_too_large_to_refine_is_saved_as_fitted(files, records, k
 
     out = tmp_path / "model.json"
     scheduler = ["--stream", "--scheduler", client.scheduler.address]
-    monkeypatch.setattr(io, "physical_memory", lambda: 1_000_000)  # 1 MB
+    monkeypatch.setattr(common, "physical_memory", lambda: 1_000_000)  # 1 MB
     monkeypatch.setattr(fit_verb, "read_records", never)
     assert main(["fit", str(files["folder"] / "*.parquet"), *scheduler, "--out", str(out)]) == 0
     err = " ".join(capsys.readouterr().err.split())
     assert (f"not refined: the refinement flies the records from memory, "
-            f"{sum(r.n_samples for r in records):.3g} samples") in err
+            f"{sum(r.n_samples for r in records):.3g} samples with the sensitivities of 61 "
+            "coefficients") in err
     assert "the streamed fit is saved as fitted" in err
     saved = AbkowitzModel.load(out)
     assert "refined" not in saved.info
@@ -242,7 +243,8 @@ def test_a_streamed_fit_too_large_to_refine_is_saved_as_fitted(files, records, k
     monkeypatch.undo()
     assert main(["fit", str(files["folder"] / "*.parquet"), *scheduler, "--refine", "2",
                  "--out", str(out)]) == 0
-    assert "the refinement reads the records into memory" in capsys.readouterr().err
+    assert "the streamed fit; the refinement reads the records into memory" in \
+        capsys.readouterr().err
     assert AbkowitzModel.load(out).info["refined"]["records"]
 
 

@@ -36,6 +36,9 @@ MAX_RK_STEPS = 1_000_000
 #: Memory [bytes] one simulated or resampled sample takes, all copies included (measured:
 #: 2e6 samples of ``simulate`` peak at 1.6 GB).
 BYTES_PER_SAMPLE = 1000
+#: Memory [bytes] a refinement takes per sample and active coefficient beyond the record: the
+#: sensitivities of the six compared channels, held twice (96), and the fit's design (8).
+REFINE_BYTES_PER_TERM = 104
 
 
 def _number(text: str) -> float:
@@ -137,11 +140,18 @@ def scheduler_address(text: str) -> str:
 SEED = bounded_int(0, 2**63 - 1, "a whole number")
 
 
+def memory_short(need: float) -> float | None:
+    """The machine's memory [bytes] when ``need`` bytes would take more than half of it, else
+    None (also where the memory cannot be read)."""
+    have = physical_memory()
+    return have if have and need > 0.5 * have else None
+
+
 def check_memory(samples: float, what: str) -> None:
     """Refuse work that would hold more samples than half the machine's memory allows."""
     need = samples * BYTES_PER_SAMPLE
-    have = physical_memory()
-    if have and need > 0.5 * have:
+    have = memory_short(need)
+    if have is not None:
         raise SindyshipInputError(
             f"{what} would make {samples:.3g} samples, about {need / 1e9:.3g} GB, more than half "
             f"of this machine's {have / 1e9:.3g} GB; use a longer interval or a shorter record."

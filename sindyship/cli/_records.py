@@ -100,7 +100,8 @@ def _check_resample_memory(paths: list[Path], resample: float) -> None:
     if not spans:
         return
     what = (f"{paths[0]}: resampling {spans[0]:g} s" if len(paths) == 1 else
-            f"resampling {len(spans)} records ({sum(spans):g} s)")
+            f"resampling {len(spans)} record{'s' if len(spans) > 1 else ''} "
+            f"({sum(spans):g} s)")
     check_memory(sum(spans) / resample, f"{what} at {resample:g} s")
 
 
@@ -136,7 +137,7 @@ def report_reading(path, notes, cut) -> None:
 
 
 def read_records(paths, resample=None, *, keys=None, ship=None, skip_checks=(),
-                 time_range="auto"):
+                 time_range="auto", memory_checked=False):
     """The records of ``paths``, in order, named by :func:`record_keys`, checked for
     plausibility and cut to the part a model can fly (:func:`sindyship.trials.underway_window`),
     with a notice for each cut.
@@ -154,13 +155,15 @@ def read_records(paths, resample=None, *, keys=None, ship=None, skip_checks=(),
         Plausibility checks not to run.
     time_range : str
         ``"auto"``, ``"all"`` or ``"START:STOP"`` (the option ``--time-range``).
+    memory_checked : bool
+        The caller has checked the resampling's memory over these records and others.
     """
     paths = [Path(p) for p in paths]
     _refuse_repeats(paths)
     keys = record_keys(paths) if keys is None else list(keys)
     window = _time_range(time_range)
     skip = "all" if "all" in skip_checks else tuple(skip_checks)
-    if resample is not None:
+    if resample is not None and not memory_checked:
         _check_resample_memory(paths, resample)
     records = []
     for path, key in zip(paths, keys, strict=True):
@@ -180,6 +183,6 @@ def read_record_sets(*path_sets, resample=None, **options):
     out, start = [], 0
     for paths in path_sets:
         out.append(read_records(paths, resample, keys=keys[start:start + len(paths)],
-                                **options))
+                                memory_checked=True, **options))
         start += len(paths)
     return out

@@ -47,10 +47,10 @@ def add_parser(sub) -> None:
     add_ship(p, default=None)
     p.add_argument("--channel", action="append", default=[], metavar="NAME=VALUE",
                    help="default value of a recorded channel the library uses, in SI as the "
-                   "measurement CSV gives it (n=10.3 for revolutions in rps), repeatable; the "
-                   "generated simulate() and zigzag() take the channels as time series in SI "
-                   "(channels=...), and without a default they must be passed there (default: "
-                   "no defaults)")
+                   "measurement CSV gives it (n=1.93 for the KCS's revolutions in rps), "
+                   "repeatable; the generated simulate() and zigzag() take the channels as "
+                   "time series in SI (channels=...), and without a default they must be "
+                   "passed there (default: no defaults)")
     add_json(p)
 
 
@@ -64,10 +64,26 @@ def _parse_channels(items: list[str]) -> dict[str, float]:
             number = math.nan
         if not sep or not name or not math.isfinite(number):
             raise SindyshipInputError(
-                f"--channel {item!r} is not NAME=VALUE with a finite number (e.g. n=10.3)."
+                f"--channel {item!r} is not NAME=VALUE with a finite number (e.g. n=1.93)."
             )
         out[name.strip()] = number
     return out
+
+
+def _check_revolutions(channels: dict[str, float], ship) -> None:
+    """Refuse revolutions far above the ship's own: a value in another unit (n L/U0 of the
+    library's scaling, or rpm), where --channel takes rps."""
+    from ..plausibility import MAX_REVOLUTION_RATIO
+
+    if "n" not in channels or not ship.has_mmg:
+        return
+    own = ship.propeller.n_P
+    if abs(channels["n"]) > MAX_REVOLUTION_RATIO * own:
+        raise SindyshipInputError(
+            f"--channel n={channels['n']:g} is {abs(channels['n']) / own:.3g} times the "
+            f"propeller revolutions n = {own:.4g} rps of the model's ship {ship.name!r}; give "
+            "n in rps, as the measurement CSV has it."
+        )
 
 
 def _write(path: str, text: str) -> None:
@@ -120,6 +136,7 @@ def run(args) -> int:
     if args.python:
         from ..terms import channel_scaling
 
+        _check_revolutions(channels, model.ship)
         scaled = {}  # SI, as the CSV and the generated channels=, to the library's scaling
         for name, value in channels.items():
             factor, offset = channel_scaling(name, model.ship.L, model.ship.U0)

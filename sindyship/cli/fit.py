@@ -72,7 +72,7 @@ def _smoothing(args, records, ship, effects, params, speed):
     if args.smoothing == "none":
         return None
     from ..identify import resolve_library
-    from ..smoothing import SmoothingSetting, choose_smoothing
+    from ..smoothing import SmoothingSetting, choose_smoothing, default_candidates
 
     if args.smoothing != "auto":
         return SmoothingSetting.parse(args.smoothing)
@@ -83,6 +83,12 @@ def _smoothing(args, records, ship, effects, params, speed):
                                       derivative=args.derivative, window=args.window,
                                       n_jobs=args.n_jobs)
     progress(table.to_string())
+    tried = {(row.method, row.window_s) for row in table.itertuples()}
+    left = [c.label for c in default_candidates(ship) if c.method != "none"
+            and (c.method, c.window) not in tried]
+    if left:
+        progress(f"--smoothing auto left out {', '.join(left)}: a window longer than a record, "
+                 "or holding too few of its samples")
     return setting
 
 
@@ -253,13 +259,14 @@ def _run_streamed(args, ship, params: dict, speed: str) -> int:
     effects = split_names(args.effects)
     model, summary = streamed_fit(args, ship, effects, params, speed)
     report_prior_fit(model)
-    if args.refine and _too_many_to_refine(summary["samples"]):
+    if args.refine and _too_many_to_refine(summary["samples"], model):
         args.refine = 0
     if args.refine:
         from ._common import on_cluster
 
-        progress("the refinement reads the records into memory (the fit streamed them; "
-                 "--refine 0 streams throughout)")
+        model.save(args.out)  # kept should reading or refining the records fail
+        progress(f"wrote {args.out}: the streamed fit; the refinement reads the records into "
+                 "memory (--refine 0 streams throughout)")
         records = read_records(args.data, args.resample, ship=ship,
                                skip_checks=args.skip_check, time_range=args.time_range)
         if args.smoothing not in ("none", None):
@@ -282,20 +289,22 @@ def _run_streamed(args, ship, params: dict, speed: str) -> int:
     return 0
 
 
-def _too_many_to_refine(samples: int) -> bool:
+def _too_many_to_refine(samples: int, model) -> bool:
     """Whether a streamed fit's records are too many to refine: the refinement flies them from
-    memory, and more than half of the machine's memory is skipped with a notice (the fit is
-    saved as fitted)."""
-    from .._io import physical_memory
-    from ._common import BYTES_PER_SAMPLE
+    memory with the sensitivities of every active coefficient, and where that takes more than
+    half of the machine's memory it is skipped with a notice (the fit is saved as fitted)."""
+    from ._common import BYTES_PER_SAMPLE, REFINE_BYTES_PER_TERM, memory_short
 
-    need, have = samples * BYTES_PER_SAMPLE, physical_memory()
-    if not have or need <= 0.5 * have:
+    terms = sum(model.n_active().values())
+    need = samples * (BYTES_PER_SAMPLE + REFINE_BYTES_PER_TERM * terms)
+    have = memory_short(need)
+    if have is None:
         return False
     progress(f"not refined: the refinement flies the records from memory, {samples:.3g} "
-             f"samples, about {need / 1e9:.3g} GB, more than half of this machine's "
-             f"{have / 1e9:.3g} GB; the streamed fit is saved as fitted (refine it on a "
-             "subset of the records in memory, or pass --refine 0 to stream throughout).")
+             f"samples with the sensitivities of {terms} coefficients, about "
+             f"{need / 1e9:.3g} GB, more than half of this machine's {have / 1e9:.3g} GB; the "
+             "streamed fit is saved as fitted (refine it on a subset of the records in memory, "
+             "or pass --refine 0 to stream throughout).")
     return True
 
 

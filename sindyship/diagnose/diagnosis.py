@@ -557,7 +557,7 @@ def _search_beyond(result: Diagnosis, fitted: Sequence[Trajectory], settings: Ma
                           key=lambda score: _finite_or_inf(score.confirmation.ratio("training")))
         result.discovery = discover(fitted, result.ship, library=result.library,
                                     threshold=result.threshold, check_catalogue=False,
-                                    rivals=[score.effect.name for score in favoured],
+                                    rivals=[score.effect for score in favoured],
                                     n_jobs=n_jobs, **settings)
 
 

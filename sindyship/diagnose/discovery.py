@@ -322,7 +322,7 @@ def discover(
     threshold: float = MEANINGFUL_SHARE,
     max_rounds: int = 1,
     check_catalogue: bool = True,
-    rivals: Sequence[str] = (),
+    rivals: Sequence[str | Effect] = (),
     n_jobs: int | None = 1,
 ) -> Discovery:
     """Search the force residual of a fitted library for an effect no catalogue lists.
@@ -353,10 +353,11 @@ def discover(
         (:func:`sindyship.diagnose.contest.flight_contest`; a family can stand in for a
         missing catalogued effect: position terms for an asymmetry, say).
         :func:`sindyship.diagnose.diagnose` searches only when none is meaningful.
-    rivals : sequence of str
-        Catalogued effects the best finding must also fly better than in that contest,
-        after the meaningful ones (:func:`sindyship.diagnose.diagnose` names those its
-        re-flown training flights favour although their share of the force error is small).
+    rivals : sequence of str or Effect
+        Effects (catalogued names, or objects such as an effect file's) the best finding must
+        also fly better than in that contest, after the meaningful ones
+        (:func:`sindyship.diagnose.diagnose` passes those its re-flown training flights
+        favour although their share of the force error is small).
     n_jobs : int or None
         joblib workers for the refits of the delay grid (``None``: from a
         ``joblib.parallel_config`` block, e.g. a Dask cluster's; the result is the same).
@@ -400,8 +401,9 @@ def discover(
     settings = {"rudder_signal": rudder_signal, "derivative": derivative, "window": window}
     catalogue = (_meaningful_catalogue(records, ship, base, threshold, settings)
                  if check_catalogue else {})
-    stand_ins = sorted(catalogue, key=lambda name: -catalogue[name])
-    stand_ins += [name for name in rivals if name not in stand_ins]
+    stand_ins = [load_effect(name) for name in sorted(catalogue, key=lambda n: -catalogue[n])]
+    stand_ins += [e if isinstance(e, Effect) else load_effect(e) for e in rivals
+                  if (e.name if isinstance(e, Effect) else e) not in catalogue]
     rounds, accepted, contests, library_now = [], [], [], base
     for _ in range(max(int(max_rounds), 1)):
         findings, floor = _search(records, ship, library_now, settings, threshold, n_jobs)
@@ -411,11 +413,11 @@ def discover(
         best = None
         for candidate in (f for f in findings if f.meaningful):
             effect = _as_effect(candidate, len(accepted) + 1)
-            rivals = [load_effect(name) for name in stand_ins]  # most explaining first
+            contenders = list(stand_ins)  # most explaining first
             if candidate.family in SHAPE_KINDS:  # a line chosen among hundreds: flights decide
-                rivals.append(None)
-            lost = None  # the position in rivals of the first that flies as well or better
-            for k, rival in enumerate(rivals):  # the finding must fly better than each
+                contenders.append(None)
+            lost = None  # the position of the first contender that flies as well or better
+            for k, rival in enumerate(contenders):  # the finding must fly better than each
                 contests.append(flight_contest(records, measured, ship, library_now,
                                                (candidate.family, effect), rival, settings))
                 if contests[-1].winner != "finding":

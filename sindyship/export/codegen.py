@@ -14,7 +14,7 @@ from sympy.printing.numpy import NumPyPrinter
 
 from .. import __version__
 from ..targets import DOFS, abkowitz_mass_matrix
-from ..terms import SPEED_FLOOR, channel_scaling, describe_variable
+from ..terms import SPEED_FLOOR, channel_scaling, read_over_speed
 from . import _compiled
 from ._runtime import RUNTIME
 from .symbolic import _active_terms, _coriolis_polynomials, coefficient_symbol, force_expressions
@@ -282,8 +282,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     ship = model.ship
     channel_names = {name: f"CHANNEL_{name.upper()}" for name in sorted(model.library.channels)
                      if name != "psi"}
-    over_speed = [name for name in channel_names
-                  if describe_variable(name).scaling in ("speed", "rate")]
+    over_speed = [name for name in channel_names if read_over_speed(name)]
     body = _forces_body(model, channel_names)  # shared by the numpy and the compiled forces
     Minv = model.inverse_mass
     M = abkowitz_mass_matrix(ship)
@@ -417,7 +416,11 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "    psi : float or ndarray",
         "        Heading [rad] (used only by heading-dependent terms).",
         "    channels : mapping, optional",
-        "        Recorded channels in the library's scaling (default: the CHANNEL_ constants).",
+        *(["        Recorded channels in the library's scaling, those in OVER_SPEED over U",
+           "        (accelerations() passes them so); the default, the CHANNEL_ constants,",
+           "        holds at U = U0."] if instantaneous else
+          ["        Recorded channels in the library's scaling (default: the CHANNEL_ "
+           "constants)."]),
         '    """',
         *_forces_source(channel_names, body),
         "",

@@ -16,6 +16,7 @@ from sindyship.terms import (
     describe_variable,
     is_shape_name,
     parse_shape,
+    read_over_speed,
     shape_values,
     sources_of,
 )
@@ -92,7 +93,7 @@ def rescaled_to_speed(values: dict, names, ratio) -> None:
     """Channels of the ``instantaneous`` form over the speed: those made non-dimensional with
     U0 (``speed`` and ``rate`` scaling, e.g. n L/U0) divided by U/U0 = ``ratio``, in place."""
     for name in names:
-        if name in values and describe_variable(name).scaling in ("speed", "rate"):
+        if name in values and read_over_speed(name):
             values[name] = values[name] / ratio
 
 

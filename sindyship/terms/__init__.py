@@ -60,6 +60,7 @@ from ._variables import (
     channel_scaling,
     describe_variable,
     is_variable_name,
+    read_over_speed,
     sources_of,
 )
 
@@ -86,6 +87,7 @@ __all__ = [
     "is_variable_name",
     "parse_shape",
     "parse_term",
+    "read_over_speed",
     "shape_name",
     "shape_values",
     "sources_of",

@@ -175,6 +175,18 @@ def describe_variable(name: str) -> Variable:
     return Variable(name, name, "none", latex, name, latex, f"channel {name} as recorded")
 
 
+def read_over_speed(name: str) -> bool:
+    """Whether the ``instantaneous`` speed form reads a variable over the speed U: those
+    made non-dimensional with U0 (the ``speed`` and ``rate`` scalings, e.g. n L/U0).
+
+    Examples
+    --------
+    >>> read_over_speed("n"), read_over_speed("psi")
+    (True, False)
+    """
+    return describe_variable(name).scaling in ("speed", "rate")
+
+
 def channel_scaling(name: str, L: float, U0: float) -> tuple[float, float]:
     """``(factor, offset)`` that turn a channel in SI into the library's scaling,
     ``value * factor + offset`` (the scalings of :func:`nondimensional_variables`).
