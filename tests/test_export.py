@@ -260,7 +260,9 @@ def test_generated_constants_and_coefficients(model, tmp_path):
 
 
 def test_generated_module_passes_ruff(model, kcs, tmp_path):
-    ruff = shutil.which("ruff")
+    # the environment's own ruff, also where its bin folder is not on PATH
+    beside = Path(sys.executable).with_name("ruff")
+    ruff = str(beside) if beside.exists() else shutil.which("ruff")
     if ruff is None:
         pytest.skip("ruff is not installed")
     long_term = "wind_speed^2 cos(wind_dir) sin(psi) abs(v) v r delta du"
