@@ -229,21 +229,21 @@ def _check_speed_scale(captive: pd.DataFrame, ship) -> None:
 def _check_revolutions_scale(captive: pd.DataFrame, model: AbkowitzModel) -> None:
     """Refuse captive revolutions far above the ship's own, where the model's terms read them:
     rpm under a bare ``n`` header are 60 times too high, and the forces would be blamed."""
-    from .plausibility import MAX_REVOLUTION_RATIO
+    from .plausibility import excess_revolutions
 
     ship = model.ship
-    if "n" not in captive.columns or "n" not in model.recorded_channels or not ship.has_mmg:
+    if "n" not in captive.columns or "n" not in model.recorded_channels:
         return
-    own = ship.propeller.n_P
     typical = float(np.median(np.abs(captive["n"].to_numpy(float))))
-    if typical <= MAX_REVOLUTION_RATIO * own:
+    excess = excess_revolutions(typical, ship)
+    if excess is None:
         return
-    hint = ("they look like rpm: write the header as 'n [rpm]'"
-            if typical / 60.0 <= MAX_REVOLUTION_RATIO * own else
+    ratio, rpm = excess
+    hint = ("they look like rpm: write the header as 'n [rpm]'" if rpm else
             "check the unit of n and that the ship (full or model scale) is right")
     raise SindyshipInputError(
-        f"the captive tests' revolutions n have a median of {typical:.4g}, {typical / own:.3g} "
-        f"times the propeller revolutions n = {own:.4g} rps of the model's ship "
+        f"the captive tests' revolutions n have a median of {typical:.4g}, {ratio:.3g} "
+        f"times the propeller revolutions n = {ship.propeller.n_P:.4g} rps of the model's ship "
         f"{ship.name!r}; {hint}."
     )
 

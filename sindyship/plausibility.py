@@ -89,6 +89,7 @@ __all__ = [
     "HEADING_MIN_SPAN",
     "MAX_DURATION",
     "MAX_REVOLUTION_RATIO",
+    "excess_revolutions",
     "MAX_SPEED_RATIO",
     "MAX_STEP",
     "MIN_STEP",
@@ -288,17 +289,39 @@ def _check_speed(u: np.ndarray, ship, context: _Context) -> None:
     )
 
 
+def excess_revolutions(typical: float, ship) -> tuple[float, bool] | None:
+    """``(ratio, rpm)`` where revolutions of size ``typical`` [rps] are more than
+    :data:`MAX_REVOLUTION_RATIO` times the ship's propeller revolutions: the ratio, and whether
+    they would fit as rpm (60 times smaller); None where they do not exceed it, or the ship
+    file gives no revolutions to compare with (one for identification only).
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> kcs = load_ship("kcs")
+    >>> excess_revolutions(2.0, kcs) is None
+    True
+    >>> ratio, rpm = excess_revolutions(116.0, kcs)
+    >>> round(ratio), rpm
+    (60, True)
+    """
+    if not ship.has_mmg:
+        return None
+    ratio = abs(typical) / ship.propeller.n_P
+    if ratio <= MAX_REVOLUTION_RATIO:
+        return None
+    return ratio, ratio / 60.0 <= MAX_REVOLUTION_RATIO
+
+
 def _check_revolutions(n: np.ndarray, ship, context: _Context) -> None:
     """Propeller revolutions far above the ship's own: rpm under a bare ``n`` header (which
     the reader's absolute limit cannot tell from rps at full scale)."""
-    if not ship.has_mmg:
-        return  # a ship file for identification gives no revolutions to compare with
-    own = ship.propeller.n_P
     typical = float(np.median(np.abs(n)))
-    ratio = typical / own
-    if ratio <= MAX_REVOLUTION_RATIO:
+    excess = excess_revolutions(typical, ship)
+    if excess is None:
         return
-    rpm = context.unit("n") is None and typical / 60.0 / own <= MAX_REVOLUTION_RATIO
+    (ratio, looks_rpm), own = excess, ship.propeller.n_P
+    rpm = context.unit("n") is None and looks_rpm
     context.refuse(
         "revolutions",
         f"column '{context.header('n')}' has a median of {typical:.4g}, {ratio:.3g} times the "

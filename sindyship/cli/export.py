@@ -73,16 +73,14 @@ def _parse_channels(items: list[str]) -> dict[str, float]:
 def _check_revolutions(channels: dict[str, float], ship) -> None:
     """Refuse revolutions far above the ship's own: a value in another unit (n L/U0 of the
     library's scaling, or rpm), where --channel takes rps."""
-    from ..plausibility import MAX_REVOLUTION_RATIO
+    from ..plausibility import excess_revolutions
 
-    if "n" not in channels or not ship.has_mmg:
-        return
-    own = ship.propeller.n_P
-    if abs(channels["n"]) > MAX_REVOLUTION_RATIO * own:
+    excess = None if "n" not in channels else excess_revolutions(channels["n"], ship)
+    if excess is not None:
         raise SindyshipInputError(
-            f"--channel n={channels['n']:g} is {abs(channels['n']) / own:.3g} times the "
-            f"propeller revolutions n = {own:.4g} rps of the model's ship {ship.name!r}; give "
-            "n in rps, as the measurement CSV has it."
+            f"--channel n={channels['n']:g} is {excess[0]:.3g} times the propeller revolutions "
+            f"n = {ship.propeller.n_P:.4g} rps of the model's ship {ship.name!r}; give n in "
+            "rps, as the measurement CSV has it."
         )
 
 

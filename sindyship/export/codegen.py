@@ -179,9 +179,8 @@ def _accelerations_body(forces_call: str, coriolis_lines: list[str],
         "    # the instantaneous speed form: v, r over U, the forces times (U/U0)^2",
         f"    ratio = {speed_ratio}",
         f"    X, Y, N = {forces_call}",
-        "    X = X * ratio * ratio",
-        "    Y = Y * ratio * ratio",
-        "    N = N * ratio * ratio",
+        "    factor = ratio * ratio",
+        "    X, Y, N = X * factor, Y * factor, N * factor",
     ]
     return [
         "    un = u / U0",
