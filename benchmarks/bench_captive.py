@@ -46,13 +46,28 @@ mean distance grows with the error of its steady yaw rate: every row reports tha
 mean yaw rate over the last quarter of each held-out turn, flown against recorded, in per
 cent).
 
+With ``--against CHECKOUT``, the ``prior`` fit on the zig-zags refined by another checkout of
+sindyship (``sindyship fit --optimizer prior --library abkowitz-vr --refine N`` of that
+checkout on the same records, written as measurement CSVs, for each N of
+:data:`AGAINST_EVALUATIONS`), its saved models flown and compared here as every other row
+(``prior 1e-05 refined before, N evaluations``): how the flights and forces of that
+refinement move with the length of its search.
+
 Prints the tables and saves ``benchmarks/results/captive.json``.  Run with
-``python benchmarks/bench_captive.py`` (about fifteen seconds once numba has compiled).
+``python benchmarks/bench_captive.py`` (about fifteen seconds once numba has compiled), or::
+
+    git worktree add /tmp/sindyship-before COMMIT
+    python benchmarks/bench_captive.py --against /tmp/sindyship-before
 """
 
 from __future__ import annotations
 
+import argparse
 import json
+import os
+import subprocess
+import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -70,7 +85,9 @@ from sindyship.identify import (
 )
 from sindyship.library import Effect, load_effect
 from sindyship.manoeuvres import fly, protocol_manoeuvres
+from sindyship.measurements import write_csv
 from sindyship.mmg import MMGModel
+from sindyship.model import AbkowitzModel
 from sindyship.optimizers import PriorRidge
 from sindyship.priors import prior_means, prior_parameters
 from sindyship.refine import refine
@@ -94,6 +111,8 @@ TAYLOR_STRENGTHS = (1e-5, 1e-4)
 RUDDER_INFLOW = ("abs(v)", "abs(r)")
 #: The share of a held-out turn, from its end, over which its steady yaw rate is taken.
 STEADY_SHARE = 0.25
+#: The most trial steps (``--refine N``) another checkout's refinement is given (--against).
+AGAINST_EVALUATIONS = (10, 20, 40, 60, 90)
 
 
 def taylor_prior_fit(ship, library, problems, strength: float):
@@ -156,8 +175,33 @@ def evaluate(model, test, ship) -> dict:
     }
 
 
-def run() -> dict:
-    """Every fit of every training set."""
+def refined_by(checkout: Path, records, ship) -> dict:
+    """The ``prior`` fit on ``records`` refined by the ``sindyship fit`` of another checkout
+    with each number of trial steps of :data:`AGAINST_EVALUATIONS`: the saved models, loaded
+    here, by that number."""
+    env = {**os.environ, "PYTHONPATH": str(checkout), "MPLBACKEND": "Agg"}
+    models = {}
+    with tempfile.TemporaryDirectory() as folder:
+        paths = []
+        for record in records:
+            paths.append(str(Path(folder) / f"{record.name}.csv"))
+            write_csv(record, paths[-1])
+        for evaluations in AGAINST_EVALUATIONS:
+            out = Path(folder) / f"refined-{evaluations}.json"
+            done = subprocess.run(
+                [sys.executable, "-m", "sindyship.cli", "fit", *paths, "--ship", "kcs",
+                 "--optimizer", "prior", "--library", METHOD_LIBRARIES["prior"],
+                 "--refine", str(evaluations), "--out", str(out)],
+                env=env, cwd=checkout, capture_output=True, text=True)
+            if done.returncode != 0:
+                raise RuntimeError(f"the fit of {checkout} failed:\n{done.stderr[-2000:]}")
+            models[evaluations] = AbkowitzModel.load(out, ship=ship)
+    return models
+
+
+def run(against: Path | None = None) -> dict:
+    """Every fit of every training set (and, with ``against``, the refinements of another
+    checkout on the zig-zags)."""
     start = time.perf_counter()
     ship = load_ship("kcs")
     plan = protocol_manoeuvres()
@@ -207,9 +251,22 @@ def run() -> dict:
                              segment_s="whole")
             rows[f"{inflow} refined whole"] = {**evaluate(refined, test, ship),
                                                "refinement": refined.info["refined"]}
+            if against is not None:
+                for evaluations, model in refined_by(against.resolve(), records, ship).items():
+                    rows[f"{prior} refined before, {evaluations} evaluations"] = {
+                        **evaluate(model, test, ship), "evaluations": evaluations}
+                out["against"] = str(against)
+                out["against_commit"] = _commit(against)
         out["sets"][name] = {"training": [r.name for r in records], "fits": rows}
     out["seconds"] = time.perf_counter() - start
     return out
+
+
+def _commit(checkout: Path) -> str | None:
+    """The short commit hash of a checkout (None when it is not a git work tree)."""
+    done = subprocess.run(["git", "-C", str(checkout), "rev-parse", "--short", "HEAD"],
+                          capture_output=True, text=True)
+    return done.stdout.strip() or None
 
 
 def format_table(result: dict) -> str:
@@ -234,7 +291,11 @@ def format_table(result: dict) -> str:
 
 
 def main() -> None:
-    result = run()
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--against", type=Path, default=None,
+                        help="another checkout of sindyship whose refinement of the prior fit "
+                        "on the zig-zags is compared")
+    result = run(parser.parse_args().against)
     print(format_table(result))
     write_text_atomic(OUT, json.dumps(clean_json(result), indent=1) + "\n")
     print(f"saved {OUT} ({result['seconds']:.0f} s)")
