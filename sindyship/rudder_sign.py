@@ -9,7 +9,11 @@ rudder angle turns the ship to starboard (r > 0).  The plausibility check ``rudd
 - With a rudder that moves 10 deg or more, the gain b of dr/dt = a r + b delta + c (least
   squares on the means of at most 200 blocks of samples, whose errors are then nearly
   independent and whose noise is averaged, whatever the sampling rate) must not lie
-  ``RUDDER_SIGN_T = 5`` standard errors below zero (good zig-zags: +7 to +90).
+  ``RUDDER_SIGN_T = 5`` standard errors below zero (good zig-zags: +7 to +90).  A block
+  lasts at most 1/``RUDDER_SIGN_BLOCKS_PER_LEG`` of the time the rudder takes from one side
+  to the other (:func:`sindyship.rudder_holds.leg_time`): longer blocks of a long record of
+  a quick zig-zag average over a leg, and their yaw acceleration lags the rudder into the
+  opposite sign.
 """
 
 from __future__ import annotations
@@ -18,13 +22,16 @@ import math
 
 import numpy as np
 
-__all__ = ["RUDDER_SIGN_ANGLE", "RUDDER_SIGN_T", "RUDDER_SIGN_TURN", "RUDDER_SIGN_WITH",
-           "against_rudder"]
+from .rudder_holds import leg_time
+
+__all__ = ["RUDDER_SIGN_ANGLE", "RUDDER_SIGN_BLOCKS_PER_LEG", "RUDDER_SIGN_T", "RUDDER_SIGN_TURN",
+           "RUDDER_SIGN_WITH", "against_rudder"]
 
 RUDDER_SIGN_ANGLE = math.radians(10.0)
 RUDDER_SIGN_TURN = math.pi  # rad: half a circle
 RUDDER_SIGN_WITH = math.pi / 2  # rad: a quarter circle with the rudder settles it
 RUDDER_SIGN_T = 5.0  # standard errors
+RUDDER_SIGN_BLOCKS_PER_LEG = 8  # fewest blocks of samples to a leg of the rudder
 
 
 def against_rudder(delta: np.ndarray, r: np.ndarray, t: np.ndarray, header: str) -> str | None:
@@ -49,6 +56,10 @@ def against_rudder(delta: np.ndarray, r: np.ndarray, t: np.ndarray, header: str)
     # the yaw response dr/dt = a r + b delta + c on the means of at most 200 blocks of samples,
     # whose errors are nearly independent, and noise averaged, whatever the sampling rate
     size = max(1, len(t) // 200)
+    leg = leg_time(t, np.degrees(delta))
+    if leg is not None:  # never averaged over a leg of the rudder
+        step = float(np.median(np.diff(t)))
+        size = max(1, min(size, int(leg / (RUDDER_SIGN_BLOCKS_PER_LEG * step))))
     tb, rb, db = (np.mean(x[: len(t) // size * size].reshape(-1, size), axis=1)
                   for x in (t, r, delta))
     if len(tb) < 5:

@@ -170,6 +170,20 @@ def test_the_rudder_sign_holds_at_fast_sampling_with_noise_and_in_a_strong_wind(
     trajectory_from_frame(windy, "tc", ship=kcs)
 
 
+def test_a_long_record_of_a_quick_zig_zag_is_no_flipped_rudder():
+    """A 2 m model's 20/20 zig-zag (legs of some 8 s) logged at 0.2 s for 3200 s: blocks of a
+    two-hundredth of the record (16 s) average over a leg and their yaw acceleration lags the
+    rudder into the opposite sign (it was refused as a flipped rudder); blocks
+    of an eighth of a leg at most read it right, and the record negated is still refused."""
+    small = load_ship("kvlcc2").scaled(2.0 / 7.0)
+    (run,) = fly(MMGModel(small), [Manoeuvre("zigzag", rudder=20, check=20, duration=3200,
+                                             dt=0.2)])
+    frame = run.data.drop(columns=["delta_c"])
+    trajectory_from_frame(frame, "zz", ship=small)
+    assert "standard errors below zero" in refusal(frame.assign(delta=-frame["delta"]),
+                                                   ship=small)
+
+
 def test_a_fast_logged_zigzag_of_the_actual_rudder_is_read_right(kcs):
     """At 0.1 s the KCS's slow servo is a string of short holds, and it leaves its last hold
     only seconds after it turned: the reversal is its turning point, so a 10/10 zig-zag reads
