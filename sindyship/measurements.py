@@ -366,6 +366,18 @@ def _row(index: pd.Index, position: int) -> str:
     return f"the row with index label {label}"
 
 
+def _is_date_time(value) -> bool:
+    """Whether a cell reads as a date or a time of day ("2024-05-01 10:00:00", "10:00:03")."""
+    text = str(value).strip()
+    if not any(mark in text for mark in "-:/") or not any(c.isdigit() for c in text):
+        return False
+    try:
+        pd.Timestamp(text)
+    except (ValueError, TypeError, OverflowError):
+        return False
+    return True
+
+
 def column_as_float(values: np.ndarray, column: Column, index: pd.Index, source: str) -> np.ndarray:
     if values.dtype != object or "_" not in "\x00".join(map(str, values)):  # 2_8: no CSV number
         try:
@@ -382,6 +394,13 @@ def column_as_float(values: np.ndarray, column: Column, index: pd.Index, source:
                 what = f"the decimal comma '{str(value).strip()}'"
             else:
                 what = f"the text '{str(value).strip()}'"
+            if column.name == "t" and _is_date_time(value):
+                raise SindyshipInputError(
+                    f"{source}: column '{column.header}' holds the date-time "
+                    f"'{str(value).strip()}' in {_row(index, position)}; write t as seconds "
+                    "(from the first sample, say), or give the records as Parquet, whose "
+                    "timestamp column t is read as seconds from the first sample."
+                ) from None
             raise SindyshipInputError(
                 f"{source}: column '{column.header}' has {what} in {_row(index, position)} "
                 "where a number is expected; write a number there or delete the row."

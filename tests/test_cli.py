@@ -324,6 +324,31 @@ def test_unknown_ship_and_model_errors_exit_2(tmp_path, records):
     assert code == 2 and "newer" in err
 
 
+def test_records_fitted_without_a_ship_are_named_as_the_kcs_in_a_note(tmp_path, records):
+    """Records are made non-dimensional with their ship's length and speed, so another ship's
+    records fitted as the KCS's fit without an error and fly wrong: a fit given no --ship says
+    which ship it took; given one, it says nothing of it."""
+    code, _, err = run_sindyship("fit", records["zz20"], records["tc35"], "--optimizer", "ls",
+                                 "--out", tmp_path / "m.json")
+    assert code == 0, err
+    assert "no --ship given: the records are taken as the KCS's (L = 230 m, U0 = 12.35 m/s)" \
+        in err
+    code, _, err = run_sindyship("fit", records["zz20"], records["tc35"], "--optimizer", "ls",
+                                 "--ship", "kcs", "--out", tmp_path / "k.json")
+    assert code == 0 and "--ship" not in err, err
+    assert json.loads((tmp_path / "m.json").read_text())["ship"] == "kcs"
+
+
+@pytest.mark.parametrize("option", [["--dt", "0.1"], ["--duration", "600"], ["--rudder", "20"],
+                                    ["--first", "port"], ["--check", "10"]])
+def test_manoeuvre_options_are_refused_with_the_protocol(tmp_path, option):
+    """The protocol's plan fixes its manoeuvres, their length and sampling: an option that
+    would not apply is refused before anything is flown (it was silently dropped)."""
+    code, _, err = run_sindyship("simulate", "--protocol", *option, "--out", tmp_path / "p")
+    assert code == 2 and f"{option[0]} does not apply to --protocol" in err, err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "p").exists()
+
+
 def test_reproduce_json_contract(tmp_path):
     code, out, err = run_sindyship("reproduce", "--out", tmp_path / "rep", "--json")
     assert code == 0, err

@@ -185,9 +185,18 @@ def split_names(text: str) -> list[str]:
     return names
 
 
-def add_ship(p, *, default: str | None = "kcs") -> None:
-    """``--ship``: a built-in ship or a TOML file."""
-    if default is None:
+#: The ship records are taken to belong to when a verb that reads them is given no ``--ship``.
+RECORDS_SHIP = "kcs"
+
+
+def add_ship(p, *, default: str | None = "kcs", records: bool = False) -> None:
+    """``--ship``: a built-in ship or a TOML file (for a verb reading ``records``: default
+    :data:`RECORDS_SHIP`, named in a note when it is taken, see :func:`load_cli_ship`)."""
+    if records:
+        p.add_argument("--ship", default=None, metavar="NAME|FILE",
+                       help="the records' ship: built-in kcs (full scale, L = 230 m) or kvlcc2 "
+                       f"(the 7 m model), or a TOML file (default: {RECORDS_SHIP}, with a note)")
+    elif default is None:
         p.add_argument("--ship", default=None, metavar="NAME|FILE",
                        help="ship particulars: built-in kcs (full scale, L = 230 m) or kvlcc2 "
                        "(the 7 m model), or a TOML file (default: the ship the model names)")
@@ -343,15 +352,26 @@ def load_cli_ship(name, *, simulated: bool = False):
     """The ship ``--ship`` names (:func:`sindyship.ships.load_ship`), with each value it assumes
     (a ship file made for identification leaves out the servo or added masses) named on
     stderr; for a verb that ``simulated`` it with the MMG model, a ship without one is returned
-    without them (the verb refuses it in one line)."""
+    without them (the verb refuses it in one line).  None (a verb reading records, given no
+    ``--ship``) is :data:`RECORDS_SHIP` (:func:`note_records_ship` says so)."""
     from ..ships import load_ship
 
-    ship = load_ship(name)
+    ship = load_ship(RECORDS_SHIP if name is None else name)
     if simulated and not ship.has_mmg:
         return ship
     for assumption in ship.assumptions:
         progress(f"note: ship {ship.name!r} assumes {assumption}.")
     return ship
+
+
+def note_records_ship(args, ship) -> None:
+    """Say that records given no ``--ship`` are taken as :data:`RECORDS_SHIP`'s: another
+    ship's records made non-dimensional with its length and speed fit without an error and
+    fly wrong.  Called when the verb has done its work, so that an error stays one line."""
+    if args.ship is None:
+        progress(f"note: no --ship given: the records are taken as the {ship.name.upper()}'s "
+                 f"(L = {ship.L:g} m, U0 = {ship.U0:.4g} m/s); give --ship with the records' "
+                 "own ship (a built-in name or a ship TOML file) if they are another's.")
 
 
 def ship_file(name: str | None) -> list[str]:
@@ -433,7 +453,7 @@ def add_training_options(p, *, n_jobs_default: int | None = 1, optimizer: bool =
     p.add_argument("data", nargs="+",
                    help="training records: measurement CSV or Parquet files, or quoted glob "
                    "patterns that name them ('fleet/*.parquet')")
-    add_ship(p)
+    add_ship(p, records=True)
     add_identification(p, optimizer=optimizer, recommended=recommended)
     p.add_argument("--smoothing", default="none", metavar="none|savgol:W|rts:W|auto",
                    type=smoothing_option,

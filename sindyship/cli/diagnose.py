@@ -92,7 +92,7 @@ def run(args) -> int:
     from ..arguments import check_two_records
     from ..library import load_effect, names_a_file
     from ..records import expand_paths
-    from ._common import load_cli_ship
+    from ._common import load_cli_ship, note_records_ship
 
     start = time.perf_counter()
     args.data, args.test = expand_paths(args.data), expand_paths(args.test)
@@ -164,6 +164,7 @@ def run(args) -> int:
         with output_folder(out) as tmp:
             _write_folder(tmp, result, iterative, text, document, bar)
         progress(f"sindyship diagnose: figures, report.txt and diagnose.json are in {out}/")
+    note_records_ship(args, ship)
     if args.json:
         emit(document)
     else:

@@ -59,7 +59,7 @@ def run(args) -> int:
     from ..arguments import check_two_records
     from ..library import load_effect
     from ..records import expand_paths
-    from ._common import load_cli_ship
+    from ._common import load_cli_ship, note_records_ship
 
     args.data = expand_paths(args.data)
     if args.out is not None:
@@ -96,6 +96,7 @@ def run(args) -> int:
         else:
             progress(f"nothing was discovered: {args.out} was not written")
         document["effect_file"] = str(args.out) if found.accepted else None
+    note_records_ship(args, ship)
     if args.json:
         emit(document)
     else:

@@ -11,6 +11,7 @@ from ._common import (
     check_inputs,
     emit,
     load_cli_ship,
+    note_records_ship,
     progress,
     report_prior_coverage,
     resolve_cli_rudder_signal,
@@ -192,6 +193,7 @@ def run(args) -> int:
     fitted_params = params if state is None else {**params, "strength": state["strength"]}
     report = None if args.no_identifiability else _identifiability(args, records, ship, library,
                                                                    fitted_params)
+    note_records_ship(args, ship)
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
               "library": model.library.name, "speed": model.library.speed,
@@ -281,6 +283,7 @@ def _run_streamed(args, ship, params: dict, speed: str) -> int:
     if not args.no_identifiability:
         progress("Identifiability: not reported for a streamed fit (it needs the samples); "
                  "fit a subset in memory to see it.")
+    note_records_ship(args, ship)
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
               "library": model.library.name, "speed": model.library.speed,

@@ -40,7 +40,7 @@ def add_parser(sub) -> None:
                       help="fly the paper's 8 training and 3 held-out manoeuvres (3200 s at "
                       "1 Hz) and write them to OUT/train/ and OUT/test/ (--out is then a folder)")
     angle = bounded_float(0, MAX_RUDDER, "degrees", symmetric=True)
-    p.add_argument("--rudder", type=angle, default=35.0, metavar="DEG",
+    p.add_argument("--rudder", type=angle, default=None, metavar="DEG",
                    help="rudder angle [deg]: of the turn, the zig-zag, the largest spiral step, "
                    "the pull-out, or the random rudder's amplitude; magnitude in "
                    f"(0, {MAX_RUDDER:g}] and at most the ship's rudder limit, the sign gives "
@@ -48,14 +48,14 @@ def add_parser(sub) -> None:
     p.add_argument("--check", type=angle, default=None, metavar="DEG",
                    help=f"zig-zag heading check angle [deg], in (0, {MAX_RUDDER:g}] "
                    "(default: the rudder angle)")
-    p.add_argument("--first", choices=["starboard", "port"], default="starboard",
+    p.add_argument("--first", choices=["starboard", "port"], default=None,
                    help="side of the first rudder (zig-zag) or of the spiral (default starboard)")
     p.add_argument("--duration", type=bounded_float(0, MAX_DURATION, "seconds"),
-                   default=3200.0, metavar="SECONDS",
+                   default=None, metavar="SECONDS",
                    help=f"record length [s], in (0, {MAX_DURATION:g}] and at most "
                    f"{MAX_SAMPLES:.0e} samples of --dt (default 3200)")
     p.add_argument("--dt", type=bounded_float(MIN_STEP, MAX_STEP, "seconds", low_open=False),
-                   default=1.0, metavar="SECONDS",
+                   default=None, metavar="SECONDS",
                    help=f"sample interval [s], {MIN_STEP:g} to {MAX_STEP:g} (default 1)")
     p.add_argument("--pull-out-time", type=bounded_float(0, MAX_DURATION, "seconds"),
                    default=None, metavar="SECONDS",
@@ -114,6 +114,26 @@ def _protocol(args, ship, effects) -> int:
     return 0
 
 
+#: The manoeuvre options and their defaults: the protocol's plan fixes them all.
+MANOEUVRE_DEFAULTS = {"rudder": 35.0, "check": None, "first": "starboard", "duration": 3200.0,
+                      "dt": 1.0, "pull_out_time": None}
+
+
+def _check_protocol_options(args) -> None:
+    """Refuse a manoeuvre option with ``--protocol`` (its plan fixes the manoeuvres, their
+    length and sampling), else put each option not given to its default."""
+    given = [name for name in MANOEUVRE_DEFAULTS if getattr(args, name) is not None]
+    if args.protocol and given:
+        option = "--" + given[0].replace("_", "-")
+        raise SindyshipInputError(
+            f"{option} does not apply to --protocol, which flies the paper's fixed plan (3200 s "
+            "at 1 Hz, docs/protocol.md); leave it out, or fly single manoeuvres with "
+            "--manoeuvre.")
+    for name, default in MANOEUVRE_DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, default)
+
+
 def run(args) -> int:
     from .._io import check_output
     from ..effects import parse_effects, simulate_with_effects
@@ -124,6 +144,7 @@ def run(args) -> int:
     check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}",
                  kind="folder" if args.protocol else "file", suffixes=(".csv",))
     check_inputs(ship_file(args.ship))
+    _check_protocol_options(args)
     ship = load_cli_ship(args.ship, simulated=True)
     check_rudder(args.rudder, ship, "--rudder")
     check_rudder(args.check, ship, "--check")
