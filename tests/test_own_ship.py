@@ -98,10 +98,31 @@ def test_an_identification_ship_keeps_every_value_it_gives(own_ship):
     assert inertia["Y_vdot"] == pytest.approx(-0.155164 * k, rel=1e-15)
     assert inertia["X_udot"] == pytest.approx(-0.006531 * k, rel=1e-15)
     assert inertia["N_rdot"] == pytest.approx(-0.010 * k, rel=1e-15)
-    # what it leaves out is assumed, and named: Y_rdot, N_vdot and the servo
-    assert len(ship.assumptions) == 3
+    # what it leaves out is assumed, and named: Y_rdot, N_vdot, the servo, the Coriolis terms
+    # and the speed form
+    assert len(ship.assumptions) == 4
     assert "Y_rdot, N_vdot" in ship.assumptions[0] and "X_udot" not in ship.assumptions[0]
     assert "rudder servo T_R = 0.1 L/U0" in ship.assumptions[1]
+    assert ship.speed_reference == "design" and 'speed_reference = "design"' in \
+        ship.assumptions[3]
+    given = own_ship('speed_reference = "instantaneous"\n' + KCS_PARTICULARS)
+    assert given.speed_reference == "instantaneous"
+    assert not any("speed_reference" in a for a in given.assumptions)
+
+
+@pytest.mark.parametrize(("text", "named"), [
+    ('speed_refrence = "instantaneous"\n', "top-level key 'speed_refrence'; did you mean "
+     "'speed_reference'?"),
+    ("[sevro]\nT_R = 0.2\n", "top-level section [sevro]; did you mean 'servo'?")])
+def test_a_misspelt_key_or_section_of_a_ship_file_is_refused(own_ship, text, named):
+    """Ignored, a misspelt speed_reference would leave the design speed form and a misspelt
+    [servo] the assumed servo; a near miss of a known name is refused, other unknown
+    top-level keys are still ignored."""
+    where = KCS_PARTICULARS.index("[particulars]")
+    with pytest.raises(SindyshipInputError, match=named.replace("[", r"\[").replace("?", r"\?")):
+        own_ship(KCS_PARTICULARS[:where] + text + KCS_PARTICULARS[where:]
+                 if text.startswith("speed") else KCS_PARTICULARS + text)
+    assert own_ship('notes = "towing tank 2024"\n' + KCS_PARTICULARS).name == "my-kcs"
 
 
 def test_given_derivatives_win_over_given_added_masses_and_nothing_is_assumed(own_ship):
@@ -129,7 +150,8 @@ def test_the_command_line_names_what_the_ship_assumes(tmp_path, protocol_runs):
                                  tmp_path / "m.json")
     assert code == 0, err
     notes = [line for line in err.splitlines() if line.startswith("note: ship")]
-    assert len(notes) == 3 and "Clarke" in notes[0] and "servo" in notes[1]
+    assert len(notes) == 4 and "Clarke" in notes[0] and "servo" in notes[1]
+    assert "speed_reference" in notes[3]
 
 
 def test_an_identification_ship_scales_and_round_trips_through_its_file(own_ship, tmp_path):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import json
 import math
@@ -149,6 +150,29 @@ def _group(cls: type, table: Any, section: str, source: str) -> Any:
     if "K_T" in values:
         values["K_T"] = tuple(float(x) for x in values["K_T"])
     return cls(**values)
+
+
+#: The top-level keys and sections of a ship file; other top-level keys are ignored, unless
+#: one is a near miss of these (a misspelt key or section, refused by :func:`_check_misspelt`).
+SHIP_FILE_KEYS = ("name", "title", "hull_form", "speed_reference", "coriolis", "particulars",
+                  "mass", "hull", "propeller", "rudder", "servo", "abkowitz")
+
+
+def _check_misspelt(data: dict, source: str) -> None:
+    """Refuse a top-level key or section that is a near miss of one of
+    :data:`SHIP_FILE_KEYS`: ignored, a misspelt ``[servo]`` would leave the ship with an
+    assumed servo, a misspelt ``speed_reference`` with the design speed form."""
+    for key, value in data.items():
+        if key in SHIP_FILE_KEYS:
+            continue
+        close = difflib.get_close_matches(key, SHIP_FILE_KEYS, n=1, cutoff=0.8)
+        if close:
+            kind = "section" if isinstance(value, dict) else "key"
+            shown = f"[{key}]" if kind == "section" else repr(key)
+            raise SindyshipInputError(
+                f"{source}: unknown top-level {kind} {shown}; did you mean {close[0]!r}? "
+                "Rename it (other unknown top-level keys are ignored)."
+            )
 
 
 def _check_top_level(data: dict, source: str) -> None:
@@ -338,6 +362,10 @@ def _identification_ship(data: dict, source: str) -> Ship:
             "rudder servo " + ", ".join(values[key] for key in servo_assumed)
             + " (the IMO steering-gear rate, Froude-scaled); give [servo] with the ship's own")
     assumptions.append("Coriolis terms of the rigid body with the added masses (eq. 14)")
+    if "speed_reference" not in data:
+        assumptions.append('speed_reference = "design" (forces over the design speed U0); give '
+                           'speed_reference = "instantaneous" for forces that scale with the '
+                           "instantaneous speed")
     _check_physics(particulars, servo, source, mass)
     return Ship(
         name=data["name"],
@@ -374,6 +402,7 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
     or ``k_zz``); [abkowitz] and [servo] are optional (Clarke's added masses,
     :data:`DEFAULT_SERVO`).
     """
+    _check_misspelt(data, source)
     if not any(section in data for section in ("hull", "propeller", "rudder", "hull_form")):
         return _identification_ship(data, source)
     _check_top_level(data, source)
