@@ -337,6 +337,19 @@ def test_a_number_with_an_underscore_is_refused(tmp_path):
     assert "column 'u' has the text '8_0' in row 4" in message
 
 
+@pytest.mark.parametrize("stamp", ["2024-05-01 10:00:00", "2024-05-01T10:00:00Z", "10:00:03"])
+def test_a_date_time_in_the_time_column_is_named_with_its_fix(tmp_path, stamp):
+    """A CSV's t is seconds: a logger's date-times there are named as such, with the two
+    ways to give them (seconds, or Parquet, whose timestamps are read)."""
+    lines = [replace_cell(line, 0, stamp) for line in rows(4)]
+    message = error_of(write(tmp_path, csv_text(lines=lines)))
+    assert f"column 't' holds the date-time '{stamp}' in row 2" in message
+    assert "write t as seconds" in message and "Parquet" in message
+    lines = rows(4)
+    lines[2] = replace_cell(lines[2], 0, "n/a")
+    assert "where a number is expected" in error_of(write(tmp_path, csv_text(lines=lines)))
+
+
 def test_a_quote_never_closed_names_its_row(tmp_path):
     """Python's CSV reader takes every row after an unclosed quote into one cell; the count of
     values then fails on the file's last row, which is not where the mistake is."""

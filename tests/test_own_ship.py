@@ -154,6 +154,27 @@ def test_the_command_line_names_what_the_ship_assumes(tmp_path, protocol_runs):
     assert "speed_reference" in notes[3]
 
 
+def test_a_design_speed_in_knots_is_named_by_the_fit(tmp_path, protocol_runs):
+    """U0 = 24 (knots, written for m/s): the records never reach 0.7 U0, which a fit says
+    in a note (the model is made non-dimensional with the wrong speed); with U0 in m/s it
+    says nothing of the speed."""
+    from sindyship.measurements import write_csv
+
+    records = []
+    for run in protocol_runs["train"][:2]:
+        records.append(tmp_path / f"{run.name}.csv")
+        write_csv(run, records[-1])
+    for speed, noted in (("24.0", True), ("12.348", False)):
+        path = tmp_path / "ship.toml"
+        path.write_text(KCS_PARTICULARS.replace("U0 = 12.348", f"U0 = {speed}"),
+                        encoding="utf-8")
+        code, _, err = run_sindyship("fit", *records, "--ship", path, "--optimizer", "ls",
+                                     "--out", tmp_path / "m.json")
+        assert code == 0, err
+        assert ("note: no record reaches more than 0.51 times the design speed U0 = 24 m/s"
+                in err) is noted, err
+
+
 def test_an_identification_ship_scales_and_round_trips_through_its_file(own_ship, tmp_path):
     """Froude scaling touches the groups the file has (no propeller or rudder here), and
     ship_to_toml writes a file load_ship reads back to the same ship, a title in any script

@@ -364,14 +364,28 @@ def load_cli_ship(name, *, simulated: bool = False):
     return ship
 
 
-def note_records_ship(args, ship) -> None:
-    """Say that records given no ``--ship`` are taken as :data:`RECORDS_SHIP`'s: another
-    ship's records made non-dimensional with its length and speed fit without an error and
-    fly wrong.  Called when the verb has done its work, so that an error stays one line."""
+#: Records none of which reaches this share of the ship's design speed are named in a note.
+SLOW_RECORDS = 0.7
+
+
+def note_records_ship(args, ship, records=None) -> None:
+    """Say that records given no ``--ship`` are taken as :data:`RECORDS_SHIP`'s, and when
+    none of the ``records`` reaches :data:`SLOW_RECORDS` times the ship's design speed U0:
+    another ship's records, or a U0 in another unit, made non-dimensional with the wrong
+    length and speed fit without an error and fly wrong.  Called when the verb has done its
+    work, so that an error stays one line."""
     if args.ship is None:
         progress(f"note: no --ship given: the records are taken as the {ship.name.upper()}'s "
                  f"(L = {ship.L:g} m, U0 = {ship.U0:.4g} m/s); give --ship with the records' "
                  "own ship (a built-in name or a ship TOML file) if they are another's.")
+    if records:
+        import numpy as np
+
+        fastest = max(float(np.max(np.hypot(r["u"], r["v"]))) for r in records)
+        if fastest < SLOW_RECORDS * ship.U0:
+            progress(f"note: no record reaches more than {fastest / ship.U0:.2f} times the "
+                     f"design speed U0 = {ship.U0:.4g} m/s of ship {ship.name}; the model is "
+                     "made non-dimensional with U0: check the ship and its U0 (in m/s).")
 
 
 def ship_file(name: str | None) -> list[str]:

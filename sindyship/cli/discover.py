@@ -96,7 +96,7 @@ def run(args) -> int:
         else:
             progress(f"nothing was discovered: {args.out} was not written")
         document["effect_file"] = str(args.out) if found.accepted else None
-    note_records_ship(args, ship)
+    note_records_ship(args, ship, records)
     if args.json:
         emit(document)
     else:

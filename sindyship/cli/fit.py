@@ -193,7 +193,7 @@ def run(args) -> int:
     fitted_params = params if state is None else {**params, "strength": state["strength"]}
     report = None if args.no_identifiability else _identifiability(args, records, ship, library,
                                                                    fitted_params)
-    note_records_ship(args, ship)
+    note_records_ship(args, ship, records)
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
               "library": model.library.name, "speed": model.library.speed,
