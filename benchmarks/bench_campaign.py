@@ -61,8 +61,9 @@ def write_campaign(folder: Path, seed: int = SEED) -> dict[str, list[str]]:
     return out
 
 
-def _cli(checkout: Path, *arguments: str) -> str:
-    """``sindyship ARGUMENTS`` of ``checkout`` in a fresh process: its stdout."""
+def checkout_cli(checkout: Path, *arguments: str) -> str:
+    """``sindyship ARGUMENTS`` of ``checkout`` in a fresh process: its stdout (also the
+    ``--against`` runs of bench_captive.py)."""
     env = {**os.environ, "PYTHONPATH": str(checkout), "MPLBACKEND": "Agg"}
     done = subprocess.run([sys.executable, "-m", "sindyship.cli", *arguments], env=env,
                           cwd=checkout, capture_output=True, text=True)
@@ -77,9 +78,9 @@ def workflow(checkout: Path, paths: dict, folder: Path, label: str,
     the held-out errors, their geometric mean and the fit's time."""
     model = folder / f"{label}.json"
     start = time.perf_counter()
-    _cli(checkout, "fit", *paths["train"], "--ship", SHIP, *options, "--out", str(model))
+    checkout_cli(checkout, "fit", *paths["train"], "--ship", SHIP, *options, "--out", str(model))
     fit_s = time.perf_counter() - start
-    flown = json.loads(_cli(checkout, "evaluate", str(model), *paths["test"], "--json"))
+    flown = json.loads(checkout_cli(checkout, "evaluate", str(model), *paths["test"], "--json"))
     errors = flown["errors"]
     errors = {name: {"mean_distance_L": row["mean_distance_L"],
                      "diverged_at_s": row.get("diverged_at_s")} for name, row in errors.items()}
@@ -93,14 +94,14 @@ def workflow(checkout: Path, paths: dict, folder: Path, label: str,
 def diagnosis(paths: dict) -> dict:
     """``sindyship diagnose --rounds 3`` on the training records, with the held-out records
     flown: the effects it adds round by round, and its first ranking."""
-    found = json.loads(_cli(ROOT, "diagnose", *paths["train"], "--ship", SHIP, "--test",
+    found = json.loads(checkout_cli(ROOT, "diagnose", *paths["train"], "--ship", SHIP, "--test",
                             *paths["test"], "--rounds", "3", "--json"))
     return {"added": found["added"], "stopped": found["stopped"], "speed": found["speed"],
             "ranking": [{"effect": row["effect"], "explained": row["explained"],
                          "meaningful": row.get("meaningful")} for row in found["ranking"]]}
 
 
-def _commit(checkout: Path) -> str | None:
+def checkout_commit(checkout: Path) -> str | None:
     """The short commit hash of a checkout (None when it is not a git work tree)."""
     done = subprocess.run(["git", "-C", str(checkout), "rev-parse", "--short", "HEAD"],
                           capture_output=True, text=True)
@@ -134,7 +135,7 @@ def run(against: Path | None) -> dict:
     out = {"ship": SHIP, "seed": SEED, "diagnosis": found, "named": named,
            "workflows": workflows, "recommended": f"default + {' + '.join(named)}" if named
            else "default", "against": None if against is None else str(against),
-           "against_commit": None if against is None else _commit(against)}
+           "against_commit": None if against is None else checkout_commit(against)}
     if "default before" in workflows:
         out["before_over_recommended"] = (workflows["default before"]["geometric_mean_L"]
                                           / recommended["geometric_mean_L"])

@@ -64,14 +64,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+from bench_campaign import checkout_cli, checkout_commit
 
 from sindyship._io import clean_json, write_text_atomic
 from sindyship.evaluation import distance_errors
@@ -179,7 +177,6 @@ def refined_by(checkout: Path, records, ship) -> dict:
     """The ``prior`` fit on ``records`` refined by the ``sindyship fit`` of another checkout
     with each number of trial steps of :data:`AGAINST_EVALUATIONS`: the saved models, loaded
     here, by that number."""
-    env = {**os.environ, "PYTHONPATH": str(checkout), "MPLBACKEND": "Agg"}
     models = {}
     with tempfile.TemporaryDirectory() as folder:
         paths = []
@@ -188,13 +185,9 @@ def refined_by(checkout: Path, records, ship) -> dict:
             write_csv(record, paths[-1])
         for evaluations in AGAINST_EVALUATIONS:
             out = Path(folder) / f"refined-{evaluations}.json"
-            done = subprocess.run(
-                [sys.executable, "-m", "sindyship.cli", "fit", *paths, "--ship", "kcs",
-                 "--optimizer", "prior", "--library", METHOD_LIBRARIES["prior"],
-                 "--refine", str(evaluations), "--out", str(out)],
-                env=env, cwd=checkout, capture_output=True, text=True)
-            if done.returncode != 0:
-                raise RuntimeError(f"the fit of {checkout} failed:\n{done.stderr[-2000:]}")
+            checkout_cli(checkout, "fit", *paths, "--ship", "kcs", "--optimizer", "prior",
+                         "--library", METHOD_LIBRARIES["prior"], "--refine", str(evaluations),
+                         "--out", str(out))
             models[evaluations] = AbkowitzModel.load(out, ship=ship)
     return models
 
@@ -256,17 +249,10 @@ def run(against: Path | None = None) -> dict:
                     rows[f"{prior} refined before, {evaluations} evaluations"] = {
                         **evaluate(model, test, ship), "evaluations": evaluations}
                 out["against"] = str(against)
-                out["against_commit"] = _commit(against)
+                out["against_commit"] = checkout_commit(against)
         out["sets"][name] = {"training": [r.name for r in records], "fits": rows}
     out["seconds"] = time.perf_counter() - start
     return out
-
-
-def _commit(checkout: Path) -> str | None:
-    """The short commit hash of a checkout (None when it is not a git work tree)."""
-    done = subprocess.run(["git", "-C", str(checkout), "rev-parse", "--short", "HEAD"],
-                          capture_output=True, text=True)
-    return done.stdout.strip() or None
 
 
 def format_table(result: dict) -> str:

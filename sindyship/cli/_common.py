@@ -364,13 +364,16 @@ def load_cli_ship(name, *, simulated: bool = False):
     return ship
 
 
-#: Records none of which reaches this share of the ship's design speed are named in a note.
-SLOW_RECORDS = 0.7
+#: Speeds, as a share of the ship's U0, beyond which a record may be of another ship or speed:
+#: ``evaluate`` notes a flight that starts outside them, ``fit``, ``diagnose`` and ``discover``
+#: records none of which reaches the lower one.
+SPEED_NOTE_RANGE = (0.7, 1.3)
 
 
 def note_records_ship(args, ship, records=None) -> None:
     """Say that records given no ``--ship`` are taken as :data:`RECORDS_SHIP`'s, and when
-    none of the ``records`` reaches :data:`SLOW_RECORDS` times the ship's design speed U0:
+    none of the ``records`` reaches the lower end of :data:`SPEED_NOTE_RANGE` times the ship's
+    design speed U0:
     another ship's records, or a U0 in another unit, made non-dimensional with the wrong
     length and speed fit without an error and fly wrong.  Called when the verb has done its
     work, so that an error stays one line."""
@@ -382,7 +385,7 @@ def note_records_ship(args, ship, records=None) -> None:
         import numpy as np
 
         fastest = max(float(np.max(np.hypot(r["u"], r["v"]))) for r in records)
-        if fastest < SLOW_RECORDS * ship.U0:
+        if fastest < SPEED_NOTE_RANGE[0] * ship.U0:
             progress(f"note: no record reaches more than {fastest / ship.U0:.2f} times the "
                      f"design speed U0 = {ship.U0:.4g} m/s of ship {ship.name}; the model is "
                      "made non-dimensional with U0: check the ship and its U0 (in m/s).")

@@ -6,6 +6,7 @@ from pathlib import Path
 
 from ..errors import SindyshipInputError
 from ._common import (
+    SPEED_NOTE_RANGE,
     add_json,
     add_record_options,
     add_resample,
@@ -63,11 +64,6 @@ def run(args) -> int:
     else:
         print(evaluation_report(errors))
     return 0
-
-
-#: Speeds at a flight's start, as a share of the model ship's U0, beyond which evaluate notes
-#: that the record may be of another ship or speed than the model's.
-SPEED_NOTE_RANGE = (0.7, 1.3)
 
 
 def _note_speeds(records, errors, ship) -> None:
