@@ -14,6 +14,7 @@ from pathlib import Path
 from ._diagnosis_thresholds import MEANINGFUL_SHARE
 from .errors import SindyshipInputError
 from .library import DOFS
+from .targets import RESOLVED_STEP
 
 __all__ = [
     "DOF_NAMES",
@@ -207,8 +208,12 @@ def _residual_lines(diagnosis) -> list[str]:
         )
     level = diagnosis.noise_level
     if level:
+        coarse = any(step > RESOLVED_STEP for step in diagnosis.sampling.values())
         lines.append(
-            f"  noise in the records (rough part over one L/U0): u {100 * level['u']:.2g} %, "
+            "  noise in the records (rough part over one L/U0"
+            + ("; the records are under-resolved, so mostly motion between samples: see the "
+               "caution below" if coarse else "")
+            + f"): u {100 * level['u']:.2g} %, "
             f"v {100 * level['v']:.2g} %, r {100 * level['r']:.2g} % of their RMS, heading "
             f"{level['psi_deg']:.2g} deg"
         )

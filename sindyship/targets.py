@@ -91,6 +91,60 @@ def five_point_derivative(y: np.ndarray, dt: float) -> np.ndarray:
     return d / dt
 
 
+#: The coarsest sampling interval, in ship-length times L/U0, at which finite differences
+#: resolve a ship's accelerations: eight samples per L/U0.  On the KVLCC2's zig-zags, 35 deg
+#: turn and random rudder (exact records of its MMG model) the 5-point yaw acceleration misses
+#: the exact one by 0.9 % of its RMS sampled every 0.05 L/U0, 4 % at 0.125, 9 % at 0.2 and
+#: 18 % at 0.34 (``tests/test_sampling.py``); coarser, the forces fitted to the records are
+#: biased and the motion between samples reads as noise.
+RESOLVED_STEP = 0.125
+
+
+def sampling_steps(records, ship: Ship) -> dict[str, float]:
+    """Each record's sampling interval (its median time step) in ship-length times L/U0.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> from sindyship.ships import load_ship
+    >>> frame = pd.DataFrame({"t": np.arange(0.0, 60.0, 2.0)})
+    >>> steps = sampling_steps([Trajectory(frame, name="zz")], load_ship("kvlcc2"))
+    >>> round(steps["zz"], 3)  # 2 s on a 7 m model at 1.179 m/s
+    0.337
+    """
+    return {record.name: record.dt * ship.U0 / ship.L for record in records}
+
+
+def under_resolved(steps: dict[str, float], ship: Ship) -> str:
+    """Why records sampled at ``steps`` (:func:`sampling_steps`) resolve the ship's
+    accelerations poorly, or "" when every step is at most :data:`RESOLVED_STEP`.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> under_resolved({"zz": 0.1}, load_ship("kvlcc2"))
+    ''
+    >>> print(under_resolved({"zz": 0.337, "tc": 0.337}, load_ship("kvlcc2")))
+    ... # doctest: +NORMALIZE_WHITESPACE
+    the records are sampled every 2 s (0.34 L/U0: zz, tc), too coarsely for finite
+    differences to resolve the ship's accelerations (at most 0.125 L/U0, 0.74 s for this
+    ship): the forces fitted to them are biased and part of the motion reads as noise; log
+    every 0.74 s or faster
+    """
+    coarse = {name: step for name, step in steps.items() if step > RESOLVED_STEP}
+    if not coarse:
+        return ""
+    time_scale = ship.L / ship.U0
+    coarsest = max(coarse.values())
+    names = ", ".join(list(coarse)[:4]) + (", ..." if len(coarse) > 4 else "")
+    finest = RESOLVED_STEP * time_scale
+    return (f"the records are sampled every {coarsest * time_scale:.3g} s ({coarsest:.2f} "
+            f"L/U0: {names}), too coarsely for finite differences to resolve the ship's "
+            f"accelerations (at most {RESOLVED_STEP:g} L/U0, {finest:.2g} s for this ship): "
+            "the forces fitted to them are biased and part of the motion reads as noise; log "
+            f"every {finest:.2g} s or faster")
+
+
 def savgol_points(window: float, dt: float, order: int, n_samples: int, what: str) -> int:
     """The odd number of samples of a Savitzky-Golay window of ``window`` seconds at the step
     ``dt``, refusing a window too short for a polynomial of ``order`` or longer than the

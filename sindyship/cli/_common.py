@@ -370,13 +370,15 @@ def load_cli_ship(name, *, simulated: bool = False):
 SPEED_NOTE_RANGE = (0.7, 1.3)
 
 
-def note_records_ship(args, ship, records=None) -> None:
+def note_records_ship(args, ship, records=None, *, sampling: bool = True) -> None:
     """Say that records given no ``--ship`` are taken as :data:`RECORDS_SHIP`'s, and when
     none of the ``records`` reaches the lower end of :data:`SPEED_NOTE_RANGE` times the ship's
     design speed U0:
     another ship's records, or a U0 in another unit, made non-dimensional with the wrong
-    length and speed fit without an error and fly wrong.  Called when the verb has done its
-    work, so that an error stays one line."""
+    length and speed fit without an error and fly wrong.  With ``sampling``, say when the
+    records are sampled too coarsely for the ship's time scale
+    (:func:`sindyship.targets.under_resolved`).  Called when the verb has done its work, so
+    that an error stays one line."""
     if args.ship is None:
         progress(f"note: no --ship given: the records are taken as the {ship.name.upper()}'s "
                  f"(L = {ship.L:g} m, U0 = {ship.U0:.4g} m/s); give --ship with the records' "
@@ -389,6 +391,12 @@ def note_records_ship(args, ship, records=None) -> None:
             progress(f"note: no record reaches more than {fastest / ship.U0:.2f} times the "
                      f"design speed U0 = {ship.U0:.4g} m/s of ship {ship.name}; the model is "
                      "made non-dimensional with U0: check the ship and its U0 (in m/s).")
+        if sampling:
+            from ..targets import sampling_steps, under_resolved
+
+            coarse = under_resolved(sampling_steps(records, ship), ship)
+            if coarse:
+                progress(f"note: {coarse}.")
 
 
 def ship_file(name: str | None) -> list[str]:

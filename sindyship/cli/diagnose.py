@@ -164,7 +164,7 @@ def run(args) -> int:
         with output_folder(out) as tmp:
             _write_folder(tmp, result, iterative, text, document, bar)
         progress(f"sindyship diagnose: figures, report.txt and diagnose.json are in {out}/")
-    note_records_ship(args, ship, records)
+    note_records_ship(args, ship, records, sampling=False)  # the report cautions
     if args.json:
         emit(document)
     else:

@@ -31,6 +31,7 @@ from ..reports import DOF_NAMES
 from ..ships import Ship
 from ..smoothing import SmoothingSetting, resolve_smoothing, smooth_records
 from ..stability import Stability, straight_run_stability
+from ..targets import RESOLVED_STEP, sampling_steps, under_resolved
 from ..trajectory import Trajectory
 from ..uncertainty import library_conditioning
 from ._flights import _fly_many
@@ -80,6 +81,11 @@ class Diagnosis:
         (:func:`sindyship.diagnose.speed.speed_forms`).
     sides : dict
         Per training record, the side its rudder is put to (:func:`rudder_side`).
+    sampling : dict
+        Per training record, its sampling interval in ship-length times L/U0
+        (:func:`sindyship.targets.sampling_steps`); above
+        :data:`~sindyship.targets.RESOLVED_STEP` a caution says the accelerations are
+        under-resolved.
     """
 
     ship: Ship
@@ -101,6 +107,7 @@ class Diagnosis:
     discovery: Discovery | None = None
     speed: SpeedForms | None = None
     sides: dict[str, int] = field(default_factory=dict)
+    sampling: dict[str, float] = field(default_factory=dict)
 
     @property
     def diverged(self) -> dict[str, float]:
@@ -147,7 +154,8 @@ class Diagnosis:
     @property
     def warnings(self) -> list[str]:
         """Cautions about the data behind the verdict (empty when there are none)."""
-        out = []
+        coarse = under_resolved(self.sampling, self.ship)
+        out = [coarse] if coarse else []
         poor = [dof for dof in DOFS if self.force_error[dof] > 0.5]
         noisy = [dof for dof in poor if self.noise_floor.get(dof, 0.0) > 0.5]
         if noisy:
@@ -297,6 +305,7 @@ class Diagnosis:
                 "stability": None if self.stability is None else self.stability.to_json(),
                 "collinear_terms": self.collinear,
                 "noise": {"floor_share_of_error": self.noise_floor, "level": self.noise_level},
+                "sampling": {"step_L_U0": self.sampling, "resolved_step_L_U0": RESOLVED_STEP},
                 "ranking": [score.to_json() for score in self.ranking],
                 "discovery": None if self.discovery is None else self.discovery.to_json(),
                 "speed": None if self.speed is None else self.speed.to_json(),
@@ -497,6 +506,7 @@ def diagnose(
                                                         @ ranked.base_errors[dof]), 1e-300)
                      for dof in DOFS},
         noise_level=channel_noise(records),
+        sampling=sampling_steps(records, ship),
         collinear=_collinear_terms(ranked.base_problems),
         settings={
             **settings,
