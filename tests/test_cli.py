@@ -493,3 +493,35 @@ def test_the_in_process_runner_shows_what_a_fresh_process_would(monkeypatch):
         monkeypatch.setattr(sindyship.cli, "main", stops)
         code, _, err = run_sindyship("fit")
         assert code == expected and (status != "refused" or err == "refused\n")
+
+
+def test_fit_flies_its_training_records_and_names_those_it_misses(tmp_path, records):
+    """A fit can match every force within a few per cent and still not fly the records it
+    was fitted on: least squares on the paper's library diverges in both 35 deg turns it was
+    fitted on, beside a straight run and a zig-zag.  fit flies the saved model like each
+    training record (as evaluate flies it), prints the distances and names those records."""
+    straight = tmp_path / "straight.csv"
+    assert main(["simulate", "--ship", "kcs", "--manoeuvre", "straight", "--duration", "1200",
+                 "--out", str(straight)]) == 0
+    data = [records["tc35"], records["tc-35"], records["zz20"], straight]
+    model = tmp_path / "m.json"
+    code, out, err = run_sindyship("fit", *data, "--ship", "kcs", "--optimizer", "ls",
+                                   "--out", model, "--json")
+    assert code == 0, err
+    flights = json.loads(out)["training_flights"]
+    assert flights["tc35"]["diverged_at_s"] is not None
+    assert flights["tc-35"]["diverged_at_s"] is not None
+    assert flights["zz20"]["diverged_at_s"] is None
+    assert flights["zz20"]["mean_distance_L"] < 0.5
+    assert "training flights (mean distance [L], flown as sindyship evaluate flies them): " \
+        f"tc35 diverged at {flights['tc35']['diverged_at_s']:g} s" in err
+    assert "note: the model flies tc35, tc-35 (records it was fitted on) diverging or more " \
+        "than 1 L off" in err
+    code, out, err = run_sindyship("evaluate", model, *data, "--json")
+    assert code == 0, err
+    evaluated = json.loads(out)["errors"]
+    for name, flight in flights.items():
+        assert flight["mean_distance_L"] == pytest.approx(
+            evaluated[name]["mean_distance_L"], rel=1e-9, nan_ok=True)
+    code, _, err = run_sindyship("fit", *data, "--ship", "kcs", "--out", tmp_path / "p.json")
+    assert code == 0 and "note: the model flies" not in err, err  # the prior fit flies them

@@ -88,7 +88,7 @@ def test_the_first_hour_runs_as_written(tmp_path, monkeypatch):
     env = {**os.environ, "MPLBACKEND": "Agg", "PATH": f"{Path(sys.executable).parent}:"
            + os.environ.get("PATH", "")}
     monkeypatch.chdir(tmp_path)
-    through_bash = []
+    through_bash, notes = [], {}
     for block in blocks:
         commands = _plain_commands(block)
         if commands is None:
@@ -100,12 +100,20 @@ def test_the_first_hour_runs_as_written(tmp_path, monkeypatch):
         for words in commands:
             code, _, err = run_sindyship(*_expanded(words))
             assert code == 0, f"sindyship {' '.join(words)}\n{err[-2000:]}"
+            if words[0] == "fit":
+                notes[words[-1]] = err
     assert any("sindyship " in block for block in through_bash)  # the console script runs
     assert (tmp_path / "equations.tex").exists() and (tmp_path / "kcs_model.py").exists()
     forces = json.loads((tmp_path / "forces" / "forces.json").read_text())
     assert min(forces["by_test"][t]["Y"]["correlation"] for t in forces["by_test"]
                if t != "straight" and forces["by_test"][t]["Y"]["correlation"] is not None) > 0.9
     assert len(list((tmp_path / "diagnosis").glob("*.png"))) > 10
+    # fit flies its training records and names those it misses: the default model the
+    # straight run, the model with the asymmetry none
+    assert "note: the model flies straight (records it was fitted on) more than 1 L off" \
+        in notes["model.json"]
+    assert "training flights" in notes["model-asymmetry.json"]
+    assert "note: the model flies" not in notes["model-asymmetry.json"]
 
 
 def test_a_readme_block_with_more_than_plain_sindyship_commands_goes_to_bash():
