@@ -135,11 +135,14 @@ def under_resolved(steps: dict[str, float], ship: Ship) -> str:
     if not coarse:
         return ""
     time_scale = ship.L / ship.U0
-    coarsest = max(coarse.values())
+    low, high = min(coarse.values()), max(coarse.values())
+    seconds, shares = f"{high * time_scale:.3g} s", f"{high:.2f} L/U0"
+    if f"{low:.2f}" != f"{high:.2f}":
+        seconds, shares = f"{low * time_scale:.3g} to {seconds}", f"{low:.2f} to {shares}"
     names = ", ".join(list(coarse)[:4]) + (", ..." if len(coarse) > 4 else "")
     finest = RESOLVED_STEP * time_scale
-    return (f"the records are sampled every {coarsest * time_scale:.3g} s ({coarsest:.2f} "
-            f"L/U0: {names}), too coarsely for finite differences to resolve the ship's "
+    return (f"the records are sampled every {seconds} ({shares}: {names}), too coarsely "
+            "for finite differences to resolve the ship's "
             f"accelerations (at most {RESOLVED_STEP:g} L/U0, {finest:.2g} s for this ship): "
             "the forces fitted to them are biased and part of the motion reads as noise; log "
             f"every {finest:.2g} s or faster")

@@ -64,7 +64,10 @@ def test_the_resolved_step_is_where_finite_differences_keep_the_yaw_acceleration
 def test_under_resolved_names_the_records_the_step_and_the_fix():
     assert under_resolved({"zz": RESOLVED_STEP, "tc": 0.05}, SHIP) == ""
     text = under_resolved({"zz": 0.05, "tc": 0.337, "rnd": 0.2}, SHIP)
-    assert text.startswith("the records are sampled every 2 s (0.34 L/U0: tc, rnd)")
+    assert text.startswith("the records are sampled every 1.19 to 2 s (0.20 to 0.34 L/U0: "
+                           "tc, rnd)")
+    assert under_resolved({"zz": 0.337, "tc": 0.337}, SHIP).startswith(
+        "the records are sampled every 2 s (0.34 L/U0: zz, tc)")
     assert "log every 0.74 s or faster" in text
     steps = sampling_steps(kvlcc2_records(0.2, duration=60.0), SHIP)
     assert list(steps) == ["zz10_10", "zz20_20_port", "tc35_stbd", "random20_seed3"]
