@@ -115,8 +115,9 @@ def read_csv(
     -------
     Trajectory
         Named after the file stem; ``meta`` holds ``source`` (the path), ``units`` (the units
-        the headers gave, by column), ``resampled`` (the step, or None) and ``notes`` (what
-        the plausibility checks changed, e.g. an unwrapped heading).
+        the headers gave, by column), ``resampled`` (the step, or None), ``logged_step`` (the
+        median step of the file's own times, before any resampling) and ``notes`` (what the
+        plausibility checks changed, e.g. an unwrapped heading).
 
     Raises
     ------
@@ -250,6 +251,7 @@ def trajectory_from_frame(
     notes = notes if gap is None else [*notes, gap]
     for note in notes:
         warnings.warn(note, PlausibilityNote, stacklevel=2)
+    logged = float(np.median(np.diff(si["t"]))) if len(si["t"]) > 1 else None
     if resample is not None:
         si = _resample(si, resample, source)
 
@@ -258,6 +260,7 @@ def trajectory_from_frame(
         "source": source,
         "units": {column.name: column.unit for column in columns if column.unit is not None},
         "resampled": None if resample is None else float(resample),
+        "logged_step": logged,
         "notes": notes,
     }
     return Trajectory(data, name=name, meta=meta)

@@ -208,11 +208,13 @@ def _residual_lines(diagnosis) -> list[str]:
         )
     level = diagnosis.noise_level
     if level:
-        coarse = any(step > RESOLVED_STEP for step in diagnosis.sampling.values())
+        coarse = [step > RESOLVED_STEP * (1.0 + 1e-9) for step in diagnosis.sampling.values()]
         lines.append(
             "  noise in the records (rough part over one L/U0"
             + ("; the records are under-resolved, so mostly motion between samples: see the "
-               "caution below" if coarse else "")
+               "caution below" if coarse and all(coarse) else
+               "; some records are under-resolved, so part of it may be motion between "
+               "samples: see the caution below" if any(coarse) else "")
             + f"): u {100 * level['u']:.2g} %, "
             f"v {100 * level['v']:.2g} %, r {100 * level['r']:.2g} % of their RMS, heading "
             f"{level['psi_deg']:.2g} deg"

@@ -13,6 +13,8 @@ freedom.  Everything here is non-dimensional in Prime I with the constant design
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .errors import SindyshipInputError
@@ -101,51 +103,62 @@ RESOLVED_STEP = 0.125
 
 
 def sampling_steps(records, ship: Ship) -> dict[str, float]:
-    """Each record's sampling interval (its median time step) in ship-length times L/U0.
+    """Each record's sampling interval in ship-length times L/U0: its median time step, or
+    the step it was logged at (``meta["logged_step"]``, kept when a record is read with
+    ``resample``) where that is coarser: interpolating onto a finer grid adds no motion.
 
     Examples
     --------
     >>> import pandas as pd
     >>> from sindyship.ships import load_ship
-    >>> frame = pd.DataFrame({"t": np.arange(0.0, 60.0, 2.0)})
-    >>> steps = sampling_steps([Trajectory(frame, name="zz")], load_ship("kvlcc2"))
-    >>> round(steps["zz"], 3)  # 2 s on a 7 m model at 1.179 m/s
+    >>> frame = pd.DataFrame({"t": np.arange(0.0, 60.0, 0.25)})
+    >>> logged = Trajectory(frame, name="zz", meta={"logged_step": 2.0})
+    >>> round(sampling_steps([logged], load_ship("kvlcc2"))["zz"], 3)  # 2 s on a 7 m model
     0.337
     """
-    return {record.name: record.dt * ship.U0 / ship.L for record in records}
+    return {record.name: max(record.dt, float(record.meta.get("logged_step") or 0.0))
+            * ship.U0 / ship.L for record in records}
+
+
+def _down(value: float) -> str:
+    """``value`` rounded down to three significant digits (a limit never rounded past)."""
+    digits = 2 - math.floor(math.log10(value))
+    return f"{math.floor(value * 10.0**digits) / 10.0**digits:g}"
 
 
 def under_resolved(steps: dict[str, float], ship: Ship) -> str:
     """Why records sampled at ``steps`` (:func:`sampling_steps`) resolve the ship's
-    accelerations poorly, or "" when every step is at most :data:`RESOLVED_STEP`.
+    accelerations poorly, or "" when every step is at most :data:`RESOLVED_STEP` (up to
+    rounding).
 
     Examples
     --------
     >>> from sindyship.ships import load_ship
-    >>> under_resolved({"zz": 0.1}, load_ship("kvlcc2"))
+    >>> under_resolved({"zz": 0.125 + 1e-15}, load_ship("kvlcc2"))
     ''
     >>> print(under_resolved({"zz": 0.337, "tc": 0.337}, load_ship("kvlcc2")))
     ... # doctest: +NORMALIZE_WHITESPACE
-    the records are sampled every 2 s (0.34 L/U0: zz, tc), too coarsely for finite
-    differences to resolve the ship's accelerations (at most 0.125 L/U0, 0.74 s for this
+    the records are sampled every 2 s (0.337 L/U0: zz, tc), too coarsely for finite
+    differences to resolve the ship's accelerations (at most 0.125 L/U0, 0.742 s for this
     ship): the forces fitted to them are biased and part of the motion reads as noise; log
-    every 0.74 s or faster
+    every 0.742 s or faster (and resample no coarser)
     """
-    coarse = {name: step for name, step in steps.items() if step > RESOLVED_STEP}
+    coarse = {name: step for name, step in steps.items()
+              if step > RESOLVED_STEP * (1.0 + 1e-9)}
     if not coarse:
         return ""
     time_scale = ship.L / ship.U0
     low, high = min(coarse.values()), max(coarse.values())
-    seconds, shares = f"{high * time_scale:.3g} s", f"{high:.2f} L/U0"
-    if f"{low:.2f}" != f"{high:.2f}":
-        seconds, shares = f"{low * time_scale:.3g} to {seconds}", f"{low:.2f} to {shares}"
+    seconds, shares = f"{high * time_scale:.3g} s", f"{high:.3g} L/U0"
+    if f"{low:.3g}" != f"{high:.3g}":
+        seconds, shares = f"{low * time_scale:.3g} to {seconds}", f"{low:.3g} to {shares}"
     names = ", ".join(list(coarse)[:4]) + (", ..." if len(coarse) > 4 else "")
-    finest = RESOLVED_STEP * time_scale
+    finest = _down(RESOLVED_STEP * time_scale)
     return (f"the records are sampled every {seconds} ({shares}: {names}), too coarsely "
-            "for finite differences to resolve the ship's "
-            f"accelerations (at most {RESOLVED_STEP:g} L/U0, {finest:.2g} s for this ship): "
-            "the forces fitted to them are biased and part of the motion reads as noise; log "
-            f"every {finest:.2g} s or faster")
+            "for finite differences to resolve the ship's accelerations (at most "
+            f"{RESOLVED_STEP:g} L/U0, {finest} s for this ship): the forces fitted to them are "
+            f"biased and part of the motion reads as noise; log every {finest} s or faster "
+            "(and resample no coarser)")
 
 
 def savgol_points(window: float, dt: float, order: int, n_samples: int, what: str) -> int:

@@ -515,8 +515,9 @@ def test_fit_flies_its_training_records_and_names_those_it_misses(tmp_path, reco
     assert flights["zz20"]["mean_distance_L"] < 0.5
     assert "training flights (mean distance [L], flown as sindyship evaluate flies them): " \
         f"tc35 diverged at {flights['tc35']['diverged_at_s']:g} s" in err
-    assert "note: the model flies tc35, tc-35 (records it was fitted on) diverging or more " \
-        "than 1 L off" in err
+    assert ("note: the model diverges on, or flies more than 1 L off, records it was fitted "
+            f"on: tc35 (diverged at {flights['tc35']['diverged_at_s']:g} s), tc-35 (diverged "
+            f"at {flights['tc-35']['diverged_at_s']:g} s); physics the library lacks") in err
     code, out, err = run_sindyship("evaluate", model, *data, "--json")
     assert code == 0, err
     evaluated = json.loads(out)["errors"]
@@ -524,4 +525,4 @@ def test_fit_flies_its_training_records_and_names_those_it_misses(tmp_path, reco
         assert flight["mean_distance_L"] == pytest.approx(
             evaluated[name]["mean_distance_L"], rel=1e-9, nan_ok=True)
     code, _, err = run_sindyship("fit", *data, "--ship", "kcs", "--out", tmp_path / "p.json")
-    assert code == 0 and "note: the model flies" not in err, err  # the prior fit flies them
+    assert code == 0 and "note: the model diverges on" not in err, err  # the prior flies them

@@ -110,10 +110,10 @@ def test_the_first_hour_runs_as_written(tmp_path, monkeypatch):
     assert len(list((tmp_path / "diagnosis").glob("*.png"))) > 10
     # fit flies its training records and names those it misses: the default model the
     # straight run, the model with the asymmetry none
-    assert "note: the model flies straight (records it was fitted on) more than 1 L off" \
+    assert "flies more than 1 L off, records it was fitted on: straight (33.2 L);" \
         in notes["model.json"]
     assert "training flights" in notes["model-asymmetry.json"]
-    assert "note: the model flies" not in notes["model-asymmetry.json"]
+    assert "records it was fitted on" not in notes["model-asymmetry.json"]
 
 
 def test_a_readme_block_with_more_than_plain_sindyship_commands_goes_to_bash():

@@ -62,13 +62,18 @@ def test_the_resolved_step_is_where_finite_differences_keep_the_yaw_acceleration
 
 
 def test_under_resolved_names_the_records_the_step_and_the_fix():
-    assert under_resolved({"zz": RESOLVED_STEP, "tc": 0.05}, SHIP) == ""
+    # a step of exactly eight samples per L/U0, up to rounding, is resolved
+    exact = float(np.median(np.diff(kvlcc2_records(RESOLVED_STEP, duration=60.0)[0].t)))
+    assert under_resolved({"zz": exact * SHIP.U0 / SHIP.L, "tc": 0.05}, SHIP) == ""
     text = under_resolved({"zz": 0.05, "tc": 0.337, "rnd": 0.2}, SHIP)
-    assert text.startswith("the records are sampled every 1.19 to 2 s (0.20 to 0.34 L/U0: "
+    assert text.startswith("the records are sampled every 1.19 to 2 s (0.2 to 0.337 L/U0: "
                            "tc, rnd)")
     assert under_resolved({"zz": 0.337, "tc": 0.337}, SHIP).startswith(
-        "the records are sampled every 2 s (0.34 L/U0: zz, tc)")
-    assert "log every 0.74 s or faster" in text
+        "the records are sampled every 2 s (0.337 L/U0: zz, tc)")
+    # the limit is rounded down: logging at the step the fix names is resolved
+    assert "(at most 0.125 L/U0, 0.742 s for this ship)" in text
+    assert "log every 0.742 s or faster (and resample no coarser)" in text
+    assert under_resolved({"zz": 0.742 * SHIP.U0 / SHIP.L}, SHIP) == ""
     steps = sampling_steps(kvlcc2_records(0.2, duration=60.0), SHIP)
     assert list(steps) == ["zz10_10", "zz20_20_port", "tc35_stbd", "random20_seed3"]
     assert np.allclose(list(steps.values()), 0.2)
@@ -79,7 +84,7 @@ def test_diagnose_cautions_that_coarse_records_are_under_resolved():
     it now says the records are under-resolved, beside the noise it reads; at 0.05 L/U0 it
     says nothing of it."""
     coarse = diagnose(kvlcc2_records(0.337), SHIP, effects=["asymmetry"], confirm=0)
-    assert coarse.warnings[0].startswith("the records are sampled every 2 s (0.34 L/U0")
+    assert coarse.warnings[0].startswith("the records are sampled every 2 s (0.337 L/U0")
     assert coarse.noise_level["r"] > 0.02  # motion between samples, read as noise
     assert "under-resolved, so mostly motion between samples" in coarse.report()
     document = coarse.to_json()
@@ -89,6 +94,9 @@ def test_diagnose_cautions_that_coarse_records_are_under_resolved():
     assert not any("sampled every" in warning for warning in fine.warnings)
     assert fine.noise_level["r"] < 0.002
     assert "under-resolved" not in fine.report()
+    mixed = diagnose(kvlcc2_records(0.05)[:2] + kvlcc2_records(0.337)[2:], SHIP,
+                     effects=["asymmetry"], confirm=0)
+    assert "some records are under-resolved, so part of it may be motion" in mixed.report()
 
 
 def test_fit_notes_records_sampled_too_coarsely(tmp_path):
@@ -100,8 +108,33 @@ def test_fit_notes_records_sampled_too_coarsely(tmp_path):
     code, _, err = run_sindyship("fit", *paths[:2], "--ship", "kvlcc2", "--optimizer", "ls",
                                  "--out", tmp_path / "coarse.json")
     assert code == 0, err
-    assert "note: the records are sampled every 2 s (0.34 L/U0" in err
+    assert "note: the records are sampled every 2 s (0.337 L/U0" in err
     assert json.loads((tmp_path / "coarse.json").read_text())["ship"] == "kvlcc2"
     code, _, err = run_sindyship("fit", *paths[2:], "--ship", "kvlcc2", "--optimizer", "ls",
                                  "--out", tmp_path / "fine.json")
+    assert code == 0 and "sampled every" not in err, err
+    # judged by the step each file was logged at: a finer --resample grid adds no motion, a
+    # coarser one takes it away
+    for records, resample in ((paths[:2], "0.25"), (paths[2:], "2")):
+        code, _, err = run_sindyship("fit", *records, "--ship", "kvlcc2", "--optimizer", "ls",
+                                     "--resample", resample, "--out", tmp_path / "r.json")
+        assert code == 0, err
+        assert "note: the records are sampled every 2 s" in err
+        assert "log every 0.742 s or faster (and resample no coarser)" in err
+
+
+def test_simulate_samples_a_model_finely_enough_by_default(tmp_path):
+    """simulate flew the 7 m KVLCC2 at 1 s by default (0.17 L/U0), which fit then called
+    under-resolved; a model's default step is now within a twentieth of its L/U0."""
+    from sindyship.cli.simulate import default_dt
+
+    assert default_dt(load_ship("kcs")) == 1.0  # 18.6 s per ship length: the paper's 1 Hz
+    assert default_dt(SHIP) == 0.2
+    paths = [tmp_path / "zz.csv", tmp_path / "tc.csv"]
+    for path, manoeuvre in zip(paths, ("zigzag", "turning-circle"), strict=True):
+        code, _, err = run_sindyship("simulate", "--ship", "kvlcc2", "--manoeuvre", manoeuvre,
+                                     "--rudder", "20", "--duration", "200", "--out", path)
+        assert code == 0 and "1000 samples" in err, err
+    code, _, err = run_sindyship("fit", *paths, "--ship", "kvlcc2", "--optimizer", "ls",
+                                 "--out", tmp_path / "m.json")
     assert code == 0 and "sampled every" not in err, err

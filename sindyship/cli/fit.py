@@ -29,6 +29,8 @@ SUMMARY = "identify an Abkowitz model from records"
 #: training records far off (the paper's identified models miss held-out manoeuvres by up
 #: to 2 L; a record the model was fitted on should not be missed by half of that).
 TRAINING_FLIGHT_NOTE_L = 1.0
+#: The most training records whose flights fit names on stderr (``--json`` gives all).
+TRAINING_FLIGHTS_SHOWN = 12
 
 
 def add_parser(sub) -> None:
@@ -217,20 +219,25 @@ def _training_flights(model, records) -> dict:
     from ..evaluation import evaluate
 
     flights = evaluate(model, records)
-    cells = [f"{name} " + (f"diverged at {e['diverged_at_s']:g} s"
-                           if e["diverged_at_s"] is not None else f"{e['mean_distance_L']:.3g}")
-             for name, e in flights.items()]
+    cells = {name: (f"diverged at {e['diverged_at_s']:g} s" if e["diverged_at_s"] is not None
+                    else f"{e['mean_distance_L']:.3g}") for name, e in flights.items()}
+    shown = list(cells)[:TRAINING_FLIGHTS_SHOWN]
+    more = len(cells) - len(shown)
     progress("training flights (mean distance [L], flown as sindyship evaluate flies them): "
-             + ", ".join(cells))
+             + ", ".join(f"{name} {cells[name]}" for name in shown)
+             + (f", and {more} more (--json gives every one)" if more else ""))
     far = [name for name, e in flights.items()
            if e["diverged_at_s"] is not None or e["mean_distance_L"] > TRAINING_FLIGHT_NOTE_L]
     if far:
-        progress(f"note: the model flies {', '.join(far)} (records it was fitted on) "
-                 + ("diverging or " if any(flights[n]["diverged_at_s"] is not None
-                                           for n in far) else "")
-                 + f"more than {TRAINING_FLIGHT_NOTE_L:g} L off: the library misses what "
-                 "they show; sindyship diagnose on the same records names what, and sindyship "
-                 "evaluate shows where.")
+        named = ", ".join(f"{name} ({cells[name]}{'' if flights[name]['diverged_at_s'] else ' L'})"
+                          for name in far[:TRAINING_FLIGHTS_SHOWN])
+        progress(f"note: the model diverges on, or flies more than {TRAINING_FLIGHT_NOTE_L:g} "
+                 f"L off, records it was fitted on: {named}"
+                 + (f" and {len(far) - TRAINING_FLIGHTS_SHOWN} more"
+                    if len(far) > TRAINING_FLIGHTS_SHOWN else "")
+                 + "; physics the library lacks, or terms the records do not pin down: "
+                 "sindyship diagnose on the same records says which, and sindyship evaluate "
+                 "shows where.")
     return flights
 
 
