@@ -35,6 +35,12 @@ prior's forces while it fixes its flights.  Two more fits there say what limits 
   records*, a reference for what the library's forces fitted on the turns fly, never a
   workflow.
 
+And ``prior 1e-05 + captive programme`` (and ``... refined``) is the hybrid fit (``fit
+--captive``, :func:`sindyship.hybrid.fit_hybrid`) of the zig-zags and a small towing-tank
+programme of the MMG's virtual captive tests (:data:`CAPTIVE_PROGRAMME`: static drift, rudder
+and pure yaw, :data:`PROGRAMME_POINTS` conditions each; no drift and yaw combined, which the
+captive agreement still judges) at the default captive share.
+
 Two more say how close the zig-zags alone come to the turns with those terms: ``... refined
 whole`` (refined by whole closed-loop zig-zag flights, as ``evaluate`` flies them, instead of
 the default shooting segments) and ``prior 1e-05 instantaneous + asymmetry abs(v) abs(r)``
@@ -69,11 +75,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 from bench_campaign import checkout_cli, checkout_commit
 
 from sindyship._io import clean_json, write_text_atomic
+from sindyship.captive import captive_tests
 from sindyship.evaluation import distance_errors
 from sindyship.flights import fly_like_batch
+from sindyship.hybrid import fit_hybrid
 from sindyship.identify import (
     design,
     fit,
@@ -109,6 +118,9 @@ TAYLOR_STRENGTHS = (1e-5, 1e-4)
 RUDDER_INFLOW = ("abs(v)", "abs(r)")
 #: The share of a held-out turn, from its end, over which its steady yaw rate is taken.
 STEADY_SHARE = 0.25
+#: The towing-tank programme of the hybrid fit on the zig-zags, and its conditions per test.
+CAPTIVE_PROGRAMME = ("static-drift", "rudder", "pure-yaw")
+PROGRAMME_POINTS = 5
 #: The most trial steps (``--refine N``) another checkout's refinement is given (--against).
 AGAINST_EVALUATIONS = (10, 20, 40, 60, 90)
 
@@ -140,6 +152,12 @@ def rudder_inflow() -> Effect:
     return Effect(f"{asymmetry.name}-rudder-inflow", asymmetry.title, asymmetry.physics, (),
                   {dof: [t for t in asymmetry.terms[dof] if t.text in RUDDER_INFLOW]
                    for dof in ("Y", "N")})
+
+
+def captive_programme(ship) -> pd.DataFrame:
+    """The MMG's virtual captive tests of :data:`CAPTIVE_PROGRAMME`, one table."""
+    return pd.concat([captive_tests(ship, test, points=PROGRAMME_POINTS)
+                      for test in CAPTIVE_PROGRAMME], ignore_index=True)
 
 
 def is_turning_circle(record) -> bool:
@@ -229,6 +247,10 @@ def run(against: Path | None = None) -> dict:
             rows[inflow] = evaluate(fitted[inflow], test, ship)
             rows[f"{prior} with the held-out records"] = evaluate(
                 fit(records + test, ship, library=library, optimizer="prior"), test, ship)
+            hybrid = f"prior {default:.0e} + captive programme"
+            fitted[hybrid] = fit_hybrid(records, ship, captive_programme(ship), library=library,
+                                        optimizer="prior")
+            rows[hybrid] = evaluate(fitted[hybrid], test, ship)
             instantaneous = f"prior {default:.0e} instantaneous + asymmetry abs(v) abs(r)"
             fitted[instantaneous] = fit(records, ship, library=library.extended(rudder_inflow()),
                                         optimizer="prior", speed="instantaneous")
@@ -236,7 +258,7 @@ def run(against: Path | None = None) -> dict:
             out["held_out_turns"] = {r.name: float(abs(r["psi"][-1] - r["psi"][0]) / (2 * np.pi))
                                      for r in test if is_turning_circle(r)}
             # each fit refined by the error of its training flights
-            for key in ("ls", prior, inflow, instantaneous):
+            for key in ("ls", prior, inflow, instantaneous, hybrid):
                 refined = refine(fitted[key], records, max_evaluations=REFINE_EVALUATIONS)
                 rows[f"{key} refined"] = {**evaluate(refined, test, ship),
                                           "refinement": refined.info["refined"]}

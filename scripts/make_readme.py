@@ -40,6 +40,9 @@ TAYLOR_FITS = ("prior 1e-05 taylor", "prior 1e-04 taylor")
 #: rudder's side-dependent inflow, and fitted on the held-out records too (the reference).
 INFLOW_FIT, REFERENCE_FIT = "+ asymmetry abs(v) abs(r)", "with the held-out records"
 INSTANTANEOUS_FIT = "instantaneous + asymmetry abs(v) abs(r)"
+#: The zig-zag fit of benchmarks/bench_captive.py with a small captive programme beside the
+#: records (the hybrid fit, ``fit --captive``).
+HYBRID_FIT = "+ captive programme"
 #: The lowest captive correlation, in X, Y and N of every test, that a model must keep to be
 #: physically right (the recommended model keeps it on the protocol).
 CAPTIVE_REQUIREMENT = 0.95
@@ -170,8 +173,9 @@ def _saved_captive_bench() -> dict | None:
     prior, the yardstick: the prior with the MMG's own Taylor coefficients, least squares and
     the prior refined by their flights, the prior with the terms of ``asymmetry`` for the
     rudder's side-dependent inflow, alone and refined by segments or whole flights, and with
-    the instantaneous speed, and the reference: the prior fitted on the held-out records too),
-    and the number of turns of each held-out turning circle."""
+    the instantaneous speed, the hybrid fit with a small captive programme, alone and refined,
+    and the reference: the prior fitted on the held-out records too), and the number of turns
+    of each held-out turning circle."""
     path = RESULTS / "captive.json"
     if not path.exists():
         return None
@@ -181,7 +185,8 @@ def _saved_captive_bench() -> dict | None:
     keys = ("ls", default, *TAYLOR_FITS, "ls refined", f"{default} refined",
             f"{default} {INFLOW_FIT}", f"{default} {INFLOW_FIT} refined",
             f"{default} {INFLOW_FIT} refined whole", f"{default} {INSTANTANEOUS_FIT}",
-            f"{default} {INSTANTANEOUS_FIT} refined", f"{default} {REFERENCE_FIT}")
+            f"{default} {INSTANTANEOUS_FIT} refined", f"{default} {REFERENCE_FIT}",
+            f"{default} {HYBRID_FIT}", f"{default} {HYBRID_FIT} refined")
     return {"default_strength": result["default_strength"],
             "held_out_turns": result["held_out_turns"],
             "sets": {"zigzags": {"fits": {k: fits[k] for k in keys}}}}
@@ -549,12 +554,23 @@ def _closest_to_the_turns(zz: dict, key: str, flights, low) -> str:
             and low(row, "XYN") >= CAPTIVE_REQUIREMENT]
     best = (f"fly the starboard turn {min(kept):.3f} L off at best" if kept else
             "do not exist")
+    hybrid, hybrid_refined = zz[f"{key} {HYBRID_FIT}"], zz[f"{key} {HYBRID_FIT} refined"]
+    done = hybrid_refined.get("refinement", {})
+    refinement = (f"its refinement by the zig-zag flights is refused ({done.get('stopped')})"
+                  if done.get("largest_change") is None else
+                  f"refined by its zig-zag flights it flies {flights(hybrid_refined)} (lowest "
+                  f"X, Y or N correlation {low(hybrid_refined, 'XYN'):+.2f})")
     return ("Refined by whole closed-loop zig-zag flights instead of shooting segments, that fit "
             f"flies {flights(whole)} (lowest X, Y or N correlation {low(whole, 'XYN'):+.2f}); "
             "with its forces scaled by the instantaneous speed (`--speed instantaneous`) it "
             f"flies {flights(fitted)} fitted and {flights(refined)} refined, while the surge "
             "force's lowest correlation falls to "
-            f"{min(low(fitted, 'X'), low(refined, 'X')):+.2f}. Of all these zig-zag fits, those "
+            f"{min(low(fitted, 'X'), low(refined, 'X')):+.2f}. Given a small towing-tank "
+            "programme beside the zig-zags (`fit --captive`: the MMG's static drift, rudder and "
+            "pure yaw, five conditions each, as `sindyship captive` makes them), the `prior` "
+            f"fit flies {flights(hybrid)} with its lowest X, Y or N correlation "
+            f"{low(hybrid, 'XYN'):+.2f} (drift and yaw combined, which the programme does not "
+            f"hold, among them); {refinement}. Of all these zig-zag fits, those "
             f"whose lowest X, Y or N correlation is {CAPTIVE_REQUIREMENT} or more (the default "
             f"fit's requirement on the protocol) {best}.")
 

@@ -64,9 +64,12 @@ import pandas as pd
 
 from ._io import write_text_atomic
 from .errors import SindyshipInputError
+from .library import TermLibrary, record_variables
 from .measurements import UNITS
 from .mmg import force_components
 from .ships import Ship
+from .terms import CORE_VARIABLES, DERIVED_SOURCES
+from .trajectory import Trajectory
 from .units import parse_headers
 
 __all__ = [
@@ -74,10 +77,12 @@ __all__ = [
     "FORCE_COLUMNS",
     "TESTS",
     "captive_tests",
+    "check_captive_scale",
     "classify_tests",
     "force_scales",
     "read_captive_csv",
     "rigid_body_forces",
+    "steady_variables",
     "write_captive_csv",
 ]
 
@@ -268,6 +273,112 @@ def classify_tests(frame: pd.DataFrame, ship: Ship) -> np.ndarray:
     names[v & r & ~d] = "drift-yaw"
     names[~(frame["u"].to_numpy(float) > 0.0)] = "astern"
     return names
+
+
+def steady_variables(captive: pd.DataFrame, library: TermLibrary, ship: Ship,
+                     rudder_signal: str = "actual") -> dict[str, np.ndarray]:
+    """A library's non-dimensional variables at each captive condition, held steady.
+
+    The commanded rudder is the actual one, a channel the library delays reads what the
+    table gives (the condition has held it) and the rudder does not move (``delta_rate``
+    0); each row stands alone (its time is only its place).
+
+    Parameters
+    ----------
+    captive : pandas.DataFrame
+        Conditions: ``u``, ``v``, ``r``, ``delta`` and every channel the library's terms
+        read, SI (as :func:`read_captive_csv` gives).
+    library : TermLibrary
+    ship : Ship
+        Gives L and U0.
+    rudder_signal : {"actual", "commanded"}
+
+    Raises
+    ------
+    SindyshipInputError
+        When the table lacks a column the terms read (one sentence naming it and the fix).
+
+    Examples
+    --------
+    >>> from sindyship.library import load_library
+    >>> from sindyship.ships import load_ship
+    >>> kcs = load_ship("kcs")
+    >>> values = steady_variables(captive_tests(kcs, "pure-yaw", points=3),
+    ...                           load_library("abkowitz"), kcs)
+    >>> [round(float(x), 2) for x in values["r"]]
+    [-0.6, 0.0, 0.6]
+    """
+    missing = [c for c in CAPTIVE_COLUMNS if c not in captive.columns]
+    if missing:
+        raise SindyshipInputError(
+            f"the captive table lacks the column '{missing[0]}'; give u, v, r and delta."
+        )
+    needed = set(library.sources) - set(CORE_VARIABLES) - {"psi", "x", "y", "delta_rate"}
+    if "psi" in library.variables or set(DERIVED_SOURCES) & library.variables:
+        needed.add("psi")  # the heading, or the wind's direction relative to the bow
+    absent = sorted(needed - set(captive.columns))
+    if absent:
+        names = ", ".join(absent)
+        raise SindyshipInputError(
+            f"the model's terms read {names}, which the captive table does not give; add "
+            f"{'a column' if len(absent) == 1 else 'columns'} {names} with the value each "
+            "condition was held at (in a towing tank's still air, wind_speed 0), or use a "
+            "model without that effect."
+        )
+    if {"x", "y"} & library.sources - set(captive.columns):
+        raise SindyshipInputError(
+            "the model's terms depend on where the ship is (its position x, y, or a shape of "
+            "it such as a bank's pull), which the captive table does not give; add columns x "
+            "and y [m] to say where each condition is held."
+        )
+    conditions = captive.assign(delta_c=captive["delta"]).reset_index(drop=True)
+    conditions["t"] = np.arange(len(conditions), dtype=float)
+    steady = Trajectory(conditions, name="captive", meta={"aligned": dict(library.delays)})
+    values = record_variables(steady, library, ship.L, ship.U0, rudder_signal)
+    if "delta_rate" in values:
+        values["delta_rate"] = np.zeros(len(conditions))
+    return values
+
+
+#: Measured captive forces whose size (RMS) differs from a model's by more than this factor
+#: are in another unit: a kN figure read as newtons is 1000 times too small, while a fitted
+#: model's forces come within some tens of the measured ones even where their shapes disagree
+#: (least squares fitted on gusty records: 30 times in Y).
+FORCE_SCALE_FACTOR = 300.0
+#: Captive tests whose median speed differs from the ship's design speed by more than this
+#: factor are of another ship or scale.
+SPEED_SCALE_FACTOR = 3.0
+
+
+def check_captive_scale(captive: pd.DataFrame, ship: Ship, *, reads_revolutions: bool,
+                        whose: str = "the model's ship") -> None:
+    """Refuse captive tests far from the ship's design speed (another ship, or another scale),
+    and, where the terms read them (``reads_revolutions``), revolutions far above the ship's
+    own (rpm under a bare ``n`` header are 60 times too high, and the forces would be
+    blamed); ``whose`` names the ship in the message."""
+    from .plausibility import excess_revolutions
+
+    speed = float(np.median(np.hypot(captive["u"], captive["v"])))
+    if not speed > ship.U0 / SPEED_SCALE_FACTOR or not speed < ship.U0 * SPEED_SCALE_FACTOR:
+        raise SindyshipInputError(
+            f"the captive tests run at {speed:.3g} m/s (median), far from the design speed "
+            f"{ship.U0:.3g} m/s of {whose} {ship.name!r}; give captive tests of the same ship "
+            "at the same scale (Froude-scale them first)."
+        )
+    if "n" not in captive.columns or not reads_revolutions:
+        return
+    typical = float(np.median(np.abs(captive["n"].to_numpy(float))))
+    excess = excess_revolutions(typical, ship)
+    if excess is None:
+        return
+    ratio, rpm = excess
+    hint = ("they look like rpm: write the header as 'n [rpm]'" if rpm else
+            "check the unit of n and that the ship (full or model scale) is right")
+    raise SindyshipInputError(
+        f"the captive tests' revolutions n have a median of {typical:.4g}, {ratio:.3g} "
+        f"times the propeller revolutions n = {ship.propeller.n_P:.4g} rps of {whose} "
+        f"{ship.name!r}; {hint}."
+    )
 
 
 # ---------------------------------------------------------------------------------------------

@@ -45,12 +45,19 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .captive import CAPTIVE_COLUMNS, FORCE_COLUMNS, classify_tests, force_scales, rigid_body_forces
+from .captive import (
+    FORCE_COLUMNS,
+    FORCE_SCALE_FACTOR,
+    check_captive_scale,
+    classify_tests,
+    force_scales,
+    rigid_body_forces,
+    steady_variables,
+)
 from .errors import SindyshipInputError
 from .identify import ENVELOPE_VARIABLES, training_envelope
 from .model import AbkowitzModel, coriolis_of_values
 from .ships import Ship
-from .terms import DERIVED_SOURCES
 from .trajectory import Trajectory
 
 __all__ = [
@@ -109,40 +116,7 @@ def model_captive_forces(model: AbkowitzModel, captive: pd.DataFrame) -> pd.Data
     True
     """
     ship = model.ship
-    missing = [c for c in CAPTIVE_COLUMNS if c not in captive.columns]
-    if missing:
-        raise SindyshipInputError(
-            f"the captive table lacks the column '{missing[0]}'; give u, v, r and delta."
-        )
-    needed = set(model.recorded_channels)
-    if "psi" in model.library.variables or set(DERIVED_SOURCES) & model.library.variables:
-        needed.add("psi")  # the heading, or the wind's direction relative to the bow
-    absent = sorted(needed - set(captive.columns))
-    if absent:
-        names = ", ".join(absent)
-        raise SindyshipInputError(
-            f"the model's terms read {names}, which the captive table does not give; add "
-            f"{'a column' if len(absent) == 1 else 'columns'} {names} with the value each "
-            "condition was held at (in a towing tank's still air, wind_speed 0), or compare a "
-            "model without that effect."
-        )
-    if {"x", "y"} & model.library.sources - set(captive.columns):
-        raise SindyshipInputError(
-            "the model's terms depend on where the ship is (its position x, y, or a shape of "
-            "it such as a bank's pull), which the captive table does not give; add columns x "
-            "and y [m] to say where each condition is held."
-        )
-    # a steady condition: the commanded rudder is the actual one, a delayed channel reads
-    # what the table gives (it has held that value) and the rudder does not move; the
-    # model's own variables (and their error for a channel the table lacks) come from
-    # Trajectory columns, and each row stands alone (its time is only its place)
-    conditions = captive.assign(delta_c=captive["delta"]).reset_index(drop=True)
-    conditions["t"] = np.arange(len(conditions), dtype=float)
-    steady = Trajectory(conditions, name="captive",
-                        meta={"aligned": dict(model.library.delays)})
-    values = model.variables(steady)
-    if "delta_rate" in values:
-        values["delta_rate"] = np.zeros(len(conditions))
+    values = steady_variables(captive, model.library, ship, model.rudder_signal)
     fitted = model.forces_from_values(values)
     full = coriolis_of_values(ship, values)
     scales = force_scales(ship, "prime-I")
@@ -210,51 +184,6 @@ class ForceComparison:
         return json.dumps(self.to_dict(), indent=2, allow_nan=False)
 
 
-#: Captive tests whose median speed differs from the model ship's design speed by more than
-#: this factor are of another ship or scale.
-SPEED_SCALE_FACTOR = 3.0
-
-
-def _check_speed_scale(captive: pd.DataFrame, ship) -> None:
-    """Refuse captive tests far from the model ship's speed: another ship, or another scale."""
-    speed = float(np.median(np.hypot(captive["u"], captive["v"])))
-    if not speed > ship.U0 / SPEED_SCALE_FACTOR or not speed < ship.U0 * SPEED_SCALE_FACTOR:
-        raise SindyshipInputError(
-            f"the captive tests run at {speed:.3g} m/s (median), far from the design speed "
-            f"{ship.U0:.3g} m/s of the model's ship {ship.name!r}; give captive tests of the "
-            "same ship at the same scale (Froude-scale them first)."
-        )
-
-
-def _check_revolutions_scale(captive: pd.DataFrame, model: AbkowitzModel) -> None:
-    """Refuse captive revolutions far above the ship's own, where the model's terms read them:
-    rpm under a bare ``n`` header are 60 times too high, and the forces would be blamed."""
-    from .plausibility import excess_revolutions
-
-    ship = model.ship
-    if "n" not in captive.columns or "n" not in model.recorded_channels:
-        return
-    typical = float(np.median(np.abs(captive["n"].to_numpy(float))))
-    excess = excess_revolutions(typical, ship)
-    if excess is None:
-        return
-    ratio, rpm = excess
-    hint = ("they look like rpm: write the header as 'n [rpm]'" if rpm else
-            "check the unit of n and that the ship (full or model scale) is right")
-    raise SindyshipInputError(
-        f"the captive tests' revolutions n have a median of {typical:.4g}, {ratio:.3g} "
-        f"times the propeller revolutions n = {ship.propeller.n_P:.4g} rps of the model's ship "
-        f"{ship.name!r}; {hint}."
-    )
-
-
-#: Measured captive forces whose size (RMS) differs from the model's predicted ones by more
-#: than this factor are in another unit: a kN figure read as newtons is 1000 times too small,
-#: while a fitted model's forces come within some tens of the measured ones even where their
-#: shapes disagree (least squares fitted on gusty records: 30 times in Y).
-FORCE_SCALE_FACTOR = 300.0
-
-
 def _check_force_scale(captive: pd.DataFrame, predicted: pd.DataFrame) -> None:
     """Refuse measured forces :data:`FORCE_SCALE_FACTOR` times or more larger or smaller than
     the model predicts: a unit the header does not say (forces in kN under a bare ``X``)."""
@@ -303,8 +232,7 @@ def compare_forces(model: AbkowitzModel, captive: pd.DataFrame,
             f"the captive table lacks the measured force '{missing[0]}'; give X, Y and N."
         )
     ship = model.ship
-    _check_speed_scale(captive, ship)
-    _check_revolutions_scale(captive, model)
+    check_captive_scale(captive, ship, reads_revolutions="n" in model.recorded_channels)
     predicted = model_captive_forces(model, captive)
     _check_force_scale(captive, predicted)
     values = _nondimensional(captive, ship)

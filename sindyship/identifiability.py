@@ -133,10 +133,10 @@ class CollinearGroup:
             amount = _amount(free)
             advice.append(f"adding {free['test']} " + ("leaves it infinite" if amount is None
                                                        else f"lowers it {amount}"))
-        if captive is not None:  # fit takes trajectories only: captive tests check forces
+        if captive is not None:  # a hybrid fit takes them beside the records
             amount = _amount(captive)
-            advice.append(f"{captive['test']} would lower it {amount} (fit takes "
-                          "trajectories only: check the model's forces against such tests with "
+            advice.append(f"{captive['test']} would lower it {amount} (give them to fit "
+                          "with --captive, or check the model's forces against them with "
                           "sindyship forces)" if amount is not None else
                           f"{captive['test']} would leave it infinite")
         return line + (f"; {', '.join(advice)}." if advice else ".")

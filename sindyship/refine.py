@@ -56,7 +56,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .errors import SindyshipInputError
-from .identify import design
+from .hybrid import model_design
 from .levenberg_marquardt import levenberg_marquardt
 from .model import AbkowitzModel
 from .optimizers import one_blas_thread
@@ -310,8 +310,8 @@ def _refined(model: AbkowitzModel, records, *, max_evaluations: int, segment_s,
         "largest_change": None if largest is None else {
             "coefficient": f"{keys[largest][0]}[{keys[largest][1]}]",
             "relative": float(p[largest])},
-        "force_change": None if largest is None else force_change(model, candidate, records,
-                                                                  problems=problems),
+        "force_change": None if largest is None else force_change(
+            model, candidate, records, problems=None if "captive" in info else problems),
         "straight_run_stable": stable,
         "refused_unstable": refused_unstable,
         "refused_turning": turns,
@@ -379,11 +379,11 @@ def _search_stages(model, records, stages, penalty, max_evaluations, prior_weigh
     return p, done, evaluations, jacobians, problem
 
 
-def _design(model, records) -> dict:
-    """The regression problems of eq. 16 on ``records``, made as the model's fit made them."""
-    return design(records, model.ship, model.library, rudder_signal=model.rudder_signal,
-                  derivative=model.info.get("derivative", "five-point"),
-                  window=model.info.get("window_s") or 21.0)
+def _design(model, records, *, captive: bool = True) -> dict:
+    """The regression problems of eq. 16 on ``records``, made as the model's fit made them
+    (with its captive rows, :func:`sindyship.hybrid.model_design`, unless ``captive`` is
+    False)."""
+    return model_design(model, records, captive=captive)
 
 
 def force_change(fitted: AbkowitzModel, refined: AbkowitzModel, records, *,
@@ -398,7 +398,7 @@ def force_change(fitted: AbkowitzModel, refined: AbkowitzModel, records, *,
         return float(np.sqrt(np.mean(np.square(values), axis=0)).max())
 
     out = {}
-    for dof, problem in (problems or _design(fitted, records)).items():
+    for dof, problem in (problems or _design(fitted, records, captive=False)).items():
         before = np.array([fitted.coefficients[dof][t] for t in problem.terms])
         change = np.array([refined.coefficients[dof][t] for t in problem.terms]) - before
         measured = rms(problem.target)

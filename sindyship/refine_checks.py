@@ -16,10 +16,10 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from . import hybrid
 from ._shooting_compiled import loop_flies
 from .evaluation import compare_flights
 from .flights import flown_part, fly_jobs_like
-from .identify import fit
 from .library import nondimensional_variables
 from .manoeuvres import Manoeuvre, fly, turning_figures
 from .model import AbkowitzModel
@@ -184,13 +184,8 @@ def _pair(batch, k: int, states: np.ndarray, stopped: int, record) -> tuple:
 
 
 def fitted_again(model: AbkowitzModel, records) -> AbkowitzModel:
-    """The model's fit (its library, optimizer and parameters, rudder signal and acceleration
-    estimate) on other records."""
-    window = model.info.get("window_s")
+    """The model's fit (its library, optimizer and parameters, rudder signal, acceleration
+    estimate and captive rows: :func:`sindyship.hybrid.fitted_again`) on other records."""
     with warnings.catch_warnings():  # the fit warned once already
         warnings.simplefilter("ignore")
-        return fit(records, model.ship, library=model.library,
-                   optimizer=model.optimizer["name"], params=dict(model.optimizer["params"]),
-                   rudder_signal=model.rudder_signal,
-                   derivative=model.info.get("derivative", "five-point"),
-                   window=21.0 if window is None else window)
+        return hybrid.fitted_again(model, records)

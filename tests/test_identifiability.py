@@ -115,12 +115,12 @@ def test_a_remedy_from_exact_collinearity_reads_as_making_the_vif_finite():
     assert finite.text() == (
         "Y: v, r cannot be separated (VIF up to inf): v' moves with r' (R^2 1.00); adding "
         "turning circles lowers it to a finite VIF, captive pure-yaw tests would lower it "
-        "40-fold (fit takes trajectories only: check the model's forces against such tests "
+        "40-fold (give them to fit with --captive, or check the model's forces against them "
         "with sindyship forces).")
     assert finite.to_dict()["remedies"][0]["factor"] is None
     infinite = group({"test": "turning circles", "captive": False, "max_vif": None,
                       "factor": None})
     assert infinite.text().endswith("adding turning circles leaves it infinite, captive "
-                                    "pure-yaw tests would lower it 40-fold (fit takes "
-                                    "trajectories only: check the model's forces against "
-                                    "such tests with sindyship forces).")
+                                    "pure-yaw tests would lower it 40-fold (give them to "
+                                    "fit with --captive, or check the model's forces "
+                                    "against them with sindyship forces).")

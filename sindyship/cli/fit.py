@@ -65,6 +65,16 @@ def add_parser(sub) -> None:
                    help="weight of the fit's own objective (force error over its sum of "
                    "squares, and the prior) against the flights' mean squared error in the "
                    "refinement, >= 0 (default 0.01; 0 refines by the flights alone)")
+    p.add_argument("--captive", default=None, metavar="CSV",
+                   help="captive (towing-tank) tests of the same ship, fitted beside the "
+                   "records (hybrid identification): a captive CSV of u, v, r, delta and the "
+                   "measured hydrodynamic X, Y, N, as sindyship captive writes and sindyship "
+                   "forces reads; they separate the terms the records cannot (default: none)")
+    p.add_argument("--captive-share", type=bounded_float(0, 1, "", high_open=True),
+                   default=None, metavar="S",
+                   help="with --captive: the share of the regression's weight the captive "
+                   "tests carry together, in (0, 1) (default 0.01: the records decide what "
+                   "they pin down, the captive tests what the records leave free)")
     p.add_argument("--out", required=True, metavar="FILE",
                    help=f"output model JSON ({OUT_NOTE})")
     p.add_argument("--no-identifiability", action="store_true",
@@ -123,8 +133,27 @@ def optimizer_params(args) -> dict:
 def fit_inputs(args) -> list[str]:
     """Every file ``fit`` or ``diagnose`` reads: records, ship, library and effect files."""
     library = [] if args.library is None else [args.library]  # None: a built-in default
+    captive = [] if getattr(args, "captive", None) is None else [args.captive]
     return [*args.data, *getattr(args, "test", []), *ship_file(args.ship), *library,
-            *split_names(args.effects)]
+            *split_names(args.effects), *captive]
+
+
+def _captive(args, ship):
+    """The captive tests ``--captive`` names (None without it), read and checked before the
+    records; ``--captive-share`` without them, or with a streamed fit, is refused."""
+    from ..errors import SindyshipInputError
+
+    if args.captive is None:
+        if args.captive_share is not None:
+            raise SindyshipInputError("--captive-share weighs the captive tests of --captive; "
+                                      "add --captive CSV or drop --captive-share.")
+        return None
+    if args.stream or args.scheduler:
+        raise SindyshipInputError("--captive goes with a fit in memory, not a streamed one; "
+                                  "drop --stream and --scheduler, or --captive.")
+    from ..captive import read_captive_csv
+
+    return read_captive_csv(args.captive)
 
 
 def _check_refine_options(args) -> None:
@@ -157,6 +186,7 @@ def run(args) -> int:
     args.library = resolved_library(args, speed)
     effects = split_names(args.effects)
     library = resolve_library(args.library, effects, speed)
+    captive = _captive(args, ship)
     # the refinement's modules (scikit-learn among them) once the arguments, files, ship,
     # library and effects pass: their refusals come in a fraction of a second
     from ..refine import MAX_EVALUATIONS
@@ -185,9 +215,21 @@ def run(args) -> int:
 
         progress(f"smoothing: {smoothing.as_dict()}")
         records = smooth_records(records, smoothing)
-    model = fit(records, ship, library=library, optimizer=args.optimizer,
-                params=params, rudder_signal=args.rudder_signal, derivative=args.derivative,
-                window=args.window, speed=speed)
+    settings = {"library": library, "optimizer": args.optimizer, "params": params,
+                "rudder_signal": args.rudder_signal, "derivative": args.derivative,
+                "window": args.window, "speed": speed}
+    if captive is None:
+        model = fit(records, ship, **settings)
+    else:
+        from ..hybrid import CAPTIVE_SHARE, fit_hybrid
+
+        model = fit_hybrid(records, ship, captive, captive_share=args.captive_share or
+                           CAPTIVE_SHARE, **settings)
+        kept = model.info["captive"]
+        progress(f"captive tests: {kept['rows']} conditions ("
+                 + ", ".join(f"{kind} {count}" for kind, count in kept["tests"].items())
+                 + f") fitted beside the records, carrying {kept['share']:.3g} of the "
+                 "regression's weight")
     if smoothing is not None:
         model.info["smoothing"] = smoothing.as_dict()
     report_prior_fit(model)
@@ -376,8 +418,9 @@ def report_prior_fit(model) -> None:
 
 
 def _identifiability(args, records, ship, library, params):
-    """Terms the records cannot separate, on stderr (the remedies need the ship's MMG), for
-    the fit's library (its effects included, in its speed form)."""
+    """Terms the records cannot separate, on stderr (the remedies need the ship's MMG, and
+    are not tried when captive tests were given), for the fit's library (its effects
+    included, in its speed form)."""
     if len(records) < 2:
         progress("note: no identifiability report from one record (it compares fits that "
                  "leave a manoeuvre out); give two or more records for it.")
@@ -389,10 +432,12 @@ def _identifiability(args, records, ship, library, params):
     report = identifiability(records, ship, library=library, effects=(),
                              optimizer=args.optimizer, params=members,
                              rudder_signal=args.rudder_signal,
-                             remedies=ship.has_mmg)
+                             remedies=ship.has_mmg and args.captive is None)
     text = report.text()
     if text:
-        verdict = ("the ship's prior decides what the records cannot (--optimizer prior)"
+        verdict = ("the captive tests decide what the records cannot (--captive)"
+                   if args.captive is not None else
+                   "the ship's prior decides what the records cannot (--optimizer prior)"
                    if args.optimizer == "prior" else
                    "their coefficients are not trustworthy as derivatives; --optimizer prior "
                    "lets the ship's semi-empirical derivatives decide them")

@@ -1,0 +1,273 @@
+"""Trajectories and captive tests in one regression (hybrid identification).
+
+Free-running records leave combinations of terms unseparated: along a zig-zag v' moves with
+r' and r' with the rudder, so the fit can trade one derivative against another and still
+match every sample (``sindyship fit`` reports them, :mod:`sindyship.identifiability`).
+Captive tests hold the motion apart (static drift, rudder, pure yaw, drift and yaw), and a
+towing tank that ran some of them is the cheapest way to separate those terms.  A hybrid fit
+solves paper eq. 16 on the records' samples and on the captive conditions together.
+
+**Captive rows.**  At a steady condition the accelerations vanish, and the hydrodynamic force a
+dynamometer measures (the captive CSV's convention, :mod:`sindyship.captive`) is, in Prime I
+with the force scales s and the rigid-body terms C_RB (:mod:`sindyship.forces`),
+
+    F_captive = s (F' + C') - C_RB,
+
+so each condition is a row of eq. 16 with the target
+
+    F' = (F_captive + C_RB) / s - C'
+
+(C' the Coriolis terms of eq. 14, Munk moment included) and the library's terms evaluated at
+the condition (:func:`sindyship.captive.steady_variables`), times (U/U0)^2 in the
+instantaneous speed form, as :func:`sindyship.identify.design` builds the records' rows.
+
+**Weights.**  A record holds thousands of samples, a captive programme tens of conditions.
+The captive rows together carry the share ``captive_share`` of the regression's weight: each
+row is multiplied by sqrt(w), w = share / (1 - share) * n_samples / n_conditions.  The
+default :data:`CAPTIVE_SHARE` is small, as the prior of ``--optimizer prior`` is: the records
+decide what they pin down, the captive tests the combinations the records leave free, which
+any weight decides.  On the KCS's three zig-zags with a prior fit, shares from 0.003 to 0.5
+all bring the forces' lowest correlation with the MMG's captive tests to 0.999 (from 0.97);
+a large share also moves what the records pin down, toward forces measured in steady
+conditions (eq. 16's target on records carries the identification's added masses, which are
+never exactly the ship's).
+
+A hybrid model keeps its captive conditions and share in ``info["captive"]``, so that the
+refinement (:func:`sindyship.refine.refine`, whose penalty is the fit's own objective) and
+its check on half of the records fit and hold it to the same captive rows.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from .captive import (
+    CAPTIVE_COLUMNS,
+    FORCE_COLUMNS,
+    FORCE_SCALE_FACTOR,
+    check_captive_scale,
+    classify_tests,
+    force_scales,
+    rigid_body_forces,
+    steady_variables,
+)
+from .errors import SindyshipInputError
+from .identify import Design, design, fit, resolve_library, resolve_rudder_signal
+from .library import SPEED_FACTOR, TermLibrary
+from .model import AbkowitzModel, coriolis_of_values
+from .priors import prior_parameters
+from .ships import Ship
+from .targets import DOFS
+from .trajectory import Trajectory
+
+__all__ = ["CAPTIVE_SHARE", "captive_design", "fit_hybrid", "model_design", "with_captive"]
+
+#: The share of the regression's weight the captive rows carry together by default.
+CAPTIVE_SHARE = 0.01
+
+
+def captive_design(captive: pd.DataFrame, ship: Ship, library: TermLibrary, *,
+                   rudder_signal: str = "actual", first_group: int = 0) -> dict[str, Design]:
+    """Rows of eq. 16 from captive measurements (module docstring), unweighted.
+
+    Parameters
+    ----------
+    captive : pandas.DataFrame
+        Captive conditions and the hydrodynamic forces measured there, SI (as
+        :func:`sindyship.captive.read_captive_csv` gives, or
+        :func:`sindyship.captive.captive_tests` makes).
+    ship : Ship
+    library : TermLibrary
+        The terms (and speed form) of the fit.
+    rudder_signal : {"actual", "commanded"}
+        The rudder angle the terms read (a captive rudder is both).
+    first_group : int
+        The group of the first test type; each type (static drift, rudder, ...) is a group
+        of its own, as a record is in :func:`sindyship.identify.design`.
+
+    Returns
+    -------
+    dict of str to Design
+
+    Raises
+    ------
+    SindyshipInputError
+        For a table that lacks a column the terms read, of another ship or scale
+        (:func:`sindyship.captive.check_captive_scale`), or whose sway force or yaw moment is
+        :data:`~sindyship.captive.FORCE_SCALE_FACTOR` times or more larger or smaller (RMS)
+        than the ship's semi-empirical derivatives predict there
+        (:func:`sindyship.priors.prior_parameters`): a unit the header does not say, kN under
+        a bare ``Y`` (within 0.8 to 1.9 times on the KCS's and the KVLCC2's virtual tests).
+        The surge force is not checked: its parts nearly cancel in pure yaw.
+
+    Examples
+    --------
+    >>> from sindyship.captive import captive_tests
+    >>> from sindyship.identify import resolve_library
+    >>> from sindyship.model import paper_model
+    >>> from sindyship.ships import load_ship
+    >>> kcs = load_ship("kcs")
+    >>> model = paper_model(kcs, "LS")
+    >>> tests = captive_tests(kcs, "all", points=5)
+    >>> from sindyship.forces import model_captive_forces
+    >>> measured = tests.assign(**model_captive_forces(model, tests))  # what it predicts
+    >>> rows = captive_design(measured, kcs, model.library)
+    >>> coefficients = [model.coefficients["N"][t] for t in rows["N"].terms]
+    >>> bool(np.allclose(rows["N"].features @ coefficients, rows["N"].target))
+    True
+    """
+    missing = [c for c in FORCE_COLUMNS if c not in captive.columns]
+    if missing:
+        raise SindyshipInputError(
+            f"the captive table lacks the measured force '{missing[0]}'; a fit needs X, Y "
+            "and N at every condition."
+        )
+    check_captive_scale(captive, ship, reads_revolutions="n" in library.sources,
+                        whose="the ship")
+    values = steady_variables(captive, library, ship, rudder_signal)
+    factor = values.get(SPEED_FACTOR, 1.0)
+    coriolis = coriolis_of_values(ship, values)
+    scales = force_scales(ship, "prime-I")
+    rigid = rigid_body_forces(ship, *(captive[c].to_numpy(float) for c in ("u", "v", "r")))
+    kinds = classify_tests(captive, ship)
+    order = {kind: first_group + k for k, kind in enumerate(dict.fromkeys(kinds))}
+    groups = np.array([order[kind] for kind in kinds], dtype=int)
+    n = len(captive)
+    out = {}
+    for i, dof in enumerate(DOFS):
+        terms = library.terms[dof]
+        features = np.empty((n, len(terms)), order="F")
+        for j, term in enumerate(terms):
+            features[:, j] = np.broadcast_to(np.asarray(term.evaluate(values) * factor,
+                                                        dtype=float), (n,))
+        measured = captive[FORCE_COLUMNS[i]].to_numpy(float)
+        target = (measured + rigid[i]) / scales[i] - np.broadcast_to(coriolis[i], (n,))
+        if dof != "X":  # the surge force's parts nearly cancel in some tests
+            estimated = prior_parameters(ship, dof, [t.text for t in terms],
+                                         speed=library.speed)["mean"]  # the ship's prior
+            _check_force_scale(dof, measured,
+                               scales[i] * (features @ np.asarray(estimated, dtype=float)
+                                            + coriolis[i]) - rigid[i])
+        out[dof] = Design(features=features, target=target, groups=groups,
+                          terms=tuple(t.text for t in terms))
+    return out
+
+
+def with_captive(problems: Mapping[str, Design], captive: Mapping[str, Design],
+                 share: float = CAPTIVE_SHARE) -> dict[str, Design]:
+    """The records' problems with the captive rows below them, weighted so that the captive
+    rows carry ``share`` of the weight together (module docstring)."""
+    if not 0.0 < share < 1.0:
+        raise SindyshipInputError(f"the captive share must be between 0 and 1 (exclusive), not "
+                                  f"{share!r}.")
+    out = {}
+    for dof in DOFS:
+        base, rows = problems[dof], captive[dof]
+        weight = math.sqrt(share / (1.0 - share) * len(base.target) / len(rows.target))
+        out[dof] = Design(features=np.asfortranarray(np.vstack([base.features,
+                                                                weight * rows.features])),
+                          target=np.concatenate([base.target, weight * rows.target]),
+                          groups=np.concatenate([base.groups, rows.groups]),
+                          terms=base.terms)
+    return out
+
+
+def _check_force_scale(dof: str, measured: np.ndarray, predicted: np.ndarray) -> None:
+    """Refuse captive forces :data:`~sindyship.captive.FORCE_SCALE_FACTOR` times or more
+    larger or smaller (RMS) than predicted: a unit the header does not say."""
+    size = float(np.sqrt(np.mean(np.square(measured))))
+    expected = float(np.sqrt(np.mean(np.square(predicted))))
+    if size > 0.0 and expected > 0.0 and not (
+            1.0 / FORCE_SCALE_FACTOR < size / expected < FORCE_SCALE_FACTOR):
+        raise SindyshipInputError(
+            f"the captive {dof} is {size / expected:.3g} times the size the ship's estimated "
+            "derivatives predict (RMS), so the forces are likely in another unit than the header "
+            f"says; give it in the header, e.g. '{dof} [{'kNm' if dof == 'N' else 'kN'}]'."
+        )
+
+
+def _hybrid_problems(records, ship, library, captive, share, rudder_signal, derivative,
+                     window) -> dict[str, Design]:
+    problems = design(records, ship, library, rudder_signal=rudder_signal,
+                      derivative=derivative, window=window)
+    first = int(problems["X"].groups.max()) + 1
+    return with_captive(problems, captive_design(captive, ship, library,
+                                                 rudder_signal=rudder_signal,
+                                                 first_group=first), share)
+
+
+def fit_hybrid(records: Sequence[Trajectory], ship: Ship, captive: pd.DataFrame, *,
+               captive_share: float = CAPTIVE_SHARE, library: str | TermLibrary = "abkowitz",
+               effects: Sequence[str] = (), speed: str | None = None,
+               rudder_signal: str = "actual", derivative: str = "five-point",
+               window: float = 21.0, **options) -> AbkowitzModel:
+    """Identify an Abkowitz model from records and captive tests together.
+
+    As :func:`sindyship.identify.fit` (``options``: ``optimizer``, ``params``), with the
+    captive conditions' rows of eq. 16 below the records' (module docstring).  The model keeps
+    the conditions, their test types and the share in ``info["captive"]``.
+
+    Examples
+    --------
+    >>> from sindyship import MMGModel, Manoeuvre, fly, load_ship
+    >>> from sindyship.captive import captive_tests
+    >>> kcs = load_ship("kcs")
+    >>> runs = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=20, check=20, duration=600)])
+    >>> model = fit_hybrid(runs, kcs, captive_tests(kcs, "static-drift", points=5))
+    >>> model.info["captive"]["tests"], model.info["captive"]["share"]
+    ({'static-drift': 4, 'straight': 1}, 0.01)
+    """
+    lib = resolve_library(library, effects, speed)
+    rudder_signal = resolve_rudder_signal(records, rudder_signal)
+    problems = _hybrid_problems(records, ship, lib, captive, captive_share, rudder_signal,
+                                derivative, window)
+    model = fit(records, ship, library=lib, rudder_signal=rudder_signal,
+                derivative=derivative, window=window, problems=problems, **options)
+    kinds = classify_tests(captive, ship)
+    columns = [c for c in captive.columns if c in (*CAPTIVE_COLUMNS, *FORCE_COLUMNS)
+               or pd.api.types.is_numeric_dtype(captive[c])]
+    model.info["n_samples"] = int(sum(record.n_samples for record in records))
+    model.info["captive"] = {
+        "share": float(captive_share), "rows": len(captive),
+        "tests": {str(kind): int(np.sum(kinds == kind)) for kind in dict.fromkeys(kinds)},
+        "conditions": {c: captive[c].to_numpy(float).tolist() for c in columns},
+    }
+    return model
+
+
+def _captive_of(model: AbkowitzModel) -> tuple[pd.DataFrame, float] | None:
+    kept = model.info.get("captive")
+    if not kept:
+        return None
+    return pd.DataFrame(kept["conditions"]), float(kept["share"])
+
+
+def model_design(model: AbkowitzModel, records: Sequence[Trajectory], *,
+                 captive: bool = True) -> dict[str, Design]:
+    """The regression problems of eq. 16 on ``records``, made as the model's fit made them:
+    with its captive rows when it has them (``info["captive"]``) and ``captive`` is True."""
+    window = model.info.get("window_s") or 21.0
+    derivative = model.info.get("derivative", "five-point")
+    kept = _captive_of(model) if captive else None
+    if kept is None:
+        return design(records, model.ship, model.library, rudder_signal=model.rudder_signal,
+                      derivative=derivative, window=window)
+    return _hybrid_problems(records, model.ship, model.library, kept[0], kept[1],
+                            model.rudder_signal, derivative, window)
+
+
+def fitted_again(model: AbkowitzModel, records: Sequence[Trajectory]) -> AbkowitzModel:
+    """The model's fit (its library, optimizer and parameters, rudder signal, acceleration
+    estimate and captive rows) on other records."""
+    settings = {"library": model.library, "optimizer": model.optimizer["name"],
+                "params": dict(model.optimizer["params"]), "rudder_signal": model.rudder_signal,
+                "derivative": model.info.get("derivative", "five-point"),
+                "window": model.info.get("window_s") or 21.0}
+    kept = _captive_of(model)
+    if kept is None:
+        return fit(records, model.ship, **settings)
+    return fit_hybrid(records, model.ship, kept[0], captive_share=kept[1], **settings)
