@@ -78,6 +78,7 @@ __all__ = [
     "TESTS",
     "captive_tests",
     "check_captive_scale",
+    "check_force_scale",
     "classify_tests",
     "force_scales",
     "read_captive_csv",
@@ -345,6 +346,22 @@ def steady_variables(captive: pd.DataFrame, library: TermLibrary, ship: Ship,
 #: model's forces come within some tens of the measured ones even where their shapes disagree
 #: (least squares fitted on gusty records: 30 times in Y).
 FORCE_SCALE_FACTOR = 300.0
+def check_force_scale(dof: str, measured: np.ndarray, predicted: np.ndarray,
+                      predictor: str) -> None:
+    """Refuse a measured captive force :data:`FORCE_SCALE_FACTOR` times or more larger or
+    smaller (RMS) than ``predicted``, what ``predictor`` (words: "the model predicts")
+    expects: a unit the header does not say (forces in kN under a bare ``X``)."""
+    size = float(np.sqrt(np.mean(np.square(measured))))
+    expected = float(np.sqrt(np.mean(np.square(predicted))))
+    if size > 0.0 and expected > 0.0 and not (
+            1.0 / FORCE_SCALE_FACTOR < size / expected < FORCE_SCALE_FACTOR):
+        raise SindyshipInputError(
+            f"the measured {dof} is {size / expected:.3g} times the size {predictor} (RMS), "
+            "so the forces are likely in another unit than the header says; give it in the "
+            f"header, e.g. '{dof} [{'kNm' if dof == 'N' else 'kN'}]'."
+        )
+
+
 #: Captive tests whose median speed differs from the ship's design speed by more than this
 #: factor are of another ship or scale.
 SPEED_SCALE_FACTOR = 3.0

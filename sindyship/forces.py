@@ -47,8 +47,8 @@ import pandas as pd
 
 from .captive import (
     FORCE_COLUMNS,
-    FORCE_SCALE_FACTOR,
     check_captive_scale,
+    check_force_scale,
     classify_tests,
     force_scales,
     rigid_body_forces,
@@ -184,21 +184,6 @@ class ForceComparison:
         return json.dumps(self.to_dict(), indent=2, allow_nan=False)
 
 
-def _check_force_scale(captive: pd.DataFrame, predicted: pd.DataFrame) -> None:
-    """Refuse measured forces :data:`FORCE_SCALE_FACTOR` times or more larger or smaller than
-    the model predicts: a unit the header does not say (forces in kN under a bare ``X``)."""
-    for dof in FORCE_COLUMNS:
-        measured = float(np.sqrt(np.mean(np.square(captive[dof].to_numpy(float)))))
-        model = float(np.sqrt(np.mean(np.square(predicted[dof].to_numpy(float)))))
-        if measured > 0.0 and model > 0.0 and not (
-                1.0 / FORCE_SCALE_FACTOR < measured / model < FORCE_SCALE_FACTOR):
-            raise SindyshipInputError(
-                f"the measured {dof} is {measured / model:.3g} times the size the model "
-                "predicts (RMS), so the forces are likely in another unit than the header "
-                f"says; give it in the header, e.g. '{dof} [{'kNm' if dof == 'N' else 'kN'}]'."
-            )
-
-
 def compare_forces(model: AbkowitzModel, captive: pd.DataFrame,
                    training_records: Sequence[Trajectory] | None = None) -> ForceComparison:
     """Compare a model's predicted captive forces with measured ones.
@@ -234,7 +219,9 @@ def compare_forces(model: AbkowitzModel, captive: pd.DataFrame,
     ship = model.ship
     check_captive_scale(captive, ship, reads_revolutions="n" in model.recorded_channels)
     predicted = model_captive_forces(model, captive)
-    _check_force_scale(captive, predicted)
+    for dof in FORCE_COLUMNS:
+        check_force_scale(dof, captive[dof].to_numpy(float), predicted[dof].to_numpy(float),
+                          "the model predicts")
     values = _nondimensional(captive, ship)
     envelope = (training_envelope(training_records, ship) if training_records
                 else model.info.get("envelope"))

@@ -48,8 +48,8 @@ import pandas as pd
 from .captive import (
     CAPTIVE_COLUMNS,
     FORCE_COLUMNS,
-    FORCE_SCALE_FACTOR,
     check_captive_scale,
+    check_force_scale,
     classify_tests,
     force_scales,
     rigid_body_forces,
@@ -149,9 +149,10 @@ def captive_design(captive: pd.DataFrame, ship: Ship, library: TermLibrary, *,
         if dof != "X":  # the surge force's parts nearly cancel in some tests
             estimated = prior_parameters(ship, dof, [t.text for t in terms],
                                          speed=library.speed)["mean"]  # the ship's prior
-            _check_force_scale(dof, measured,
-                               scales[i] * (features @ np.asarray(estimated, dtype=float)
-                                            + coriolis[i]) - rigid[i])
+            check_force_scale(dof, measured,
+                              scales[i] * (features @ np.asarray(estimated, dtype=float)
+                                           + coriolis[i]) - rigid[i],
+                              "the ship's estimated derivatives predict")
         out[dof] = Design(features=features, target=target, groups=groups,
                           terms=tuple(t.text for t in terms))
     return out
@@ -174,20 +175,6 @@ def with_captive(problems: Mapping[str, Design], captive: Mapping[str, Design],
                           groups=np.concatenate([base.groups, rows.groups]),
                           terms=base.terms)
     return out
-
-
-def _check_force_scale(dof: str, measured: np.ndarray, predicted: np.ndarray) -> None:
-    """Refuse captive forces :data:`~sindyship.captive.FORCE_SCALE_FACTOR` times or more
-    larger or smaller (RMS) than predicted: a unit the header does not say."""
-    size = float(np.sqrt(np.mean(np.square(measured))))
-    expected = float(np.sqrt(np.mean(np.square(predicted))))
-    if size > 0.0 and expected > 0.0 and not (
-            1.0 / FORCE_SCALE_FACTOR < size / expected < FORCE_SCALE_FACTOR):
-        raise SindyshipInputError(
-            f"the captive {dof} is {size / expected:.3g} times the size the ship's estimated "
-            "derivatives predict (RMS), so the forces are likely in another unit than the header "
-            f"says; give it in the header, e.g. '{dof} [{'kNm' if dof == 'N' else 'kN'}]'."
-        )
 
 
 def _hybrid_problems(records, ship, library, captive, share, rudder_signal, derivative,

@@ -158,7 +158,7 @@ def test_fit_takes_captive_tests_beside_the_records(kcs, zigzags, programme, tmp
 @pytest.mark.parametrize(("extra", "message"), [
     (["--captive-share", "0.1"], "--captive-share weighs the captive tests of --captive"),
     (["--captive", "{captive}", "--stream"], "--captive goes with a fit in memory"),
-    (["--captive", "{kilo}"], "the captive Y is 0.00"),
+    (["--captive", "{kilo}"], "the measured Y is 0.00"),
     (["--captive", "{other}"], "far from the design speed 12.3 m/s of the ship 'kcs'"),
     (["--captive", "{captive}", "--captive-share", "1"], "--captive-share"),
 ])
