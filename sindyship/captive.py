@@ -323,8 +323,8 @@ def steady_variables(captive: pd.DataFrame, library: TermLibrary, ship: Ship,
         raise SindyshipInputError(
             f"the model's terms read {names}, which the captive table does not give; add "
             f"{'a column' if len(absent) == 1 else 'columns'} {names} with the value each "
-            "condition was held at (in a towing tank's still air, wind_speed 0), or use a "
-            "model without that effect."
+            "condition was held at (in a towing tank's still air wind_speed 0, with any "
+            "wind_dir and psi), or use a model without that effect."
         )
     if {"x", "y"} & library.sources - set(captive.columns):
         raise SindyshipInputError(

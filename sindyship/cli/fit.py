@@ -138,9 +138,10 @@ def fit_inputs(args) -> list[str]:
             *split_names(args.effects), *captive]
 
 
-def _captive(args, ship):
-    """The captive tests ``--captive`` names (None without it), read and checked before the
-    records; ``--captive-share`` without them, or with a streamed fit, is refused."""
+def _captive(args, ship, library):
+    """The captive tests ``--captive`` names (None without it), read and checked against the
+    ship and the library before the records are read (a refusal names the file);
+    ``--captive-share`` without them, or with a streamed fit, is refused."""
     from ..errors import SindyshipInputError
 
     if args.captive is None:
@@ -152,8 +153,14 @@ def _captive(args, ship):
         raise SindyshipInputError("--captive goes with a fit in memory, not a streamed one; "
                                   "drop --stream and --scheduler, or --captive.")
     from ..captive import read_captive_csv
+    from ..hybrid import captive_design
 
-    return read_captive_csv(args.captive)
+    captive = read_captive_csv(args.captive)
+    try:
+        captive_design(captive, ship, library)
+    except SindyshipInputError as error:
+        raise SindyshipInputError(f"{args.captive}: {error}") from error
+    return captive
 
 
 def _check_refine_options(args) -> None:
@@ -186,7 +193,7 @@ def run(args) -> int:
     args.library = resolved_library(args, speed)
     effects = split_names(args.effects)
     library = resolve_library(args.library, effects, speed)
-    captive = _captive(args, ship)
+    captive = _captive(args, ship, library)
     # the refinement's modules (scikit-learn among them) once the arguments, files, ship,
     # library and effects pass: their refusals come in a fraction of a second
     from ..refine import MAX_EVALUATIONS
@@ -226,7 +233,7 @@ def run(args) -> int:
         model = fit_hybrid(records, ship, captive, captive_share=args.captive_share or
                            CAPTIVE_SHARE, **settings)
         kept = model.info["captive"]
-        progress(f"captive tests: {kept['rows']} conditions ("
+        progress(f"captive tests: {kept['rows']} condition{'' if kept['rows'] == 1 else 's'} ("
                  + ", ".join(f"{kind} {count}" for kind, count in kept["tests"].items())
                  + f") fitted beside the records, carrying {kept['share']:.3g} of the "
                  "regression's weight")
@@ -239,8 +246,8 @@ def run(args) -> int:
     progress(f"wrote {args.out}: {model!r}")
     state = model.info.get("straight_run")  # a raised prior strength is the fit's strength
     fitted_params = params if state is None else {**params, "strength": state["strength"]}
-    report = None if args.no_identifiability else _identifiability(args, records, ship, library,
-                                                                   fitted_params)
+    report = None if args.no_identifiability else _identifiability(
+        args, records, ship, library, fitted_params, model.info.get("captive"))
     flights = _training_flights(model, records)
     note_records_ship(args, ship, records)
     if args.json:
@@ -417,10 +424,10 @@ def report_prior_fit(model) -> None:
                  f"report names{larger}.")
 
 
-def _identifiability(args, records, ship, library, params):
-    """Terms the records cannot separate, on stderr (the remedies need the ship's MMG, and
-    are not tried when captive tests were given), for the fit's library (its effects
-    included, in its speed form)."""
+def _identifiability(args, records, ship, library, params, captive=None):
+    """Terms the records cannot separate, on stderr (the remedies need the ship's MMG), for
+    the fit's library (its effects included, in its speed form); ``captive`` is a hybrid
+    fit's ``info["captive"]``, whose test types decide what they hold."""
     if len(records) < 2:
         progress("note: no identifiability report from one record (it compares fits that "
                  "leave a manoeuvre out); give two or more records for it.")
@@ -432,11 +439,14 @@ def _identifiability(args, records, ship, library, params):
     report = identifiability(records, ship, library=library, effects=(),
                              optimizer=args.optimizer, params=members,
                              rudder_signal=args.rudder_signal,
-                             remedies=ship.has_mmg and args.captive is None)
+                             remedies=ship.has_mmg)
     text = report.text()
     if text:
-        verdict = ("the captive tests decide what the records cannot (--captive)"
-                   if args.captive is not None else
+        held = [kind for kind in (captive or {}).get("tests", {}) if kind != "straight"]
+        rest = ("the ship's prior decides the rest" if args.optimizer == "prior" else
+                "the rest is the records' guess")
+        verdict = (f"the captive {', '.join(held)} tests given decide what they hold "
+                   f"(--captive); {rest}" if held else
                    "the ship's prior decides what the records cannot (--optimizer prior)"
                    if args.optimizer == "prior" else
                    "their coefficients are not trustworthy as derivatives; --optimizer prior "

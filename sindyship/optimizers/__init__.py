@@ -45,8 +45,10 @@ Shapes.
 Cross-validation.
     ``fit(X, y, groups=None)``.  ``cv=None`` (the default) means leave-one-group-out when
     ``groups`` is given (one group per manoeuvre: a held-out manoeuvre shares no samples with
-    the training set) and 5 contiguous, unshuffled blocks (``KFold(5, shuffle=False)``) when it
-    is not, with a ``UserWarning`` that says so.  ``pysindy.SINDy.fit`` calls ``fit(X, y)``
+    the training set; samples labelled ``ALWAYS_TRAINED``, -1, such as a hybrid fit's captive
+    conditions, are in every training set and never held out) and 5 contiguous, unshuffled
+    blocks (``KFold(5, shuffle=False)``) when it is not, with a ``UserWarning`` that says so.
+    ``pysindy.SINDy.fit`` calls ``fit(X, y)``
     without groups: give the optimizer ``cv=LeaveOneTrajectoryOut(lengths)``, the number of
     samples of every trajectory in the order ``SINDy.fit`` gets them, to leave one manoeuvre
     out there too.  An integer ``cv=k`` means ``k`` contiguous blocks, whatever ``groups`` is; the
@@ -87,7 +89,7 @@ from __future__ import annotations
 from ._base import _LinearModel as _LinearModel
 from ._compressed import GroupedProblem, RowFactor, merge_factors, pairwise_tree, tree_factor
 from ._compressed import _qr as _qr
-from ._cv import LeaveOneTrajectoryOut
+from ._cv import ALWAYS_TRAINED, LeaveOneTrajectoryOut
 from ._forward import ForwardSelection
 from ._lasso import LassoCV
 from ._lasso import _lasso_path_exact as _lasso_path_exact
@@ -104,6 +106,7 @@ from ._svr import _with_ones as _with_ones
 from ._threads import one_blas_thread
 
 __all__ = [
+    "ALWAYS_TRAINED",
     "OPTIMIZERS",
     "STLSQ",
     "ForwardSelection",

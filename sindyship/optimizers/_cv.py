@@ -14,10 +14,19 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from sklearn.model_selection import BaseCrossValidator, KFold, LeaveOneGroupOut, check_cv
+from sklearn.model_selection import (
+    BaseCrossValidator,
+    KFold,
+    LeaveOneGroupOut,
+    PredefinedSplit,
+    check_cv,
+)
 
 from sindyship.errors import SindyshipInputError
 
+#: The group label of samples that are always trained on and never held out (the captive
+#: rows of a hybrid fit, :mod:`sindyship.hybrid`): not a manoeuvre of their own.
+ALWAYS_TRAINED = -1
 #: Number of contiguous blocks when neither ``cv`` nor ``groups`` is given.
 _DEFAULT_N_BLOCKS = 5
 #: Cross-validation errors within this relative tolerance of the smallest count as ties (ties
@@ -31,10 +40,11 @@ _TIE_FLOOR = 1e-20
 def _resolve_cv(cv: Any, groups: NDArray | None) -> tuple[Any, NDArray | None]:
     """The splitter that ``cv`` and ``groups`` select, and the groups to hand to it.
 
-    Leave one group out when ``groups`` is given and ``cv`` is not, else 5 contiguous blocks
-    with a ``UserWarning`` (a fit that receives no groups, as through ``pysindy.SINDy``, would
-    otherwise change the protocol silently); an integer always means contiguous blocks
-    (groups unused).
+    Leave one group out when ``groups`` is given and ``cv`` is not (samples labelled
+    :data:`ALWAYS_TRAINED` are in every training set and no test set: a
+    ``PredefinedSplit``), else 5 contiguous blocks with a ``UserWarning`` (a fit that
+    receives no groups, as through ``pysindy.SINDy``, would otherwise change the protocol
+    silently); an integer always means contiguous blocks (groups unused).
 
     Parameters
     ----------
@@ -55,7 +65,13 @@ def _resolve_cv(cv: Any, groups: NDArray | None) -> tuple[Any, NDArray | None]:
     (KFold(n_splits=5, random_state=None, shuffle=False), None)
     >>> _resolve_cv(None, np.array([0, 0, 1, 1]))[0]
     LeaveOneGroupOut()
+    >>> splitter, _ = _resolve_cv(None, np.array([0, 0, 1, 1, -1]))
+    >>> [test.tolist() for _, test in splitter.split()]
+    [[0, 1], [2, 3]]
     """
+    if cv is None and groups is not None and np.any(groups == ALWAYS_TRAINED):
+        _check_two_groups(groups[groups != ALWAYS_TRAINED])
+        return PredefinedSplit(groups), None
     if cv is None and groups is not None:
         return LeaveOneGroupOut(), groups
     if cv is None:
@@ -135,15 +151,21 @@ def _splits(
     ValueError
         When the splitter produces no folds.
     """
-    if isinstance(splitter, LeaveOneGroupOut) and np.unique(groups).size < 2:
-        raise SindyshipInputError(
-            "leave-one-group-out cross-validation needs samples from at least two groups "
-            "(manoeuvres); pass more manoeuvres, or cv=<number of folds> for contiguous blocks."
-        )
+    if isinstance(splitter, LeaveOneGroupOut):
+        _check_two_groups(groups)
     splits = list(splitter.split(X, Y, groups))
     if not splits:
         raise ValueError("the cross-validation splitter produced no folds.")
     return splits
+
+
+def _check_two_groups(groups: NDArray) -> None:
+    """Refuse leave-one-group-out cross-validation over fewer than two groups."""
+    if np.unique(groups).size < 2:
+        raise SindyshipInputError(
+            "leave-one-group-out cross-validation needs samples from at least two groups "
+            "(manoeuvres); pass more manoeuvres, or cv=<number of folds> for contiguous blocks."
+        )
 
 
 def _check_groups(groups: ArrayLike | None, n_samples: int) -> NDArray | None:
