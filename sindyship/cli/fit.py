@@ -264,7 +264,7 @@ def _training_flights(model, records) -> dict:
     (:func:`sindyship.evaluation.evaluate`): a line of mean distances on stderr, and a note
     for the records it flies more than :data:`TRAINING_FLIGHT_NOTE_L` off or diverges on
     (least squares can fit every force within a few per cent and still fly a straight run
-    tens of ship lengths off; ``diagnose`` says what the library misses there)."""
+    tens of ship lengths off; ``diagnose`` says whether the library misses physics there)."""
     from ..evaluation import evaluate
 
     flights = evaluate(model, records)
