@@ -131,6 +131,10 @@ def test_a_saved_hybrid_model_is_refined_and_refitted_with_its_captive_rows(kcs,
     n = sum(r.n_samples for r in zigzags)
     assert len(rows["N"].target) == n + len(programme)
     assert len(model_design(loaded, zigzags, captive=False)["N"].target) == n
+    from sindyship.export import generate_python
+
+    assert ("Captive tests fitted beside them: static-drift 4, straight 3, rudder 4, pure-yaw "
+            "4") in " ".join(generate_python(loaded).split())
     again = fitted_again(loaded, zigzags)
     assert again.info["captive"]["rows"] == len(programme)
     for dof in ("X", "Y", "N"):
@@ -155,7 +159,14 @@ def test_fit_takes_captive_tests_beside_the_records(kcs, zigzags, programme, tmp
             "rest)") in err
     saved = json.loads((tmp_path / "m.json").read_text())
     assert saved["info"]["captive"]["conditions"]["u"][0] == pytest.approx(programme["u"][0])
-    assert json.loads(out)["training_flights"]["zz20_20"]["diverged_at_s"] is None
+    document = json.loads(out)
+    assert document["training_flights"]["zz20_20"]["diverged_at_s"] is None
+    # the saved model against the tests it was given, as forces compares them
+    given = document["captive_agreement"]
+    assert set(given) == {"static-drift", "rudder", "pure-yaw", "straight"}
+    assert min(given[t][f]["correlation"] for t in ("static-drift", "rudder", "pure-yaw")
+               for f in "YN") > 0.99
+    assert "the saved model against the captive tests given (correlation of X / Y / N" in err
 
 
 @pytest.mark.parametrize(("extra", "message"), [

@@ -244,6 +244,7 @@ def run(args) -> int:
         model = _refined(model, records, args)
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
+    agreement = None if captive is None else _captive_agreement(model, captive)
     state = model.info.get("straight_run")  # a raised prior strength is the fit's strength
     fitted_params = params if state is None else {**params, "strength": state["strength"]}
     report = None if args.no_identifiability else _identifiability(
@@ -255,8 +256,27 @@ def run(args) -> int:
               "library": model.library.name, "speed": model.library.speed,
               "optimizer": model.optimizer["name"],
               "identifiability": None if report is None else report.to_dict(),
-              "refined": model.info.get("refined"), "training_flights": flights})
+              "refined": model.info.get("refined"), "training_flights": flights,
+              **({} if agreement is None else {"captive_agreement": agreement})})
     return 0
+
+
+def _captive_agreement(model, captive) -> dict:
+    """The saved model's forces against the captive tests it was fitted with
+    (:func:`sindyship.forces.compare_forces`): one line per test type on stderr, the
+    correlation of X, Y and N; the ``by_test`` of ``forces --json``."""
+    from ..forces import compare_forces
+
+    by_test = compare_forces(model, captive).by_test
+    cells = []
+    for test, forces in by_test.items():
+        values = [forces[f]["correlation"] for f in "XYN"]
+        if any(v is not None for v in values):
+            cells.append(f"{test} " + " / ".join("n/a" if v is None else f"{v:+.2f}"
+                                                 for v in values))
+    progress("the saved model against the captive tests given (correlation of X / Y / N; "
+             "sindyship forces for more): " + ", ".join(cells))
+    return by_test
 
 
 def _training_flights(model, records) -> dict:

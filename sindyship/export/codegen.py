@@ -210,6 +210,23 @@ def _kernel_source() -> str:
     return "\n\n" + text[text.index(kernels.KERNEL_MARK):]
 
 
+def _provenance(model: AbkowitzModel) -> list[str]:
+    """Docstring lines naming what the model was fitted on: its training records and, for a
+    hybrid fit (``info["captive"]``), its captive tests."""
+    info = model.info if isinstance(model.info, Mapping) else {}
+    lines = []
+    if info.get("training"):
+        lines += _wrap(_docstring_text("Training records: "
+                                       + ", ".join(map(str, info["training"])) + "."))
+    captive = info.get("captive")
+    if isinstance(captive, Mapping) and isinstance(captive.get("tests"), Mapping):
+        tests = ", ".join(f"{kind} {count}" for kind, count in captive["tests"].items())
+        lines += _wrap(_docstring_text(
+            f"Captive tests fitted beside them: {tests} (share {captive.get('share')!r} of the "
+            "regression's weight)."))
+    return lines
+
+
 def generate_python(model: AbkowitzModel, *, source_note: str = "",
                     channels: Mapping[str, float] | None = None, compiled: bool = False) -> str:
     """Source of a standalone simulator module for a model (imports numpy only).
@@ -287,7 +304,6 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     M = abkowitz_mass_matrix(ship)
     optimizer = model.optimizer.get("name", "given")
     params = model.optimizer.get("params", {}) or {}
-    training = model.info.get("training") if isinstance(model.info, Mapping) else None
 
     doc = [f'"""Simulator of an Abkowitz manoeuvring model of the ship '
            f'{_docstring_text(repr(ship.name))}.', ""]
@@ -300,9 +316,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         + f", rudder signal {model.rudder_signal!r}."
     )
     doc += _wrap(_docstring_text(facts))
-    if training:
-        doc += _wrap(_docstring_text("Training records: " + ", ".join(map(str, training))
-                                     + "."))
+    doc += _provenance(model)
     if source_note:
         doc += _wrap(_docstring_text(source_note))
     doc += [
