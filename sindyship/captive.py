@@ -83,6 +83,7 @@ __all__ = [
     "force_scales",
     "read_captive_csv",
     "rigid_body_forces",
+    "steady_conditions",
     "steady_variables",
     "write_captive_csv",
 ]
@@ -278,7 +279,8 @@ def classify_tests(frame: pd.DataFrame, ship: Ship) -> np.ndarray:
 
 def steady_variables(captive: pd.DataFrame, library: TermLibrary, ship: Ship,
                      rudder_signal: str = "actual") -> dict[str, np.ndarray]:
-    """A library's non-dimensional variables at each captive condition, held steady.
+    """A library's non-dimensional variables at each captive condition, held steady
+    (:func:`steady_conditions`).
 
     The commanded rudder is the actual one, a channel the library delays reads what the
     table gives (the condition has held it) and the rudder does not move (``delta_rate``
@@ -332,13 +334,20 @@ def steady_variables(captive: pd.DataFrame, library: TermLibrary, ship: Ship,
             "it such as a bank's pull), which the captive table does not give; add columns x "
             "and y [m] to say where each condition is held."
         )
+    values = record_variables(steady_conditions(captive, library), library, ship.L, ship.U0,
+                              rudder_signal)
+    if "delta_rate" in values:
+        values["delta_rate"] = np.zeros(len(captive))
+    return values
+
+
+def steady_conditions(captive: pd.DataFrame, library: TermLibrary) -> Trajectory:
+    """The captive conditions as a record named ``captive`` whose rows stand alone: the
+    commanded rudder is the actual one, a channel the library delays reads what the table
+    gives, and each row's time is only its place."""
     conditions = captive.assign(delta_c=captive["delta"]).reset_index(drop=True)
     conditions["t"] = np.arange(len(conditions), dtype=float)
-    steady = Trajectory(conditions, name="captive", meta={"aligned": dict(library.delays)})
-    values = record_variables(steady, library, ship.L, ship.U0, rudder_signal)
-    if "delta_rate" in values:
-        values["delta_rate"] = np.zeros(len(conditions))
-    return values
+    return Trajectory(conditions, name="captive", meta={"aligned": dict(library.delays)})
 
 
 #: Measured captive forces whose size (RMS) differs from a model's by more than this factor

@@ -53,10 +53,18 @@ from .captive import (
     classify_tests,
     force_scales,
     rigid_body_forces,
+    steady_conditions,
     steady_variables,
 )
 from .errors import SindyshipInputError
-from .identify import Design, design, fit, resolve_library, resolve_rudder_signal
+from .identify import (
+    Design,
+    design,
+    fit,
+    resolve_library,
+    resolve_rudder_signal,
+    term_column,
+)
 from .library import SPEED_FACTOR, TermLibrary
 from .model import AbkowitzModel, coriolis_of_values
 from .optimizers import ALWAYS_TRAINED
@@ -145,14 +153,14 @@ def captive_design(captive: pd.DataFrame, ship: Ship, library: TermLibrary, *,
     scales = force_scales(ship, "prime-I")
     rigid = rigid_body_forces(ship, *(captive[c].to_numpy(float) for c in ("u", "v", "r")))
     n = len(captive)
+    steady = steady_conditions(captive, library)  # names the table in a term's refusal
     groups = np.full(n, ALWAYS_TRAINED, dtype=int)
     out = {}
     for i, dof in enumerate(DOFS):
         terms = library.terms[dof]
         features = np.empty((n, len(terms)), order="F")
         for j, term in enumerate(terms):
-            features[:, j] = np.broadcast_to(np.asarray(term.evaluate(values) * factor,
-                                                        dtype=float), (n,))
+            features[:, j] = term_column(term, values, factor, steady)
         measured = captive[FORCE_COLUMNS[i]].to_numpy(float)
         target = (measured + rigid[i]) / scales[i] - np.broadcast_to(coriolis[i], (n,))
         if dof != "X":  # the surge force's parts nearly cancel in some tests
@@ -268,18 +276,23 @@ def _captive_of(model: AbkowitzModel) -> tuple[pd.DataFrame, float] | None:
     return pd.DataFrame(kept["conditions"]), float(kept["share"])
 
 
+def _estimate(model: AbkowitzModel) -> dict:
+    """How the model's fit estimated the accelerations (``derivative``, ``window``)."""
+    return {"derivative": model.info.get("derivative", "five-point"),
+            "window": model.info.get("window_s") or 21.0}
+
+
 def model_design(model: AbkowitzModel, records: Sequence[Trajectory], *,
                  captive: bool = True) -> dict[str, Design]:
     """The regression problems of eq. 16 on ``records``, made as the model's fit made them:
     with its captive rows when it has them (``info["captive"]``) and ``captive`` is True."""
-    window = model.info.get("window_s") or 21.0
-    derivative = model.info.get("derivative", "five-point")
     kept = _captive_of(model) if captive else None
     if kept is None:
         return design(records, model.ship, model.library, rudder_signal=model.rudder_signal,
-                      derivative=derivative, window=window)
+                      **_estimate(model))
+    estimate = _estimate(model)
     return _hybrid_problems(records, model.ship, model.library, kept[0], kept[1],
-                            model.rudder_signal, derivative, window)
+                            model.rudder_signal, estimate["derivative"], estimate["window"])
 
 
 def fitted_again(model: AbkowitzModel, records: Sequence[Trajectory]) -> AbkowitzModel:
@@ -287,8 +300,7 @@ def fitted_again(model: AbkowitzModel, records: Sequence[Trajectory]) -> Abkowit
     estimate and captive rows) on other records."""
     settings = {"library": model.library, "optimizer": model.optimizer["name"],
                 "params": dict(model.optimizer["params"]), "rudder_signal": model.rudder_signal,
-                "derivative": model.info.get("derivative", "five-point"),
-                "window": model.info.get("window_s") or 21.0}
+                **_estimate(model)}
     kept = _captive_of(model)
     if kept is None:
         return fit(records, model.ship, **settings)

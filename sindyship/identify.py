@@ -103,7 +103,7 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
         for dof in DOFS:
             for j, term in enumerate(library.terms[dof]):
                 if term.text not in columns:
-                    columns[term.text] = _term_column(term, values, factor, record)
+                    columns[term.text] = term_column(term, values, factor, record)
                 features[dof][start:stop, j] = columns[term.text]
             target[dof][start:stop] = forces[dof]
         group_array[start:stop] = index
@@ -120,8 +120,9 @@ def design(records: Sequence[Trajectory], ship: Ship, library: TermLibrary, *,
 MAX_TERM_VALUE = 1e100
 
 
-def _term_column(term, values: dict, factor, record: Trajectory) -> np.ndarray:
-    """A term's column of the regression matrix on one record, refused in one line when it
+def term_column(term, values: dict, factor, record: Trajectory) -> np.ndarray:
+    """A term's column of the regression matrix on one record (the library's ``values`` of
+    it, times the speed ``factor`` of the instantaneous form), refused in one line when it
     is not finite or so large that the fit would overflow."""
     with np.errstate(over="ignore", invalid="ignore"):
         column = term.evaluate(values) * factor
@@ -169,7 +170,7 @@ def check_term_values(library: TermLibrary, records: Sequence[Trajectory], ship:
         factor = values.get(SPEED_FACTOR, 1.0)
         for dof in DOFS:
             for term in library.terms[dof]:
-                _term_column(term, values, factor, record)
+                term_column(term, values, factor, record)
 
 
 def check_delays(library: TermLibrary, records: Sequence[Trajectory], rudder_signal: str

@@ -14,7 +14,7 @@ from pathlib import Path
 from ._diagnosis_thresholds import MEANINGFUL_SHARE
 from .errors import SindyshipInputError
 from .library import DOFS
-from .targets import RESOLVED_STEP
+from .targets import is_under_resolved
 
 __all__ = [
     "DOF_NAMES",
@@ -208,7 +208,7 @@ def _residual_lines(diagnosis) -> list[str]:
         )
     level = diagnosis.noise_level
     if level:
-        coarse = [step > RESOLVED_STEP * (1.0 + 1e-9) for step in diagnosis.sampling.values()]
+        coarse = [is_under_resolved(step) for step in diagnosis.sampling.values()]
         lines.append(
             "  noise in the records (rough part over one L/U0"
             + ("; the records are under-resolved, so mostly motion between samples: see the "

@@ -120,6 +120,12 @@ def sampling_steps(records, ship: Ship) -> dict[str, float]:
             * ship.U0 / ship.L for record in records}
 
 
+def is_under_resolved(step: float) -> bool:
+    """Whether a sampling interval in L/U0 (:func:`sampling_steps`) is coarser than
+    :data:`RESOLVED_STEP`, up to rounding."""
+    return step > RESOLVED_STEP * (1.0 + 1e-9)
+
+
 def _down(value: float) -> str:
     """``value`` rounded down to three significant digits (a limit never rounded past)."""
     digits = 2 - math.floor(math.log10(value))
@@ -143,8 +149,7 @@ def under_resolved(steps: dict[str, float], ship: Ship) -> str:
     ship): the forces fitted to them are biased and part of the motion reads as noise; log
     every 0.742 s or faster (and resample no coarser)
     """
-    coarse = {name: step for name, step in steps.items()
-              if step > RESOLVED_STEP * (1.0 + 1e-9)}
+    coarse = {name: step for name, step in steps.items() if is_under_resolved(step)}
     if not coarse:
         return ""
     time_scale = ship.L / ship.U0
