@@ -122,19 +122,3 @@ def test_fit_notes_records_sampled_too_coarsely(tmp_path):
         assert "note: the records are sampled every 2 s" in err
         assert "log every 0.742 s or faster (and resample no coarser)" in err
 
-
-def test_simulate_samples_a_model_finely_enough_by_default(tmp_path):
-    """simulate flew the 7 m KVLCC2 at 1 s by default (0.17 L/U0), which fit then called
-    under-resolved; a model's default step is now within a twentieth of its L/U0."""
-    from sindyship.cli.simulate import default_dt
-
-    assert default_dt(load_ship("kcs")) == 1.0  # 18.6 s per ship length: the paper's 1 Hz
-    assert default_dt(SHIP) == 0.2
-    paths = [tmp_path / "zz.csv", tmp_path / "tc.csv"]
-    for path, manoeuvre in zip(paths, ("zigzag", "turning-circle"), strict=True):
-        code, _, err = run_sindyship("simulate", "--ship", "kvlcc2", "--manoeuvre", manoeuvre,
-                                     "--rudder", "20", "--duration", "200", "--out", path)
-        assert code == 0 and "1000 samples" in err, err
-    code, _, err = run_sindyship("fit", *paths, "--ship", "kvlcc2", "--optimizer", "ls",
-                                 "--out", tmp_path / "m.json")
-    assert code == 0 and "sampled every" not in err, err

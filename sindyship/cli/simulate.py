@@ -56,9 +56,9 @@ def add_parser(sub) -> None:
                    f"{MAX_SAMPLES:.0e} samples of --dt (default 3200)")
     p.add_argument("--dt", type=bounded_float(MIN_STEP, MAX_STEP, "seconds", low_open=False),
                    default=None, metavar="SECONDS",
-                   help=f"sample interval [s], {MIN_STEP:g} to {MAX_STEP:g} (default 1; for a "
-                   "ship whose L/U0 is under 10 s, a model, the coarsest of 0.5, 0.2, 0.1, "
-                   "... s within L/U0 / 20: 0.2 for kvlcc2)")
+                   help=f"sample interval [s], {MIN_STEP:g} to {MAX_STEP:g} (default 1; a model "
+                   "needs finer, at most L/U0 / 8 for fit to resolve its accelerations: "
+                   "0.742 s for kvlcc2)")
     p.add_argument("--pull-out-time", type=bounded_float(0, MAX_DURATION, "seconds"),
                    default=None, metavar="SECONDS",
                    help="pull-out: time the rudder returns to zero [s], before the record's end "
@@ -116,23 +116,9 @@ def _protocol(args, ship, effects) -> int:
     return 0
 
 
-#: The manoeuvre options and their defaults: the protocol's plan fixes them all (the sample
-#: interval's depends on the ship: :func:`default_dt`).
+#: The manoeuvre options and their defaults: the protocol's plan fixes them all.
 MANOEUVRE_DEFAULTS = {"rudder": 35.0, "check": None, "first": "starboard", "duration": 3200.0,
-                      "dt": None, "pull_out_time": None}
-#: The sample intervals [s] :func:`default_dt` chooses from, coarsest first.
-SAMPLE_STEPS = (1.0, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01)
-
-
-def default_dt(ship) -> float:
-    """The sample interval of a manoeuvre flown without ``--dt``: 1 s, or for a ship whose
-    ship-length time L/U0 is under 10 s (a model) the coarsest of :data:`SAMPLE_STEPS`
-    within a twentieth of it (0.2 s for the 7 m KVLCC2), so that its records resolve its
-    accelerations (:data:`sindyship.targets.RESOLVED_STEP`)."""
-    time_scale = ship.L / ship.U0
-    if time_scale >= 10.0:
-        return 1.0
-    return next((step for step in SAMPLE_STEPS if step <= time_scale / 20.0), SAMPLE_STEPS[-1])
+                      "dt": 1.0, "pull_out_time": None}
 
 
 def _check_protocol_options(args) -> None:
@@ -162,8 +148,6 @@ def run(args) -> int:
     check_inputs(ship_file(args.ship))
     _check_protocol_options(args)
     ship = load_cli_ship(args.ship, simulated=True)
-    if args.dt is None and not args.protocol:
-        args.dt = default_dt(ship)
     check_rudder(args.rudder, ship, "--rudder")
     check_rudder(args.check, ship, "--check")
     check_simulation_cost(ship, args.duration, args.dt)
