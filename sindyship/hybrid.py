@@ -112,7 +112,8 @@ def captive_design(captive: pd.DataFrame, ship: Ship, library: TermLibrary, *,
         larger or smaller (RMS) than the ship's semi-empirical derivatives predict there
         (:func:`sindyship.priors.prior_parameters`; within 0.8 to 1.9 times on the KCS's and
         the KVLCC2's virtual tests), or falls where they rise (a negative correlation: other
-        axes or signs), or whose surge force is that many times smaller or larger than its
+        axes or signs), or whose rudder tests' sway force rises or yaw moment falls with the
+        rudder angle, or whose surge force is that many times smaller or larger than its
         sway force: a unit the header does not say, kN under a bare ``Y``.
 
     Examples
@@ -173,6 +174,7 @@ def captive_design(captive: pd.DataFrame, ship: Ship, library: TermLibrary, *,
             _check_force_sign(dof, measured, expected)
         out[dof] = Design(features=features, target=target, groups=groups,
                           terms=tuple(t.text for t in terms))
+    _check_rudder_sign(captive, ship)
     return out
 
 
@@ -190,6 +192,33 @@ def _check_force_sign(dof: str, measured: np.ndarray, expected: np.ndarray) -> N
             "to starboard, r and N positive turning the bow to starboard, body axes at "
             f"midship); flip the column or check the axes."
         )
+
+
+def _check_rudder_sign(captive: pd.DataFrame, ship: Ship) -> None:
+    """Refuse rudder tests whose sway force rises or yaw moment falls with the rudder angle.
+
+    The ship's estimated derivatives have no rudder terms to compare with, but a rudder aft
+    of midship pushes the stern to port and turns the bow to starboard for a positive angle
+    in sindyship's convention: in the rudder tests of the KCS and the KVLCC2 (design and half
+    speed) Y correlates -0.997 and N +0.997 with the angle.  Rows of other test types are
+    checked against the derivatives (:func:`_check_force_sign`).
+    """
+    rudder = classify_tests(captive, ship) == "rudder"
+    angle = captive["delta"].to_numpy(float)[rudder]
+    if angle.size < 3 or np.std(angle) == 0.0:
+        return
+    for dof, sign in (("Y", -1.0), ("N", 1.0)):
+        measured = captive[dof].to_numpy(float)[rudder]
+        if np.std(measured) == 0.0:
+            continue
+        correlation = float(np.corrcoef(measured, angle)[0, 1])
+        if sign * correlation < 0.0:
+            raise SindyshipInputError(
+                f"the measured {dof} of the rudder tests correlates {correlation:+.2f} with "
+                "the rudder angle, where a rudder aft gives Y negative and N positive for a "
+                "positive angle in sindyship's convention (delta positive turns the bow to "
+                "starboard); flip the column or the angle's sign."
+            )
 
 
 def _check_surge_scale(captive: pd.DataFrame) -> None:

@@ -120,6 +120,26 @@ def test_a_small_programme_fixes_the_forces_the_zigzags_leave_free(kcs, zigzags,
     assert hybrid.info["n_samples"] == sum(r.n_samples for r in zigzags)
 
 
+def test_tests_at_half_speed_tell_how_the_forces_fall_and_move_them_at_the_design_speed(
+        kcs, zigzags, protocol_runs):
+    """The same programme run at half the design speed with the design revolutions: in the
+    design speed form the held-out turns (which lose speed) fly closer and the yaw moment in
+    pure yaw at U0 moves; in the instantaneous form the surge force in pure yaw at U0 takes
+    the wrong sign (the propeller loaded at the design revolutions), as the docs say."""
+    slow = pd.concat([captive_tests(kcs, test, points=5, speed=0.5 * kcs.U0)
+                      for test in PROGRAMME], ignore_index=True)
+    design_form = fit_hybrid(zigzags, kcs, slow, library="abkowitz-vr", optimizer="prior")
+    assert held_out(design_form, protocol_runs, kcs) == pytest.approx([1.268, 0.087, 0.156],
+                                                                      abs=0.01)
+    agreement = captive_agreement({"model": design_form}, kcs)["model"]
+    assert agreement["pure-yaw"]["N"]["relative_rms"] == pytest.approx(0.41, abs=0.02)
+    assert lowest_correlation(design_form, kcs) > 0.98
+    instantaneous = fit_hybrid(zigzags, kcs, slow, optimizer="prior",
+                               library=resolve_library("abkowitz-vr", speed="instantaneous"))
+    agreement = captive_agreement({"model": instantaneous}, kcs)["model"]
+    assert agreement["pure-yaw"]["X"]["correlation"] < -0.99
+
+
 def test_a_saved_hybrid_model_is_refined_and_refitted_with_its_captive_rows(kcs, zigzags,
                                                                           programme, tmp_path):
     """The refinement's penalty (the fit's own objective) and its check on half of the
@@ -176,6 +196,7 @@ def test_fit_takes_captive_tests_beside_the_records(kcs, zigzags, programme, tmp
     (["--captive", "{surge}"], "the measured X is 7.29e-05 times the size of the measured Y"),
     (["--captive", "{flipped}"], "the measured Y correlates -0.9"),
     (["--captive", "{astern}"], "has 15 conditions going astern"),
+    (["--captive", "{port_rudder}"], "the measured Y of the rudder tests correlates +"),
     (["--captive", "{other}"], "far from the design speed 12.3 m/s of the ship 'kcs'"),
     (["--captive", "{captive}", "--captive-share", "1"], "--captive-share"),
 ])
@@ -191,11 +212,13 @@ def test_fit_refuses_captive_tests_it_cannot_use(kcs, zigzags, programme, tmp_pa
     write_captive_csv(programme.assign(u=programme["u"] / 10.0, v=programme["v"] / 10.0),
                       files["other"])
     files.update(surge=tmp_path / "surge.csv", flipped=tmp_path / "flipped.csv",
-                 astern=tmp_path / "astern.csv")
+                 astern=tmp_path / "astern.csv", port_rudder=tmp_path / "port_rudder.csv")
     write_captive_csv(programme.assign(X=programme["X"] / 1000.0), files["surge"])
     write_captive_csv(programme.assign(Y=-programme["Y"], N=-programme["N"]), files["flipped"])
     write_captive_csv(pd.concat([programme, programme.assign(u=-programme["u"])]),
                       files["astern"])
+    rudder = programme[programme["delta"] != 0.0]  # a positive angle to port: not sindyship's
+    write_captive_csv(rudder.assign(delta=-rudder["delta"]), files["port_rudder"])
     argv = [word.format(**files) for word in extra]
     code, _, err = run_sindyship("fit", record, "--ship", "kcs", *argv, "--out",
                                  tmp_path / "m.json")
