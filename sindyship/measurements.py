@@ -421,7 +421,7 @@ def _check_step(step: float, source: str) -> None:
     if not ok:
         raise SindyshipInputError(
             f"{source}: the resampling step {step!r} is not a positive number of seconds; "
-            "pass resample=DT (--resample DT) with DT > 0."
+            "give --resample DT (resample=DT in Python) with DT > 0."
         )
 
 
@@ -454,8 +454,8 @@ def _check_time(
         raise SindyshipInputError(
             f"{source}: the sampling is irregular: the time step into {_row(index, worst + 1)} "
             f"is {steps[worst]:.6g} s while the median step is {median:.6g} s (more than "
-            f"{SAMPLING_TOLERANCE:.0%} apart); pass resample=DT (--resample DT on the command "
-            "line) to resample onto a regular grid."
+            f"{SAMPLING_TOLERANCE:.0%} apart); give --resample DT (resample=DT in Python) to "
+            "interpolate it onto a regular grid."
         )
 
 
