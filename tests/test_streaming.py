@@ -296,6 +296,22 @@ def test_fit_stream_without_a_scheduler_starts_a_local_cluster(files, records, k
     assert gap(fit(records, kcs), AbkowitzModel.load(out)) <= RTOL
 
 
+def test_a_streamed_fit_notes_coarse_sampling_as_the_fit_in_memory_does(files, client,
+                                                                         tmp_path, capsys):
+    """Every 3 s, the KCS's records are sampled at 0.16 L/U0, coarser than eight samples per
+    L/U0: both fits say so in the same line (the streamed one from its records' reductions)."""
+    common = [*map(str, files["csv"]), "--resample", "3", "--optimizer", "ls"]
+    assert main(["fit", *common, "--out", str(tmp_path / "memory.json")]) == 0
+    in_memory = [line for line in capsys.readouterr().err.splitlines()
+                 if "L/U0" in line and line.startswith("note:")]
+    assert main(["fit", *common, "--stream", "--scheduler", client.scheduler.address,
+                 "--out", str(tmp_path / "streamed.json")]) == 0
+    streamed = [line for line in capsys.readouterr().err.splitlines()
+                if "L/U0" in line and line.startswith("note:")]
+    assert len(in_memory) == 1 and streamed == in_memory
+    assert "0.16" in in_memory[0]
+
+
 def test_a_parquet_timestamp_column_is_read_as_seconds_from_the_first_sample(tmp_path, kcs):
     pytest.importorskip("pyarrow")
     from sindyship.streaming import read_record

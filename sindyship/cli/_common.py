@@ -370,33 +370,40 @@ def load_cli_ship(name, *, simulated: bool = False):
 SPEED_NOTE_RANGE = (0.7, 1.3)
 
 
-def note_records_ship(args, ship, records=None, *, sampling: bool = True) -> None:
+def note_records_ship(args, ship, records=None, *, sampling: bool = True,
+                      streamed=None) -> None:
     """Say that records given no ``--ship`` are taken as :data:`RECORDS_SHIP`'s, and when
     none of the ``records`` reaches the lower end of :data:`SPEED_NOTE_RANGE` times the ship's
     design speed U0:
     another ship's records, or a U0 in another unit, made non-dimensional with the wrong
     length and speed fit without an error and fly wrong.  With ``sampling``, say when the
     records are sampled too coarsely for the ship's time scale
-    (:func:`sindyship.targets.under_resolved`).  Called when the verb has done its work, so
-    that an error stays one line."""
+    (:func:`sindyship.targets.under_resolved`).  A streamed fit, which never holds the
+    records, gives its reduction as ``streamed`` instead (its ``names``, ``fastest`` and
+    ``steps``).  Called when the verb has done its work, so that an error stays one line."""
     if args.ship is None:
         progress(f"note: no --ship given: the records are taken as the {ship.name.upper()}'s "
                  f"(L = {ship.L:g} m, U0 = {ship.U0:.4g} m/s); give --ship with the records' "
                  "own ship (a built-in name or a ship TOML file) if they are another's.")
-    if records:
+    from ..targets import sampling_steps, under_resolved
+
+    if streamed is not None:
+        fastest = max(streamed.fastest, default=None)
+        steps = dict(zip(streamed.names, streamed.steps, strict=True))
+    elif records:
         import numpy as np
 
         fastest = max(float(np.max(np.hypot(r["u"], r["v"]))) for r in records)
-        if fastest < SPEED_NOTE_RANGE[0] * ship.U0:
-            progress(f"note: no record reaches more than {fastest / ship.U0:.2f} times the "
-                     f"design speed U0 = {ship.U0:.4g} m/s of ship {ship.name}; the model is "
-                     "made non-dimensional with U0: check the ship and its U0 (in m/s).")
-        if sampling:
-            from ..targets import sampling_steps, under_resolved
-
-            coarse = under_resolved(sampling_steps(records, ship), ship)
-            if coarse:
-                progress(f"note: {coarse}.")
+        steps = sampling_steps(records, ship)
+    else:
+        return
+    if fastest is not None and fastest < SPEED_NOTE_RANGE[0] * ship.U0:
+        progress(f"note: no record reaches more than {fastest / ship.U0:.2f} times the "
+                 f"design speed U0 = {ship.U0:.4g} m/s of ship {ship.name}; the model is "
+                 "made non-dimensional with U0: check the ship and its U0 (in m/s).")
+    coarse = under_resolved(steps, ship) if sampling else None
+    if coarse:
+        progress(f"note: {coarse}.")
 
 
 def ship_file(name: str | None) -> list[str]:

@@ -30,6 +30,8 @@ def streamed_fit(args, ship, effects, params, speed=None):
     model : AbkowitzModel
     summary : dict
         ``{"records", "samples", "workers", "scheduler"}``.
+    whole : sindyship.streaming.Reduction
+        The records' reduction (their names, speeds and sampling steps among it).
     """
     from ..optimizers import make_optimizer
     from ..streaming import connect, fit_reduction, reduce_files, stream_settings, time_window
@@ -59,4 +61,4 @@ def streamed_fit(args, ship, effects, params, speed=None):
                           records=records)
     summary = {"records": len(whole.names), "samples": whole.n_samples, "workers": count,
                "scheduler": args.scheduler or "local"}
-    return model, summary
+    return model, summary, whole

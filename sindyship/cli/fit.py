@@ -366,7 +366,7 @@ def _run_streamed(args, ship, params: dict, speed: str) -> int:
     Dask cluster; a refinement then reads the records into memory (unless they would fill
     more than half of it) and flies their segments on the cluster's workers."""
     effects = split_names(args.effects)
-    model, summary = streamed_fit(args, ship, effects, params, speed)
+    model, summary, whole = streamed_fit(args, ship, effects, params, speed)
     report_prior_fit(model)
     if args.refine and _too_many_to_refine(summary["samples"], model):
         args.refine = 0
@@ -390,7 +390,7 @@ def _run_streamed(args, ship, params: dict, speed: str) -> int:
     if not args.no_identifiability:
         progress("Identifiability: not reported for a streamed fit (it needs the samples); "
                  "fit a subset in memory to see it.")
-    note_records_ship(args, ship)
+    note_records_ship(args, ship, streamed=whole)
     if args.json:
         emit({"model": str(args.out), "active_terms": model.n_active(),
               "library": model.library.name, "speed": model.library.speed,

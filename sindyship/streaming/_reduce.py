@@ -15,11 +15,13 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ..errors import SindyshipInputError
 from ..optimizers import RowFactor, merge_factors, pairwise_tree
 from ..ships import Ship
 from ..smoothing import SmoothingSetting, smooth_records
-from ..targets import DOFS
+from ..targets import DOFS, sampling_steps
 
 __all__ = ["Reduction", "StreamSettings", "merge_reductions", "reduce_record"]
 
@@ -80,6 +82,10 @@ class Reduction:
         What the reader repaired.
     cuts : list of (path, start, stop, reason)
         Automatic time-range cuts.
+    fastest : list of float
+        Every record's highest speed sqrt(u^2 + v^2) [m/s].
+    steps : list of float
+        Every record's sampling interval in L/U0 (:func:`sindyship.targets.sampling_steps`).
     """
 
     names: list[str]
@@ -89,6 +95,8 @@ class Reduction:
     envelope: dict[str, list[float]]
     notes: list[tuple[str, str]] = field(default_factory=list)
     cuts: list[tuple[str, float, float, str]] = field(default_factory=list)
+    fastest: list[float] = field(default_factory=list)
+    steps: list[float] = field(default_factory=list)
 
     @property
     def n_samples(self) -> int:
@@ -141,6 +149,8 @@ def reduce_record(path: str | os.PathLike, name: str, settings: StreamSettings) 
         envelope=training_envelope([record], ship),
         notes=[(source, note) for note in notes],
         cuts=[] if cut is None else [(source, *cut)],
+        fastest=[float(np.max(np.hypot(record["u"], record["v"])))],
+        steps=[sampling_steps([record], ship)[record.name]],
     )
 
 
@@ -153,6 +163,7 @@ def merge_reductions(a: Reduction, b: Reduction) -> Reduction:
         names=a.names + b.names, paths=a.paths + b.paths, samples=a.samples + b.samples,
         factors={dof: merge_factors(a.factors[dof], b.factors[dof]) for dof in a.factors},
         envelope=envelope, notes=a.notes + b.notes, cuts=a.cuts + b.cuts,
+        fastest=a.fastest + b.fastest, steps=a.steps + b.steps,
     )
 
 
