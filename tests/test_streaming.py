@@ -242,10 +242,16 @@ def test_a_streamed_fit_too_large_to_refine_is_saved_as_fitted(files, records, k
     assert gap(fit(records, kcs, library=saved.library, optimizer="prior"), saved) <= RTOL
     monkeypatch.undo()
     assert main(["fit", str(files["folder"] / "*.parquet"), *scheduler, "--refine", "2",
-                 "--out", str(out)]) == 0
-    assert "the streamed fit; the refinement reads the records into memory" in \
-        capsys.readouterr().err
+                 "--out", str(out), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert "the streamed fit; the refinement reads the records into memory" in captured.err
     assert AbkowitzModel.load(out).info["refined"]["records"]
+    # having read them, it flies its training records as the fit in memory does
+    assert "training flights (mean distance [L]" in captured.err
+    flights = json.loads(captured.out)["training_flights"]
+    assert len(flights) == len(records)
+    assert all(f["diverged_at_s"] is None and f["mean_distance_L"] < 1.0
+               for f in flights.values())
 
 
 def one_line_error(capsys) -> str:

@@ -370,6 +370,7 @@ def _run_streamed(args, ship, params: dict, speed: str) -> int:
     report_prior_fit(model)
     if args.refine and _too_many_to_refine(summary["samples"], model):
         args.refine = 0
+    flights = None  # flown when the refinement has read the records
     if args.refine:
         from ._common import on_cluster
 
@@ -387,6 +388,8 @@ def _run_streamed(args, ship, params: dict, speed: str) -> int:
                              (args.n_jobs or 1))
     model.save(args.out)
     progress(f"wrote {args.out}: {model!r}")
+    if args.refine:
+        flights = _training_flights(model, records)
     if not args.no_identifiability:
         progress("Identifiability: not reported for a streamed fit (it needs the samples); "
                  "fit a subset in memory to see it.")
@@ -395,7 +398,8 @@ def _run_streamed(args, ship, params: dict, speed: str) -> int:
         emit({"model": str(args.out), "active_terms": model.n_active(),
               "library": model.library.name, "speed": model.library.speed,
               "optimizer": model.optimizer["name"], "identifiability": None,
-              "streamed": summary, "refined": model.info.get("refined")})
+              "streamed": summary, "refined": model.info.get("refined"),
+              **({} if flights is None else {"training_flights": flights})})
     return 0
 
 
