@@ -305,18 +305,13 @@ def _closer(score) -> str:
     return f"brings them {1.0 / ratio:.2g} times closer"
 
 
-def _held_out_caution(score) -> str:
-    """What the held-out flights say against an effect the training flights confirm."""
-    change = score.confirmation
-    if change is None or change.held_out_supports is not False:
-        return ""
+def _held_out_refutation(change) -> str:
+    """How the held-out flights refute an effect: their error ratio and divergences."""
     before, after = change.divergences("held-out")
     diverged = f", diverged flights {before} -> {after}" if before or after else ""
     ratio = change.ratio("held-out")
     error = f"held-out error x {ratio:.2f}" if math.isfinite(ratio) else "held-out error n/a"
-    return (f" But the held-out flights do not agree ({error}{diverged}): on the training "
-            "manoeuvres its terms may stand in for something else, so judge it on manoeuvres "
-            "like the held-out ones before keeping it.")
+    return error + diverged
 
 
 def _other_fit(diagnosis) -> str:
@@ -350,8 +345,24 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
         given = diagnosis.library.effects if effect_arguments is None else effect_arguments
         options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
         text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... {options}; then "
-                "diagnose again with the same --effects." + _held_out_caution(top)
-                + _other_fit(diagnosis))
+                "diagnose again with the same --effects." + _other_fit(diagnosis))
+    elif verdict == "contested":
+        top = diagnosis.top
+        change = top.confirmation
+        given = diagnosis.library.effects if effect_arguments is None else effect_arguments
+        options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
+        ratio = change.ratio("training")
+        training = (f"training error x {ratio:.2f}" if math.isfinite(ratio) else
+                    "it cures a divergence" if change.divergences()[0] > change.divergences()[1]
+                    else "no training flights to compare")
+        text = (f"Verdict: contested - re-flying the training records favours {top.effect.name} "
+                f"({training}), but the held-out flights "
+                f"given refute it ({_held_out_refutation(change)}): on the training manoeuvres "
+                "its terms may stand in for something else, so it is not named to add.  What "
+                "can help: training records of manoeuvres like the held-out ones, or logging "
+                "what the effect describes (its 'To test it' above); to see it anyway, "
+                f"sindyship fit DATA.csv... {options} and sindyship evaluate it on the "
+                "held-out records.")
     elif verdict == "add-discovered":
         found = " and ".join(f.family for f in diagnosis.discovery.accepted)
         given = list(diagnosis.library.effects if effect_arguments is None else effect_arguments)

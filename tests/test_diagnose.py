@@ -9,6 +9,7 @@ use the full protocol (3200 s), since the paper's Table 10 is measured on it.
 from __future__ import annotations
 
 import argparse
+import importlib
 import io
 import json
 import math
@@ -630,15 +631,14 @@ def test_the_side_a_record_puts_its_rudder_to(kcs):
     assert rudder_side(Trajectory(small, name="small")) == 0
 
 
-def test_held_out_flights_that_contradict_a_confirmed_effect_are_said_so(kcs):
+def test_held_out_flights_that_contradict_a_confirmed_effect_contest_it(kcs, kcs_rounds):
     """Confirmation judges the training flights alone (never selecting on the test set); when
-    the held-out flights then diverge with the effect, the confirmation line and the verdict
-    say that they do not agree."""
-    from types import SimpleNamespace
-
+    the held-out flights then diverge with the effect, or fly farther off, the confirmation
+    line says that they do not agree and the verdict is contested: the effect is not named to
+    add (the held-out flights never choose an effect, but they stop one)."""
     from sindyship.diagnose import BeforeAfter
     from sindyship.evaluation import compare_flights, error_summary
-    from sindyship.reports import _confirmation_text, _held_out_caution
+    from sindyship.reports import _confirmation_text, _held_out_refutation
 
     (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=35, duration=600)])
 
@@ -666,15 +666,38 @@ def test_held_out_flights_that_contradict_a_confirmed_effect_are_said_so(kcs):
                                "flights): training error x 0.50, held-out error x ")
         assert line.endswith("the held-out flights agree" if supports
                              else "the held-out flights do not agree")
-        assert (_held_out_caution(SimpleNamespace(confirmation=change)) == "") is supports
-    def caution(held_out):
-        change = BeforeAfter("abkowitz", "abkowitz+x", ("x",), [training, held_out])
-        return _held_out_caution(SimpleNamespace(confirmation=change))
+        # the diagnosis of the paper's records, its best effect confirmed as above
+        first = kcs_rounds.rounds[0].diagnosis
+        best = replace(first.ranking[0], confirmation=change)
+        judged = replace(first, ranking=[best, *first.ranking[1:]])
+        assert judged.verdict == ("add-effect" if supports else "contested")
+        assert not judged.complete and judged.top is best
+        verdict = " ".join(judged.report().split("Verdict: ")[1].split())
+        assert verdict.startswith("add asymmetry: sindyship fit" if supports else
+                                  "contested - re-flying the training records favours "
+                                  "asymmetry (training error x 0.50), but the held-out flights "
+                                  "given refute it (held-out error x ")
+        document = judged.to_json()
+        assert document["verdict"] == judged.verdict
+        assert document["effect_to_add"] == ("asymmetry" if supports else None)
+        if not supports:  # an iterative diagnosis stops there, adding nothing
+            iteration = importlib.import_module("sindyship.diagnose.iteration")
 
-    assert caution(row("held-out", 0.1, 0.3)).startswith(
-        " But the held-out flights do not agree (held-out error x 3.00): on the training")
-    assert "(held-out error x 2.00, diverged flights 0 -> 1)" in caution(
-        row("held-out", 0.1, 0.2, after_diverges=300.0))
+            with pytest.MonkeyPatch.context() as patch:
+                patch.setattr(iteration, "diagnose",
+                              lambda *args, contested=judged, **kwargs: contested)
+                stopped = diagnose_iteratively([run], kcs, max_rounds=3)
+            assert len(stopped.rounds) == 1 and stopped.rounds[0].added is None
+            assert stopped.stopped == ("the held-out flights refute asymmetry, the effect "
+                                       "re-flying the training records favours")
+
+    def refutation(held_out):
+        return _held_out_refutation(BeforeAfter("abkowitz", "abkowitz+x", ("x",),
+                                                [training, held_out]))
+
+    assert refutation(row("held-out", 0.1, 0.3)) == "held-out error x 3.00"
+    assert refutation(row("held-out", 0.1, 0.2, after_diverges=300.0)) == (
+        "held-out error x 2.00, diverged flights 0 -> 1")
 
 
 def test_a_flight_diverging_at_its_first_sample_has_no_mean(kcs):

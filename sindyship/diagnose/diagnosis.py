@@ -130,12 +130,18 @@ class Diagnosis:
 
     @property
     def verdict(self) -> str:
-        """``"add-effect"`` (a meaningful effect is missing), ``"add-discovered"`` (no
-        catalogued effect is meaningful but the search beyond the catalogue discovered one),
-        ``"unstable"`` (training flights diverged and no catalogued effect is meaningful),
-        ``"unexplained"`` (most of a force is unexplained and no catalogued effect is
-        meaningful) or ``"complete"``."""
+        """``"add-effect"`` (a meaningful effect is missing), ``"contested"`` (the effect
+        :attr:`top` names is refuted by the held-out flights given: one diverges only with it,
+        or they come out farther off; they never choose an effect, which would select the
+        model on its test, but they can stop one), ``"add-discovered"`` (no catalogued effect
+        is meaningful but the search beyond the catalogue discovered one), ``"unstable"``
+        (training flights diverged and no catalogued effect is meaningful), ``"unexplained"``
+        (most of a force is unexplained and no catalogued effect is meaningful) or
+        ``"complete"``."""
         if self.top is not None:
+            change = self.top.confirmation
+            if change is not None and change.held_out_supports is False:
+                return "contested"
             return "add-effect"
         if self.discovery is not None and self.discovery.accepted:
             return "add-discovered"
@@ -300,7 +306,7 @@ class Diagnosis:
                 "threshold": self.threshold,
                 "complete": self.complete,
                 "verdict": self.verdict,
-                "effect_to_add": None if self.top is None else self.top.effect.name,
+                "effect_to_add": self.top.effect.name if self.verdict == "add-effect" else None,
                 "diverged": self.diverged,
                 "stability": None if self.stability is None else self.stability.to_json(),
                 "collinear_terms": self.collinear,

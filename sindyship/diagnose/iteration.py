@@ -183,6 +183,11 @@ def diagnose_iteratively(
     for _ in range(max_rounds):
         result = diagnose(records, ship, library=lib, test=test, progress=progress, **options)
         pick = result.top  # the diagnosis's own verdict: never one the flights refute
+        if result.verdict == "contested":
+            rounds.append(Round(result, None, None))
+            stopped = (f"the held-out flights refute {pick.effect.name}, the effect re-flying "
+                       "the training records favours")
+            break
         if pick is None:
             rounds.append(Round(result, None, None))
             meaningful = any(s.meaningful for s in result.ranking)
