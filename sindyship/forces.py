@@ -64,6 +64,7 @@ __all__ = [
     "ENVELOPE_VARIABLES",
     "ForceComparison",
     "compare_forces",
+    "forces_report",
     "model_captive_forces",
     "plot_captive_forces",
     "training_envelope",
@@ -252,6 +253,31 @@ def compare_forces(model: AbkowitzModel, captive: pd.DataFrame,
                                                 for k, v in envelope.items()},
         table=table,
     )
+
+
+def forces_report(result) -> str:
+    """Correlation and relative RMS error of X, Y, N per captive test type and envelope."""
+    def cell(stats):
+        corr, rel = stats["correlation"], stats["relative_rms"]
+        c = "   n/a" if corr is None else f"{corr:6.3f}"
+        r = "    n/a" if rel is None else f"{rel:7.3f}"
+        return f"{c} {r}"
+
+    astern = result.by_test.get("astern")
+    rows = [("all ahead" if astern else "all", result.overall)]
+    rows += [(test, stats) for test, stats in result.by_test.items() if test != "astern"]
+    if result.inside is not None:
+        rows += [("inside envelope", result.inside), ("outside envelope", result.outside)]
+    lines = [f"{'conditions':<18}" + "".join(f"{dof + ' corr  relRMS':>16}"
+                                             for dof in ("X", "Y", "N"))]
+    for name, stats in rows:
+        lines.append(f"{name:<18}" + "".join(f"  {cell(stats[dof])}" for dof in ("X", "Y", "N")))
+    if astern:
+        lines.append(f"{'astern (u <= 0)':<18}"
+                     + "".join(f"  {cell(astern[dof])}" for dof in ("X", "Y", "N")))
+        lines.append(f"{astern['X']['n']} condition(s) going astern are compared apart: the "
+                     "model's forces are expanded about its design speed ahead.")
+    return "\n".join(lines)
 
 
 def plot_captive_forces(result: ForceComparison, *, tests: Sequence[str] | None = None,

@@ -70,6 +70,7 @@ MAX_RUDDER_ANGLE = 1.0  # rad
 MAX_YAW_RATE = 0.5  # rad/s
 MAX_SPEED = 100.0  # m/s
 MAX_REVOLUTIONS = 100.0  # rps
+MAX_WIND_DIRECTION = 4.0 * math.pi  # rad: two turns (a direction in degrees passes 12.6)
 SAMPLING_TOLERANCE = 0.01  # fraction of the median time step
 
 
@@ -494,6 +495,13 @@ def _check_plausible(
             f"any propeller ({MAX_REVOLUTIONS:.0f} rps)",
             "the values look like rpm, so write the header as 'n [rpm]'",
             f"check the values and the unit '{by_name['n'].unit}'",
+        )
+    if "wind_dir" in si and np.max(np.abs(si["wind_dir"])) > MAX_WIND_DIRECTION:
+        refuse(
+            "wind_dir",
+            f"two turns of a direction ({MAX_WIND_DIRECTION:.4g} rad = 720 deg)",
+            "the values look like degrees, so write the header as 'wind_dir [deg]'",
+            f"check the values and the unit '{by_name['wind_dir'].unit}'",
         )
     if not rudder_check:
         return

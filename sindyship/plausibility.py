@@ -55,7 +55,9 @@ The checks, in the order they run, with their thresholds (module constants) and 
 ``revolutions`` (only with a ship that has a propeller, and records with ``n``)
     Refuses a median n above ``MAX_REVOLUTION_RATIO`` = 5 times the ship's propeller
     revolutions: rpm under a bare header read 60 times too high (91.5 rpm of the full-scale
-    KVLCC2 pass the reader's absolute limit of 100 rps).
+    KVLCC2 pass the reader's absolute limit of 100 rps); and a largest n below
+    ``MIN_REVOLUTION_RATIO`` = 0.1 times them, unless n is zero throughout (a stopped
+    propeller): rps under an ``n [rpm]`` header read 60 times too low.
 ``forward-speed``
     Refuses u <= 0 at every sample: the models describe a ship going ahead.
 ``rudder-sign``
@@ -63,6 +65,13 @@ The checks, in the order they run, with their thresholds (module constants) and 
     the motion contradicts is refused by name (:mod:`sindyship.rudder_sign`: held over while
     the ship turned half a circle the other way, or a yaw acceleration that follows it with
     the opposite sign, ``RUDDER_SIGN_T`` = 5 standard errors below zero).
+``rudder-size`` (only with a ship)
+    Refuses a rudder column whose largest angle [rad] times ``MAX_YAW_PER_RUDDER`` = 20 stays
+    below the largest yaw rate r L/U0 (5-sample mean) while the yaw acceleration follows it
+    (:func:`sindyship.rudder_sign.yaw_follows_rudder` above ``RUDDER_SIGN_T``): radians under
+    a degree header read 57 times too small (a 20/20 zig-zag of the KCS reads 0.35 deg against
+    r' = 0.36).  A rudder held over gives no gain (a turning circle alone is not judged), and
+    a pull-out with the rudder amidships does not follow it.
 
 Decimal-comma files are recognised by the reader itself (:mod:`sindyship.measurements`).
 """
@@ -75,9 +84,23 @@ from collections.abc import Callable, Iterable, Mapping
 import numpy as np
 
 from sindyship.errors import SindyshipInputError
-from sindyship.rudder_sign import (
-    against_rudder,
+from sindyship.kinematics_checks import (
+    _KNOT,
+    FRAME_SEGMENTS,
+    FRAME_TOLERANCE,
+    HEADING_GAIN_TOLERANCE,
+    HEADING_MAX_DRIFT,
+    HEADING_MIN_SPAN,
+    UNIT_MATCH,
+    WRAP_TOLERANCE,
+    check_frame,
+    check_heading,
+    frame_misfit,
+    heading_gain,
+    unwrap_heading,
 )
+from sindyship.rudder_sign import RUDDER_SIGN_T, against_rudder, yaw_follows_rudder
+from sindyship.units import unit_factor
 
 __all__ = [
     "CHECKS",
@@ -89,6 +112,8 @@ __all__ = [
     "HEADING_MIN_SPAN",
     "MAX_DURATION",
     "MAX_REVOLUTION_RATIO",
+    "MAX_YAW_PER_RUDDER",
+    "MIN_REVOLUTION_RATIO",
     "excess_revolutions",
     "MAX_SPEED_RATIO",
     "MAX_STEP",
@@ -105,26 +130,24 @@ __all__ = [
 
 #: Names of the checks, in the order they run.
 CHECKS = ("motion", "sampling", "heading", "frame", "speed", "revolutions", "forward-speed",
-          "rudder-sign")
+          "rudder-sign", "rudder-size")
 
 MOTION_TOLERANCE = 1e-9
 MAX_STEP = 1.0  # L/U0
 MIN_STEP = 1e-5  # L/U0
 MAX_DURATION = 1e5  # L/U0
-WRAP_TOLERANCE = 0.5  # rad
-HEADING_MIN_SPAN = 0.1  # rad
-HEADING_GAIN_TOLERANCE = 0.25
-HEADING_MAX_DRIFT = 0.35  # rad
-FRAME_SEGMENTS = 32
-FRAME_TOLERANCE = 0.1
-UNIT_MATCH = 0.2
 MAX_SPEED_RATIO = 1.6  # of U0
 #: Most a record's median propeller revolutions may exceed the ship's own (a ratio): rpm read
 #: as rps are 60 times too high.
 MAX_REVOLUTION_RATIO = 5.0
+#: Least share of the ship's propeller revolutions a record's largest n must reach when it is
+#: not zero throughout: rps under an rpm header read 60 times too low.
+MIN_REVOLUTION_RATIO = 0.1
+#: Most a record's largest yaw rate r L/U0 may be per radian of its largest rudder angle when
+#: its yaw acceleration follows the rudder: radians under a degree header read 57 times too
+#: small (zig-zags and turns of the KCS and the KVLCC2 give 0.6 to 3).
+MAX_YAW_PER_RUDDER = 20.0
 
-
-_KNOT = 1852.0 / 3600.0
 
 Rows = Callable[[int], str]
 
@@ -197,20 +220,23 @@ def check_record(
     if ship is not None and "sampling" not in skip:
         _check_sampling(data["t"], ship, context)
     if "heading" not in skip:
-        data["psi"], note = _unwrap_heading(data, context)
+        data["psi"], note = unwrap_heading(data, context)
         if note:
             notes.append(note)
-        _check_heading(data, context)
+        check_heading(data, context)
     if "frame" not in skip:
-        _check_frame(data, context)
+        check_frame(data, context)
     if ship is not None and "speed" not in skip:
         _check_speed(data["u"], ship, context)
     if ship is not None and "revolutions" not in skip and "n" in data:
         _check_revolutions(data["n"], ship, context)
+        _check_too_few_revolutions(data["n"], ship, context)
     if "forward-speed" not in skip:
         _check_forward_speed(data["u"], context)
     if "rudder-sign" not in skip:
         _check_rudder_sign(data, context)
+    if ship is not None and "rudder-size" not in skip:
+        _check_rudder_size(data, ship, context)
     return data, notes
 
 
@@ -225,6 +251,11 @@ class _Context:
 
     def unit(self, name: str) -> str | None:
         return self.headers.get(name, (name, None))[1]
+
+    def factor(self, name: str) -> float:
+        """The factor to SI of the unit the header gave (1 for a bare header)."""
+        unit = self.unit(name)
+        return 1.0 if unit is None else unit_factor(name, self.header(name), unit, self.source)
 
     def refuse(self, check: str, problem: str, fix: str) -> None:
         raise SindyshipInputError(
@@ -331,6 +362,50 @@ def _check_revolutions(n: np.ndarray, ship, context: _Context) -> None:
     )
 
 
+def _check_too_few_revolutions(n: np.ndarray, ship, context: _Context) -> None:
+    """Propeller revolutions that never reach a tenth of the ship's own although they turn:
+    rps under an ``n [rpm]`` header (a stopped propeller, n = 0 throughout, passes)."""
+    if not ship.has_mmg:
+        return  # a ship file for identification only gives no revolutions
+    largest, own = float(np.max(np.abs(n))), ship.propeller.n_P
+    if largest == 0.0 or largest >= MIN_REVOLUTION_RATIO * own:
+        return
+    rps = context.factor("n") == 1.0 / 60.0 and largest * 60.0 >= MIN_REVOLUTION_RATIO * own
+    context.refuse(
+        "revolutions",
+        f"column '{context.header('n')}' never exceeds {largest:.4g} rps, "
+        f"{largest / own:.2g} times the ship's propeller revolutions n = {own:.4g} rps",
+        "the values look like rps, so write the header as 'n [rps]' or a bare 'n'" if rps else
+        "check the unit of n and that the ship (full or model scale) is right",
+    )
+
+
+def _check_rudder_size(data, ship, context: _Context) -> None:
+    """A rudder column too small for the turning its yaw acceleration follows: radians under a
+    degree header (a zig-zag of 20 deg reads 0.35 deg)."""
+    window = min(5, len(data["t"]))
+    turning = float(np.max(np.abs(np.convolve(data["r"], np.full(window, 1.0 / window),
+                                               mode="valid")))) * ship.L / ship.U0
+    for name in [n for n in ("delta", "delta_c") if n in data]:
+        largest = float(np.max(np.abs(data[name])))
+        if largest == 0.0 or turning <= MAX_YAW_PER_RUDDER * largest:
+            continue
+        follows = yaw_follows_rudder(data[name], data["r"], data["t"])
+        if not follows > RUDDER_SIGN_T:
+            continue  # a pull-out: the ship turns on with the rudder amidships
+        degrees = context.factor(name) == math.radians(1.0)
+        context.refuse(
+            "rudder-size",
+            f"column '{context.header(name)}' never exceeds {math.degrees(largest):.3g} deg "
+            f"while the ship turns at up to r' = r L/U0 = {turning:.2g} and its yaw "
+            f"acceleration follows the rudder ({follows:.0f} standard errors above zero): no "
+            "rudder that small turns a ship that fast",
+            "the values look like radians, so write the header as "
+            f"'{name} [rad]' or a bare '{name}'" if degrees else
+            f"check the unit of '{context.header(name)}'",
+        )
+
+
 def _check_forward_speed(u: np.ndarray, context: _Context) -> None:
     if np.max(u) <= 0.0:
         context.refuse(
@@ -350,235 +425,6 @@ def _check_rudder_sign(data, context: _Context) -> None:
             context.refuse("rudder-sign", problem, f"sindyship takes a positive rudder angle to "
                            f"turn the ship to starboard (r > 0): check the sign convention of "
                            f"'{context.header(name)}' and negate it if it is flipped")
-
-
-# ---------------------------------------------------------------------------------------------
-# heading
-
-
-def _running_integral(y: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """The trapezoidal integral of ``y`` over ``t`` from the first sample, as
-    ``scipy.integrate.cumulative_trapezoid(y, t, initial=0.0)`` computes it (written out:
-    importing scipy.integrate costs every command that reads a record a quarter second).
-
-    Examples
-    --------
-    >>> _running_integral(np.array([0.0, 1.0, 2.0]), np.array([0.0, 1.0, 3.0])).tolist()
-    [0.0, 0.5, 3.5]
-    """
-    y, t = np.asarray(y), np.asarray(t, dtype=float)  # y may be complex: x + i y
-    return np.concatenate(([0.0], np.cumsum(np.diff(t) * (y[1:] + y[:-1]) / 2.0)))
-
-
-def _yaw_integral(data) -> np.ndarray:
-    return _running_integral(data["r"], data["t"])
-
-
-def _unwrap_heading(data, context: _Context) -> tuple[np.ndarray, str | None]:
-    psi = data["psi"]
-    unexplained = np.diff(psi) - np.diff(_yaw_integral(data))
-    jumps = np.flatnonzero(np.abs(np.diff(psi)) > math.pi)
-    if jumps.size == 0:
-        return psi, None
-    turns = np.round(unexplained[jumps] / (2 * math.pi))
-    residual = np.abs(unexplained[jumps] - 2 * math.pi * turns)
-    odd = np.flatnonzero(residual > WRAP_TOLERANCE)
-    if odd.size:
-        i = int(jumps[odd[0]]) + 1
-        jump = float(psi[i] - psi[i - 1])
-        degrees = context.unit("psi") is None and abs(abs(jump) - 360.0) < 20.0
-        context.refuse(
-            "heading",
-            f"column '{context.header('psi')}' jumps by {jump:.4g} rad into {context.row(i)} "
-            f"while r turns the ship by {psi[i] - psi[i - 1] - unexplained[i - 1]:.3g} rad",
-            "the values look like degrees wrapped at +-180, so write the header as 'psi [deg]'"
-            if degrees else "check the heading there",
-        )
-    steps = np.zeros_like(psi)
-    steps[jumps + 1] = 2 * math.pi * turns
-    note = (
-        f"{context.source}: column '{context.header('psi')}' wraps around {jumps.size} "
-        f"time{'s' if jumps.size > 1 else ''}, first into {context.row(int(jumps[0]) + 1)}; "
-        "unwrapped it (psi must be continuous)."
-    )
-    return psi - np.cumsum(steps), note
-
-
-def heading_gain(t: np.ndarray, r: np.ndarray, psi: np.ndarray) -> tuple[float, float]:
-    """The least-squares gain of psi - psi[0] on the integral of r, and that integral's span.
-
-    Examples
-    --------
-    >>> t = np.arange(100.0)
-    >>> gain, span = heading_gain(t, np.full(100, 0.01), np.degrees(0.01 * t))
-    >>> round(gain, 2), round(span, 2)
-    (57.3, 0.99)
-    """
-    turned = _running_integral(r, t)
-    change = psi - psi[0]
-    span = float(np.max(np.abs(turned)))
-    if span == 0.0:
-        return math.nan, span
-    return float(np.dot(change, turned) / np.dot(turned, turned)), span
-
-
-def _check_heading(data, context: _Context) -> None:
-    psi_header, r_header = context.header("psi"), context.header("r")
-    gain, span = heading_gain(data["t"], data["r"], data["psi"])
-    if span < HEADING_MIN_SPAN:
-        drift = float(np.max(np.abs(data["psi"] - data["psi"][0] - _yaw_integral(data))))
-        if drift > HEADING_MAX_DRIFT:
-            context.refuse(
-                "heading",
-                f"column '{psi_header}' strays {drift:.3g} rad from the integral of "
-                f"'{r_header}', which turns the ship by at most {span:.3g} rad",
-                "check that psi is in rad (else write 'psi [deg]') and belongs with r",
-            )
-        return
-    if abs(gain - 1.0) <= HEADING_GAIN_TOLERANCE:
-        return
-    problem = (
-        f"column '{psi_header}' changes {gain:.4g} times as much as the integral of "
-        f"'{r_header}' from psi[0] (expected 1 +- {HEADING_GAIN_TOLERANCE})"
-    )
-    if _near(gain, 180.0 / math.pi) and context.unit("psi") is None:
-        fix = "the heading looks like degrees, so write the header as 'psi [deg]'"
-    elif _near(gain, math.pi / 180.0) and context.unit("r") is None:
-        fix = "the yaw rate looks like deg/s, so write the header as 'r [deg/s]'"
-    elif _near(gain, 1e-3) and context.unit("t") in (None, "s"):
-        fix = "the times look like milliseconds, so write the header as 't [ms]'"
-    elif _near(gain, -1.0):
-        fix = ("psi and r turn opposite ways: psi is clockwise from north and r positive to "
-               "starboard, so negate the one with the wrong sign")
-    else:
-        fix = "check the units and signs of psi and r"
-    context.refuse("heading", problem, fix)
-
-
-def _near(value: float, target: float) -> bool:
-    return value * target > 0 and abs(math.log(value / target)) < math.log1p(UNIT_MATCH)
-
-
-# ---------------------------------------------------------------------------------------------
-# frame
-
-
-def _segments(n: int) -> np.ndarray:
-    step = max(1, (n - 1) // FRAME_SEGMENTS)
-    edges = np.arange(0, n, step)
-    if edges[-1] != n - 1:
-        edges = np.append(edges, n - 1)
-    return edges
-
-
-def _displacements(t: np.ndarray, velocity: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    travelled = _running_integral(velocity, t)
-    return travelled[edges[1:]] - travelled[edges[:-1]]
-
-
-def frame_misfit(data: Mapping[str, np.ndarray]) -> float:
-    """The ``frame`` check's misfit: (u, v) rotated by psi against the track d(x, y)/dt.
-
-    Sum over segments of |recorded displacement - integrated velocity| over the sum of
-    |recorded displacement| (0 for a consistent record; NaN when x and y never change).
-
-    Examples
-    --------
-    >>> t = np.arange(10.0)
-    >>> record = {"t": t, "u": np.full(10, 2.0), "v": np.zeros(10), "psi": np.full(10, 0.5),
-    ...           "x": 2 * t * math.cos(0.5), "y": 2 * t * math.sin(0.5)}
-    >>> round(frame_misfit(record), 12)
-    0.0
-    """
-    edges = _segments(len(data["t"]))
-    track = np.asarray(data["x"]) + 1j * np.asarray(data["y"])
-    recorded = track[edges[1:]] - track[edges[:-1]]
-    scale = float(np.sum(np.abs(recorded)))
-    velocity = np.exp(1j * np.asarray(data["psi"])) * (np.asarray(data["u"]) + 1j * data["v"])
-    predicted = _displacements(np.asarray(data["t"]), velocity, edges)
-    if scale == 0.0:
-        return math.nan
-    return float(np.sum(np.abs(recorded - predicted)) / scale)
-
-
-def _check_frame(data, context: _Context) -> None:
-    t, psi = data["t"], data["psi"]
-    body = data["u"] + 1j * data["v"]
-    edges = _segments(len(t))
-    track = data["x"] + 1j * data["y"]
-    recorded = track[edges[1:]] - track[edges[:-1]]
-    scale = float(np.sum(np.abs(recorded)))
-    predicted = _displacements(t, np.exp(1j * psi) * body, edges)
-    if scale == 0.0:
-        context.refuse(
-            "frame",
-            f"x and y never change while (u, v) carry the ship "
-            f"{np.sum(np.abs(predicted)):.4g} m",
-            "give the track in x (north) and y (east) [m]",
-        )
-    misfit = float(np.sum(np.abs(recorded - predicted)) / scale)
-    if misfit <= FRAME_TOLERANCE:
-        return
-    readings = _frame_readings(t, psi, body, recorded, predicted, edges, context)
-    fits = [(m, text, fix) for m, text, fix in readings if m <= FRAME_TOLERANCE]
-    if fits:
-        best, text, fix = min(fits, key=lambda item: item[0])
-        context.refuse(
-            "frame",
-            f"{text}: misfit {best:.3f} against {misfit:.3f} when (u, v) are rotated by psi "
-            f"into the track d(x, y)/dt (tolerance {FRAME_TOLERANCE})",
-            fix,
-        )
-    context.refuse(
-        "frame",
-        f"(u, v) rotated by psi miss the track d(x, y)/dt by a misfit of {misfit:.3f} "
-        f"(tolerance {FRAME_TOLERANCE})",
-        "check that u, v are body-fixed (v to starboard), x points north, y east, psi is "
-        "clockwise from north, and the units of t, u, v, x and y",
-    )
-
-
-def _frame_readings(t, psi, body, recorded, predicted, edges, context: _Context):
-    """(misfit, what it looks like, fix) for each other reading of the channels."""
-    scale = float(np.sum(np.abs(recorded)))
-
-    def misfit(other_recorded, other_predicted) -> float:
-        return float(np.sum(np.abs(other_recorded - other_predicted)) / scale)
-
-    readings = [
-        (misfit(recorded, _displacements(t, body, edges)),
-         "(u, v) look earth-fixed: they match d(x, y)/dt without rotating by psi",
-         "give body-fixed surge and sway, u = u_N cos psi + u_E sin psi and "
-         "v = -u_N sin psi + u_E cos psi"),
-        (misfit(recorded, _displacements(t, np.exp(1j * psi) * np.conj(body), edges)),
-         "v looks positive to port", "negate v (sway is positive to starboard)"),
-        (misfit(1j * np.conj(recorded), predicted),
-         "x and y look swapped", "x points north and y east: swap the two columns"),
-        (misfit(recorded, _displacements(t, np.exp(-1j * psi) * body, edges)),
-         "psi looks anticlockwise", "psi is clockwise from north: negate psi (and r)"),
-    ]
-    if context.unit("psi") is None:
-        readings.append(
-            (misfit(recorded, _displacements(t, np.exp(1j * np.radians(psi)) * body, edges)),
-             "psi looks like degrees", "write the header as 'psi [deg]'"))
-    gain = complex(np.sum(np.conj(predicted) * recorded) / np.sum(np.abs(predicted) ** 2))
-    ratio = abs(gain)
-    if ratio > 0 and not _near(ratio, 1.0):
-        readings.append((misfit(recorded, ratio * predicted),
-                         f"the track is {ratio:.4g} times the distance (u, v) integrate to",
-                         _scale_fix(ratio, context)))
-    return readings
-
-
-def _scale_fix(ratio: float, context: _Context) -> str:
-    speed_bare = context.unit("u") in (None, "m/s")
-    if _near(ratio, _KNOT) and speed_bare:
-        return "u and v look like knots, so write the headers as 'u [kn]' and 'v [kn]'"
-    if _near(ratio, 1 / 3.6) and speed_bare:
-        return "u and v look like km/h, so write the headers as 'u [km/h]' and 'v [km/h]'"
-    if _near(ratio, 1e-3) and context.unit("t") in (None, "s"):
-        return "the times look like milliseconds, so write the header as 't [ms]'"
-    return "check the units of t, u, v, x and y"
 
 
 #: A stretch without samples longer than this many median steps (and than the resampling

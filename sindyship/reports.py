@@ -1,4 +1,6 @@
-"""Every text table: results hold numbers, this module turns them into text for people.
+"""The text tables of fits, flights and diagnoses: results hold numbers, this module turns
+them into text for people (a captive comparison's is
+:func:`sindyship.forces.forces_report`).
 
 The command line prints these; notebooks call them (or a result's ``report()`` method, which
 calls them).
@@ -23,7 +25,6 @@ __all__ = [
     "diagnosis_report",
     "error_cell",
     "evaluation_report",
-    "forces_report",
     "iteration_report",
     "reproduce_report",
 ]
@@ -583,28 +584,3 @@ def _captive_lines(captive: dict) -> list[str]:
             cells.append(" ".join("  n/a" if v is None else f"{v:+.2f}" for v in values))
         lines.append(f"{key:34s}" + "".join(f"{c:>20s}" for c in cells))
     return lines
-
-
-def forces_report(result) -> str:
-    """Correlation and relative RMS error of X, Y, N per captive test type and envelope."""
-    def cell(stats):
-        corr, rel = stats["correlation"], stats["relative_rms"]
-        c = "   n/a" if corr is None else f"{corr:6.3f}"
-        r = "    n/a" if rel is None else f"{rel:7.3f}"
-        return f"{c} {r}"
-
-    astern = result.by_test.get("astern")
-    rows = [("all ahead" if astern else "all", result.overall)]
-    rows += [(test, stats) for test, stats in result.by_test.items() if test != "astern"]
-    if result.inside is not None:
-        rows += [("inside envelope", result.inside), ("outside envelope", result.outside)]
-    lines = [f"{'conditions':<18}" + "".join(f"{dof + ' corr  relRMS':>16}"
-                                             for dof in ("X", "Y", "N"))]
-    for name, stats in rows:
-        lines.append(f"{name:<18}" + "".join(f"  {cell(stats[dof])}" for dof in ("X", "Y", "N")))
-    if astern:
-        lines.append(f"{'astern (u <= 0)':<18}"
-                     + "".join(f"  {cell(astern[dof])}" for dof in ("X", "Y", "N")))
-        lines.append(f"{astern['X']['n']} condition(s) going astern are compared apart: the "
-                     "model's forces are expanded about its design speed ahead.")
-    return "\n".join(lines)

@@ -25,7 +25,7 @@ import numpy as np
 from .rudder_holds import leg_time
 
 __all__ = ["RUDDER_SIGN_ANGLE", "RUDDER_SIGN_BLOCKS_PER_LEG", "RUDDER_SIGN_T", "RUDDER_SIGN_TURN",
-           "RUDDER_SIGN_WITH", "against_rudder"]
+           "RUDDER_SIGN_WITH", "against_rudder", "yaw_follows_rudder"]
 
 RUDDER_SIGN_ANGLE = math.radians(10.0)
 RUDDER_SIGN_TURN = math.pi  # rad: half a circle
@@ -53,8 +53,28 @@ def against_rudder(delta: np.ndarray, r: np.ndarray, t: np.ndarray, header: str)
                     f"the ship turned {math.degrees(-turned):.0f} deg the other way")
     if np.ptp(delta) < RUDDER_SIGN_ANGLE:
         return None
-    # the yaw response dr/dt = a r + b delta + c on the means of at most 200 blocks of samples,
-    # whose errors are nearly independent, and noise averaged, whatever the sampling rate
+    below = yaw_follows_rudder(delta, r, t)
+    return None if not -below > RUDDER_SIGN_T else (
+        f"the yaw acceleration follows column '{header}' with the opposite sign ({-below:.0f} "
+        "standard errors below zero)")
+
+
+def yaw_follows_rudder(delta: np.ndarray, r: np.ndarray, t: np.ndarray) -> float:
+    """How many standard errors above zero the gain b of the yaw response
+    dr/dt = a r + b delta + c lies (negative below; NaN for fewer than five blocks): least
+    squares on the means of at most 200 blocks of samples, whose errors are nearly
+    independent and whose noise is averaged, whatever the sampling rate (module docstring).
+
+    Examples
+    --------
+    >>> t = np.arange(0.0, 400.0, 0.5)
+    >>> delta = np.radians(10.0) * np.sign(np.sin(2 * np.pi * t / 100.0))
+    >>> r = np.zeros_like(t)
+    >>> for k in range(1, len(t)):  # a first-order yaw response to the rudder
+    ...     r[k] = r[k - 1] + 0.5 * (0.02 * delta[k - 1] - 0.05 * r[k - 1])
+    >>> bool(yaw_follows_rudder(delta, r, t) > RUDDER_SIGN_T)
+    True
+    """
     size = max(1, len(t) // 200)
     leg = leg_time(t, np.degrees(delta))
     if leg is not None:  # never averaged over a leg of the rudder
@@ -63,12 +83,9 @@ def against_rudder(delta: np.ndarray, r: np.ndarray, t: np.ndarray, header: str)
     tb, rb, db = (np.mean(x[: len(t) // size * size].reshape(-1, size), axis=1)
                   for x in (t, r, delta))
     if len(tb) < 5:
-        return None
+        return math.nan
     design, rate = np.column_stack([rb, db, np.ones_like(rb)]), np.gradient(rb, tb)
     fitted, *_ = np.linalg.lstsq(design, rate, rcond=None)
     error = rate - design @ fitted
     spread = float(error @ error) / max(len(error) - 3, 1) * np.linalg.pinv(design.T @ design)
-    below = -fitted[1] / math.sqrt(max(spread[1, 1], 1e-300))
-    return None if not below > RUDDER_SIGN_T else (
-        f"the yaw acceleration follows column '{header}' with the opposite sign ({below:.0f} "
-        "standard errors below zero)")
+    return float(fitted[1] / math.sqrt(max(spread[1, 1], 1e-300)))

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from sindyship.errors import SindyshipInputError
 
-__all__ = ["COMMON_NAMES", "UNITS", "Column", "parse_headers", "renaming_hint"]
+__all__ = ["COMMON_NAMES", "UNITS", "Column", "parse_headers", "renaming_hint", "unit_factor"]
 
 _DEG = math.pi / 180.0
 
@@ -136,12 +136,14 @@ def parse_headers(headers: list[str], source: str) -> list[Column]:
         factor = 1.0
         if unit is not None:
             unit = unit.strip()
-            factor = _unit_factor(name, header, unit, source)
+            factor = unit_factor(name, header, unit, source)
         columns.append(Column(header=header, name=name, unit=unit, factor=factor))
     return columns
 
 
-def _unit_factor(name: str, header: str, unit: str, source: str) -> float:
+def unit_factor(name: str, header: str, unit: str, source: str) -> float:
+    """The factor to SI of ``unit`` in the column ``header`` of channel ``name`` (refused in one
+    sentence naming ``source`` when unknown, ambiguous or of another quantity)."""
     key = unit.replace(" ", "")
     if key not in UNITS:
         matches = [spelling for spelling in UNITS if spelling.lower() == key.lower()]

@@ -215,7 +215,7 @@ def test_conditions_going_astern_are_compared_apart(kcs, tmp_path):
     import pandas as pd
 
     from sindyship.captive import classify_tests
-    from sindyship.reports import forces_report
+    from sindyship.forces import forces_report
 
     reference = AbkowitzModel(kcs, load_library("abkowitz"), taylor_reference(kcs))
     ahead = captive_tests(kcs, "static-drift", points=5)

@@ -126,7 +126,7 @@ def test_unknown_check_name_is_refused(zigzag):
     with pytest.raises(SindyshipInputError, match="unknown plausibility check 'speeed'"):
         trajectory_from_frame(zigzag.data, skip_checks=["speeed"])
     assert set(CHECKS) == {"motion", "sampling", "heading", "frame", "speed", "revolutions",
-                           "forward-speed", "rudder-sign"}
+                           "forward-speed", "rudder-sign", "rudder-size"}
 
 
 def test_a_flipped_rudder_sign_is_refused(protocol_runs):
@@ -708,7 +708,7 @@ def test_the_running_integral_is_scipys_cumulative_trapezoid(seed):
     integrates r, the frame check the complex velocity x + i y."""
     from scipy.integrate import cumulative_trapezoid
 
-    from sindyship.plausibility import _running_integral
+    from sindyship.kinematics_checks import _running_integral
 
     rng = np.random.default_rng(seed)
     for n in (1, 2, 7, 3200):

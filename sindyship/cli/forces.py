@@ -43,9 +43,8 @@ def _check_order(model: str, captive: str) -> None:
 def run(args) -> int:
     from .._io import check_output, output_folder, save_figure, write_text_atomic
     from ..captive import read_captive_csv
-    from ..forces import compare_forces, plot_captive_forces
+    from ..forces import compare_forces, forces_report, plot_captive_forces
     from ..model import AbkowitzModel
-    from ..reports import forces_report
     from ._common import check_inputs, load_cli_ship, ship_file
     from ._records import read_records
 

@@ -1,0 +1,94 @@
+"""Channels in a unit their header does not say, caught on load: a rudder in radians under a
+degree header, revolutions in rps under an rpm header, a wind direction in degrees under a bare
+header, and which of psi, r or x, y carries the wrong unit (sindyship.plausibility)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sindyship.errors import SindyshipInputError
+from sindyship.measurements import trajectory_from_frame
+
+
+@pytest.fixture(scope="module")
+def records(protocol_runs):
+    return {r.name: r for r in protocol_runs["train"] + protocol_runs["test"]}
+
+
+def refusal(frame, **options) -> str:
+    with pytest.raises(SindyshipInputError) as caught:
+        trajectory_from_frame(frame, "run", source="run.csv", **options)
+    message = str(caught.value)
+    assert "\n" not in message and message.startswith("run.csv: ")
+    return message
+
+
+@pytest.mark.parametrize("name", ["zz20_20", "zz10_10", "zz35_10"])
+def test_a_rudder_in_radians_under_a_degree_header_is_refused(records, name):
+    """A 20/20 zig-zag of the KCS reads 0.35 deg against r' = 0.36: no rudder that small
+    turns a ship that fast, and the yaw acceleration follows it."""
+    data = records[name].data
+    message = refusal(data.rename(columns={"delta": "delta [deg]", "delta_c": "delta_c [deg]"}),
+                      ship="kcs")
+    assert "rudder-size check" in message and "look like radians" in message
+    assert "'delta [rad]' or a bare 'delta'" in message
+    assert "deg while the ship turns at up to r' = r L/U0 = " in message
+    # the same numbers under bare headers are radians, and load
+    trajectory_from_frame(data, name, ship="kcs")
+    # and radians under a bare header read as such but a hundred times smaller: no hint
+    small = refusal(data.assign(delta=data["delta"] / 100.0, delta_c=data["delta_c"] / 100.0),
+                    ship="kcs")
+    assert "rudder-size check" in small and "check the unit of 'delta" in small
+
+
+def test_every_protocol_record_passes_the_rudder_size_check(records):
+    for record in records.values():
+        trajectory_from_frame(record.data, record.name, ship="kcs")
+
+
+def test_a_ship_turning_on_with_its_rudder_amidships_is_no_rudder_in_radians(records, seed):
+    """A pull-out: the steady turn of a hard-over turning circle with the rudder read as
+    amidships (noise of 0.05 deg) turns on at r' = 0.4 but does not follow the rudder."""
+    data = records["tc35_stbd"].data.iloc[400:].reset_index(drop=True)
+    noise = np.radians(0.05) * np.random.default_rng(seed).standard_normal(len(data))
+    trajectory_from_frame(data.assign(delta=noise, delta_c=noise), "pull-out", ship="kcs")
+
+
+def test_revolutions_in_rps_under_an_rpm_header_are_refused(records, kcs):
+    data = records["zz20_20"].data.assign(n=kcs.propeller.n_P)  # 1.93 rps
+    message = refusal(data.rename(columns={"n": "n [rpm]"}), ship="kcs")
+    assert "revolutions check" in message and "never exceeds 0.03209 rps" in message
+    assert "the values look like rps, so write the header as 'n [rps]'" in message
+    # a stopped propeller (n = 0 throughout) and the same numbers under a bare header load
+    trajectory_from_frame(data, "run", ship="kcs")
+    trajectory_from_frame(data.assign(n=0.0), "run", ship="kcs")
+
+
+def test_a_wind_direction_in_degrees_under_a_bare_header_is_refused(records):
+    data = records["zz20_20"].data.assign(wind_speed=5.0, wind_dir=270.0)
+    message = refusal(data)
+    assert "column 'wind_dir' reaches 270" in message
+    assert "the values look like degrees, so write the header as 'wind_dir [deg]'" in message
+    record = trajectory_from_frame(data.rename(columns={"wind_dir": "wind_dir [deg]"}), "run")
+    assert record["wind_dir"][0] == pytest.approx(np.radians(270.0))
+
+
+def test_the_track_tells_which_of_psi_and_r_has_the_wrong_unit(records):
+    """The heading check sees psi turn 57 times more or less than the integral of r; the
+    track, which (u, v) rotated by the right psi integrate to, tells which column is wrong."""
+    data = records["zz20_20"].data
+    psi_in_rad = refusal(data.rename(columns={"psi": "psi [deg]"}))
+    assert "heading check" in psi_in_rad
+    assert "'psi [deg]' looks like rad: write the header as 'psi [rad]'" in psi_in_rad
+    r_in_rad = refusal(data.rename(columns={"r": "r [deg/s]"}))
+    assert "heading check" in r_in_rad and "check the unit of 'r [deg/s]'" in r_in_rad
+    psi_in_degrees = refusal(data.assign(psi=np.degrees(data["psi"])))
+    assert "the heading looks like degrees, so write the header as 'psi [deg]'" in psi_in_degrees
+
+
+def test_positions_in_km_are_not_taken_for_milliseconds(records):
+    data = records["tc35_stbd"].data
+    message = refusal(data.assign(x=data["x"] / 1000.0, y=data["y"] / 1000.0))
+    assert "frame check" in message and "x and y look like km" in message
+    assert "'x [km]' and 'y [km]'" in message and "milliseconds" not in message
