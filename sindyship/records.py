@@ -21,10 +21,15 @@ import pandas as pd
 from .errors import SindyshipInputError
 from .trajectory import Trajectory
 
-__all__ = ["PARQUET_SUFFIXES", "expand_paths", "read_record", "time_window"]
+__all__ = ["MIN_RECORD_LENGTH", "PARQUET_SUFFIXES", "expand_paths", "read_record",
+           "time_window"]
 
 #: File suffixes read as Parquet; every other file is read as a measurement CSV.
 PARQUET_SUFFIXES = (".parquet", ".pq")
+#: The shortest record a verb takes, in ship-length times L/U0: a shorter one cannot show the
+#: ship's response to its rudder (a flight of it is a few samples from its measured start, and
+#: scores near zero whatever the model; a fit or a held-out error of it says nothing).
+MIN_RECORD_LENGTH = 1.0
 
 #: How to install what reading Parquet needs.
 PARQUET_INSTALL = 'python3 -m pip install "sindyship[parquet]"'
@@ -181,8 +186,9 @@ def read_record(path: str | os.PathLike, *, name: str | None = None, ship=None,
     Raises
     ------
     SindyshipInputError
-        For a file the reader refuses (one sentence naming the file), or a time range that
-        keeps fewer than two samples.
+        For a file the reader refuses (one sentence naming the file), a time range that
+        keeps fewer than two samples, or, with a ship, a record shorter than
+        :data:`MIN_RECORD_LENGTH` ship-length times after its cut.
     """
     from .measurements import PlausibilityNote, read_csv
     from .trials import flight_start, trim, underway_window
@@ -226,4 +232,22 @@ def read_record(path: str | os.PathLike, *, name: str | None = None, ship=None,
                 f"{path}: --time-range {start:g}:{stop:g} keeps fewer than two samples; "
                 "choose times within the record."
             )
+    if ship is not None:
+        _check_length(record, ship, path, cut)
     return record, notes, cut
+
+
+def _check_length(record: Trajectory, ship, path: Path, cut) -> None:
+    """Refuse a record shorter than :data:`MIN_RECORD_LENGTH` ship-length times."""
+    scale = ship.L / ship.U0
+    lasts = float(record.t[-1] - record.t[0]) if record.n_samples > 1 else 0.0
+    if lasts >= MIN_RECORD_LENGTH * scale:
+        return
+    after = "" if cut is None else (f" after the automatic cut to the part under way "
+                                    f"({cut[2]})")
+    hint = (" (or --time-range all, if the cut took too much)" if cut is not None else "")
+    raise SindyshipInputError(
+        f"{path}: the record lasts {lasts:.3g} s{after}, shorter than one ship-length time "
+        f"L/U0 = {scale:.3g} s of ship {ship.name}, too short to show the ship's response to "
+        f"its rudder: give a longer record{hint}."
+    )

@@ -92,3 +92,30 @@ def test_positions_in_km_are_not_taken_for_milliseconds(records):
     message = refusal(data.assign(x=data["x"] / 1000.0, y=data["y"] / 1000.0))
     assert "frame check" in message and "x and y look like km" in message
     assert "'x [km]' and 'y [km]'" in message and "milliseconds" not in message
+
+
+@pytest.mark.parametrize("verb", ["evaluate", "fit"])
+def test_a_record_shorter_than_one_ship_length_time_is_refused(records, tmp_path, verb):
+    """Twenty samples of a zig-zag (19 s of the KCS, L/U0 = 18.6 s) flew 0.0001 L off and
+    scored as a near-perfect flight; two samples flew for 0 s."""
+    from cli_in_process import run_sindyship
+
+    from sindyship.measurements import write_csv
+    from sindyship.model import paper_model
+    from sindyship.ships import load_ship
+    from sindyship.trajectory import Trajectory
+
+    paper_model(load_ship("kcs"), "LS").save(tmp_path / "model.json")
+    zigzag = records["zz20_20"]
+    path = tmp_path / "short.csv"
+    write_csv(Trajectory(zigzag.data.iloc[100:115].reset_index(drop=True), name="short"), path)
+    before = ["evaluate", tmp_path / "model.json"] if verb == "evaluate" else ["fit"]
+    after = [] if verb == "evaluate" else ["--out", tmp_path / "fitted.json"]
+    code, out, err = run_sindyship(*before, path, "--ship", "kcs", *after)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert f"{path}: the record lasts 14 s, shorter than one ship-length time L/U0 = " in err
+    assert "too short to show the ship's response to its rudder" in err
+    write_csv(Trajectory(zigzag.data.iloc[100:140].reset_index(drop=True), name="short"),
+              path)  # 39 s
+    code, _, err = run_sindyship(*before, path, "--ship", "kcs", *after)
+    assert code == 0, err
