@@ -82,9 +82,10 @@ fig.colorbar(image, ax=axes, shrink=0.8, label="correlation between term columns
 plt.show()
 
 # %% [markdown]
-# The largest correlations pair terms such as v and v^3, or v^2 r and r^2 v: on manoeuvres
-# where v and r grow together, the columns are nearly proportional, and least squares can
-# move weight between them. This is the parameter drift of the paper: different data or
+# Many pairs of columns correlate by more than 0.95 in magnitude, such as du^2 v and du r, or
+# v^2 r and r^2 v (with opposite signs: in a steady turn v and r have opposite signs): on
+# these manoeuvres the terms grow together, the columns are nearly proportional, and least
+# squares can move weight between them. This is the parameter drift of the paper: different data or
 # optimizers give very different coefficients with similar forces.
 
 # %% [markdown]

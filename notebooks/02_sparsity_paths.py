@@ -21,6 +21,7 @@
 import os
 
 import matplotlib.pyplot as plt
+from IPython.display import display
 
 from sindyship import plots
 from sindyship.identify import fit
@@ -49,8 +50,8 @@ print(stlsq)
 # %%
 for dof in ("X", "Y", "N"):
     names = [t.identifier(dof) for t in lasso.library.terms[dof]]
-    plots.sparsity_path(lasso.estimators_[dof], names, title=f"LASSO, {dof}' equation")
-plt.show()
+    display(plots.sparsity_path(lasso.estimators_[dof], names,
+                                title=f"LASSO, {dof}' equation"))
 
 # %% [markdown]
 # ## STLSQ: coefficients against the threshold
@@ -60,8 +61,8 @@ plt.show()
 # %%
 for dof in ("X", "Y", "N"):
     names = [t.identifier(dof) for t in stlsq.library.terms[dof]]
-    plots.sparsity_path(stlsq.estimators_[dof], names, title=f"STLSQ, {dof}' equation")
-plt.show()
+    display(plots.sparsity_path(stlsq.estimators_[dof], names,
+                                title=f"STLSQ, {dof}' equation"))
 
 # %% [markdown]
 # ## Pareto view: active terms against cross-validation error

@@ -59,7 +59,7 @@ if HAVE_DATA:
               f"rudder {rudder.min():.1f} .. {rudder.max():.1f} deg")
 
 # %% [markdown]
-# ## Turning circles beside the simulator's
+# ## The measured turning circles
 # Advance and tactical diameter from the rudder execute point, in ship lengths.
 
 # %%

@@ -125,3 +125,20 @@ def options_without_help() -> list[str]:
 def test_every_option_has_help_text():
     offenders = options_without_help()
     assert offenders == [], f"options without help text: {', '.join(offenders)}"
+
+
+def test_the_term_library_file_layout_loads_as_documented(tmp_path):
+    """docs/term-grammar.md's layout of a library file, its lists filled in, loads with every
+    key it shows (a key written after [terms] would belong to that table)."""
+    from sindyship.identify import resolve_library
+
+    page = (DOCS / "term-grammar.md").read_text()
+    block = page.split("## Term-library files", 1)[1].split("```toml\n", 1)[1].split("```")[0]
+    text = (block.replace(', ...]', ']').replace('[...]', '["v", "r", "delta"]')
+            .replace('"""..."""', '"""A library as the docs lay it out."""'))
+    path = tmp_path / "documented.toml"
+    path.write_text(text)
+    library = resolve_library(str(path))
+    assert library.name == "abkowitz" and library.speed == "design"
+    assert library.delays == {"delta": 4.0}
+    assert [t.text for t in library.terms["X"]] == ["1", "du", "du^2", "v^2"]

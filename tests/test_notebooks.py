@@ -21,6 +21,10 @@ import pytest
 
 NOTEBOOKS = sorted((Path(__file__).parents[1] / "notebooks").glob("*.py"))
 
+#: Figures a notebook displays (made without pyplot, they show only where displayed): the
+#: paths of three equations for each of two optimizers, and the forces of two models.
+DISPLAYED_FIGURES = {"02_sparsity_paths": 6, "07_coefficients_with_a_prior": 2}
+
 #: Run once in a new kernel: what :data:`FRESH_START` brings it back to.
 SNAPSHOT = """\
 import os, sys, types, warnings
@@ -127,6 +131,13 @@ def test_notebook_runs(path, kernel, tmp_path):
     errors = [o for cell in notebook.cells if cell.cell_type == "code"
               for o in cell.get("outputs", []) if o.get("output_type") == "error"]
     assert not errors
+    # a figure made without pyplot shows only where it is displayed, and never empty
+    shown = [o["data"].get("text/plain", "") for cell in notebook.cells
+             if cell.cell_type == "code" for o in cell.get("outputs", [])
+             if o.get("output_type") == "display_data"]
+    figures = [text for text in shown if text.startswith("<Figure")]
+    assert len(figures) >= DISPLAYED_FIGURES.get(path.stem, 0), shown
+    assert not [text for text in figures if "with 0 Axes" in text]
 
 
 def test_a_fresh_start_forgets_what_an_earlier_notebook_left(kernel, tmp_path):

@@ -51,7 +51,8 @@ def sparsity_path(estimator, terms, *, target: int = 0, title: str = "", axes=No
     For :class:`~sindyship.optimizers.LassoCV` the x axis is the penalty alpha, for
     :class:`~sindyship.optimizers.STLSQ` the threshold; the chosen value is marked.  The
     coefficients are shown standardised (times the column's standard deviation is not
-    available here, so relative to their largest magnitude per term) on a symmetric log scale.
+    available here, so relative to their largest magnitude per term), on a linear scale
+    against a logarithmic penalty or threshold.
 
     Parameters
     ----------
