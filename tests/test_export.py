@@ -472,7 +472,7 @@ def test_instantaneous_equations_are_what_the_model_computes(kcs):
     assert text.count("= (U/U0)^2 [") == 3 and "(Coriolis) + 0.0159 (U/U0)^2 v r" in text
     tex = equations_latex(model, precision=3)
     assert tex.count(r"\left(\frac{U}{U_0}\right)^{2} [") == 3
-    assert r"\frac{U}{U_0} &= \frac{|1 + \Delta u'|}{\sqrt{1 - v'^2}}" in tex
+    assert r"&\frac{U}{U_0} = \frac{|1 + \Delta u'|}{\sqrt{1 - v'^2}}" in tex
 
 
 def _parse_align(tex: str) -> list[sympy.Eq]:
@@ -487,8 +487,9 @@ def _parse_align(tex: str) -> list[sympy.Eq]:
 
     body = tex.split(r"\begin{align}")[1].split(r"\end{align}")[0]
     equations, current = [], ""
+    body = re.sub(r"\\underbrace\{(.*?)\}_\{\\text\{[^{}]*\}\}", r"\1", body)  # Coriolis
     for line in body.split(r"\\"):
-        line = line.replace(r"\nonumber", "").replace(r"\quad", "").replace("&", "")
+        line = line.replace(r"\nonumber", "").replace(r"\qquad", "").replace("&", "")
         line = re.sub(r"(\\dot\{[a-z]\})'", r"\1", line).strip()
         if not line:
             continue
@@ -536,11 +537,35 @@ def test_latex_equations_read_back_to_the_model(model, seed):
 
 def test_latex_numbers_have_the_requested_precision(model):
     tex = equations_latex(model, 4)
-    assert r"0.008853 \dot{u}' &= -0.002265 \Delta u' - 0.0005081 \Delta u'^{2}" in tex
+    assert ("&0.008853 \\dot{u}' = \\nonumber \\\\\n"
+            "&\\qquad -0.002265 \\Delta u' - 0.0005081 \\Delta u'^{2}") in tex
     assert r"- 3.071 \times 10^{-5} r'^{2} \Delta u'" in tex  # X'_rru, as in Table 7
-    assert r"&= 4.32 \times 10^{-6} - 0.0002212 \Delta u'" in tex  # Y'_0
-    assert r"- 0.008853 (1 + \Delta u') r'" in tex  # Coriolis, u' = 1 + du
-    assert tex.count(r"\nonumber") == sum(math.ceil(n / 4) - 1 for n in (17, 23, 24))
+    assert r"&\qquad 4.32 \times 10^{-6} - 0.0002212 \Delta u'" in tex  # Y'_0
+    assert (r"&\qquad \underbrace{- 0.008853 (1 + \Delta u') r'}_{\text{Coriolis}} \\"
+            in tex)  # Coriolis, u' = 1 + du, on a line of its own
+    assert r"}_{\text{Coriolis and Munk moment}}" in tex
+    lines = tex.splitlines()[1:-1]
+    numbered = [line for line in lines if not line.endswith(r"\nonumber \\")]
+    assert len(numbered) == 3 and all(r"\underbrace" in line for line in numbered)
+
+
+def test_latex_lines_fit_an_article_page(model):
+    """Every line of the equations holds at most LATEX_LINE_LENGTH characters of rendered
+    mathematics, which pdflatex fits in an article's text width for every model tried; the
+    first line of each equation is its left-hand side alone, whatever its width."""
+    from sindyship.export.text import LATEX_LINE_LENGTH, _rendered_length
+
+    assert _rendered_length(r"- 3.071 \times 10^{-5} r'^{2} \Delta u'") == 22
+    assert _rendered_length(r"\left(\frac{U}{U_0}\right)^{2} [ -0.1 v'") == 16
+    tex = equations_latex(model, 4)
+    lines = tex.splitlines()[1:-1]
+    bodies = [line.removesuffix(r" \\").removesuffix(r" \nonumber") for line in lines]
+    assert max(_rendered_length(body) for body in bodies) <= LATEX_LINE_LENGTH
+    assert sum(line.endswith(r"= \nonumber \\") for line in lines) == 3
+    short = equations_latex(model, 4, line_length=10).splitlines()[1:-1]
+    terms = sum(len(model.coefficients[dof]) - list(model.coefficients[dof].values()).count(0)
+                for dof in DOFS)
+    assert len(short) == 3 + terms + 3  # a term a line, and each side and brace its own
 
 
 def test_symbolic_latex_names_every_active_coefficient(model):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import textwrap
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
@@ -190,9 +191,23 @@ def equations_text(model: AbkowitzModel, precision: int = 4, *, width: int = 100
     return "\n".join(lines)
 
 
+#: Characters of rendered mathematics a LaTeX line of the equations holds (an estimate by
+#: :func:`_rendered_length`): lines of every model tried fit an article's 345 pt text width at
+#: 10 pt type (80 characters overran it by up to 15 pt).
+LATEX_LINE_LENGTH = 68
+
+
 def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool = True,
-                    terms_per_line: int = 4) -> str:
+                    line_length: int = LATEX_LINE_LENGTH) -> str:
     """The model's equations (paper eq. 14-15) as one LaTeX ``align`` environment.
+
+    Each equation starts with its left-hand side (the mass-matrix row times the
+    accelerations) on a line of its own; its hydrodynamic terms follow, indented, as many to a
+    line as fit ``line_length`` (lines that fit an article's text width), and its Coriolis
+    terms last, on a line of their own under a brace labelled "Coriolis" (in the yaw equation
+    "Coriolis and Munk moment": a fitted N'_v excludes the Munk moment -(X'_udot - Y'_vdot) u' v',
+    which eq. 14 moves to the right-hand side): a fitted ``v' r'`` and the Coriolis ``v' r'``
+    are two terms.  Only an equation's last line is numbered.
 
     Parameters
     ----------
@@ -201,8 +216,9 @@ def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool =
         Significant digits of every number (``1.234 \\times 10^{-5}`` form when small).
     numeric : bool
         Coefficients as numbers (default) or by name (``X'_{vv}``, as in Tables 7-9).
-    terms_per_line : int
-        Right-hand-side terms per printed line; continuation lines are ``\\nonumber``.
+    line_length : int
+        Most characters of rendered mathematics on a line (:data:`LATEX_LINE_LENGTH`; a term
+        longer than that has a line of its own).
 
     Returns
     -------
@@ -215,31 +231,58 @@ def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool =
     >>> from sindyship.model import paper_model
     >>> from sindyship.ships import load_ship
     >>> tex = equations_latex(paper_model(load_ship("kcs")), precision=3)
-    >>> print(tex.splitlines()[1].split(" - 0.000508")[0])
-    0.00885 \\dot{u}' &= -0.00227 \\Delta u'
+    >>> lines = tex.splitlines()
+    >>> print(lines[1])
+    &0.00885 \\dot{u}' = \\nonumber \\\\
+    >>> print(lines[2].split(" + 0.00246")[0])
+    &\\qquad -0.00227 \\Delta u' - 0.000508 \\Delta u'^{2}
     """
     precision = _check_precision(precision)
-    if terms_per_line < 1:
-        raise SindyshipInputError(f"terms_per_line must be at least 1, not {terms_per_line}.")
+    if line_length < 1:
+        raise SindyshipInputError(f"line_length must be at least 1, not {line_length}.")
     rows = [r"\begin{align}"]
-    for n, dof in enumerate(DOFS):
-        lhs, words, _ = _equation_words(model, dof, latex=True, numeric=numeric,
-                                        precision=precision)
-        chunks = [words[k:k + terms_per_line] for k in range(0, len(words), terms_per_line)]
-        last = n == len(DOFS) - 1
-        for k, chunk in enumerate(chunks):
-            start = f"{lhs} &= " if k == 0 else r"&\quad "
-            end = "" if (last and k == len(chunks) - 1) else (
-                r" \\" if k == len(chunks) - 1 else r" \nonumber \\")
-            rows.append(start + " ".join(chunk) + end)
+    for dof in DOFS:
+        lhs, words, n_coriolis = _equation_words(model, dof, latex=True, numeric=numeric,
+                                                 precision=precision)
+        hydrodynamic = words[:len(words) - n_coriolis]
+        lines = [f"&{lhs} ="]
+        for word in hydrodynamic:
+            last = lines[-1]
+            if len(lines) > 1 and (_rendered_length(last) + 1 + _rendered_length(word)
+                                   <= line_length):
+                lines[-1] = f"{last} {word}"
+            else:
+                lines.append(r"&\qquad " + word)
+        if n_coriolis:
+            coriolis = " ".join(words[len(words) - n_coriolis:])
+            label = "Coriolis and Munk moment" if dof == "N" and "v'" in coriolis else "Coriolis"
+            lines.append(r"&\qquad \underbrace{" + coriolis + r"}_{\text{" + label + "}}")
+        rows += [line + r" \nonumber \\" for line in lines[:-1]]
+        rows.append(lines[-1] + r" \\")
     if model.library.speed == "instantaneous":  # what the variables are over
-        rows[-1] += r" \\"
-        rows.append(r"\frac{U}{U_0} &= \frac{|1 + \Delta u'|}{\sqrt{1 - v'^2}}, \qquad "
-                    r"v' = \frac{v}{U}, \quad r' = \frac{r L}{U} \quad \text{(the "
-                    r"channels' speeds and rates over } U \text{ too; from } "
-                    f"{SPEED_FLOOR:g}" r"\,U_0 \text{ up)} \nonumber")
+        rows.append(r"&\frac{U}{U_0} = \frac{|1 + \Delta u'|}{\sqrt{1 - v'^2}}, \qquad "
+                    r"v' = \frac{v}{U}, \quad r' = \frac{r L}{U} \nonumber \\")
+        rows.append(r"&\qquad \text{(the channels' speeds and rates over } U \text{ too; "
+                    r"from } " f"{SPEED_FLOOR:g}" r"\,U_0 \text{ up)} \nonumber")
+    else:
+        rows[-1] = rows[-1].removesuffix(r" \\")
     rows.append(r"\end{align}")
     return "\n".join(rows)
+
+
+def _rendered_length(tex: str) -> int:
+    """About how many characters wide ``tex`` renders: commands count as one character
+    (``\\Delta``, ``\\times``, ``\\dot{u}``), a fraction of U over U_0 as three,
+    superscripts and subscripts as half, braces, spacing commands and a brace's label (set
+    under it) not at all."""
+    text = re.sub(r"_\{\\text\{[^{}]*\}\}", "", tex)  # a brace's label, set below it
+    text = text.replace(r"\left(\frac{U}{U_0}\right)", "(U/U)")
+    text = text.replace(r"\frac{U}{U_0}", "U/U")
+    scripts = sum(len(m) for m in re.findall(r"[\^_]\{([^{}]*)\}", text))
+    text = re.sub(r"[\^_]\{[^{}]*\}", "", text)
+    text = re.sub(r"\\(?:qquad|quad|nonumber|left|right)", "", text)
+    text = re.sub(r"\\[A-Za-z]+(?:\{[^{}]*\})?", "x", text)
+    return len(text.replace("{", "").replace("}", "")) + (scripts + 1) // 2
 
 
 def _latex_text(text: str) -> str:
@@ -264,10 +307,11 @@ def _table_number(value: float, precision: int) -> str:
 def coefficient_table_latex(model: AbkowitzModel, precision: int = 4, *,
                             reference: Mapping[str, Mapping[str, float]] | None = None,
                             label: str | None = None, reference_label: str = "Reference") -> str:
-    """The coefficients as a booktabs ``tabular`` in the style of paper Tables 7-9.
+    """The coefficients as booktabs ``tabular`` environments in the style of paper Tables 7-9:
+    one per equation (a library's sixty-odd terms in one table run off a page).
 
-    Values are Prime I times 1e5, one block per degree of freedom, every library term
-    listed (zero coefficients as 0).
+    Values are Prime I times 1e5, every library term listed (zero coefficients as 0); the
+    tables are separated by ``\\medskip``.
 
     Parameters
     ----------
@@ -288,6 +332,8 @@ def coefficient_table_latex(model: AbkowitzModel, precision: int = 4, *,
     >>> model = paper_model(load_ship("kcs"))
     >>> table = coefficient_table_latex(model, reference=model.coefficients,
     ...                                 reference_label="Paper LS")
+    >>> print(table.splitlines()[2])
+    \\multicolumn{3}{l}{Surge force X', Prime I, $\\times 10^{-5}$} \\\\
     >>> print(table.splitlines()[3])
     Coefficient & paper-ls & Paper LS \\\\
     >>> [line for line in table.splitlines() if line.startswith("$Y'_{vvr}")]
@@ -298,14 +344,18 @@ def coefficient_table_latex(model: AbkowitzModel, precision: int = 4, *,
     columns = ["Coefficient", heading]
     if reference is not None:
         columns.append(_latex_text(reference_label))
-    rows = [
-        r"\begin{tabular}{l" + "r" * (len(columns) - 1) + "}",
-        r"\toprule",
-        r"\multicolumn{" + str(len(columns)) + r"}{l}{Prime I, $\times 10^{-5}$} \\",
-        " & ".join(columns) + r" \\",
-    ]
+    rows = []
     for dof in DOFS:
-        rows.append(r"\midrule")
+        if rows:
+            rows += ["", r"\medskip", ""]
+        rows += [
+            r"\begin{tabular}{l" + "r" * (len(columns) - 1) + "}",
+            r"\toprule",
+            r"\multicolumn{" + str(len(columns)) + r"}{l}{" + _EQUATION_NAMES[dof]
+            + r", Prime I, $\times 10^{-5}$} \\",
+            " & ".join(columns) + r" \\",
+            r"\midrule",
+        ]
         for term in model.library.terms[dof]:
             cells = [f"${term.latex(dof)}$",
                      _table_number(model.coefficients[dof][term.text] * 1e5, precision)]
@@ -314,8 +364,12 @@ def coefficient_table_latex(model: AbkowitzModel, precision: int = 4, *,
                 cells.append(_table_number(None if ref is None else float(ref) * 1e5,
                                            precision))
             rows.append(" & ".join(cells) + r" \\")
-    rows += [r"\bottomrule", r"\end{tabular}"]
+        rows += [r"\bottomrule", r"\end{tabular}"]
     return "\n".join(rows)
+
+
+#: The equations by name, for the tables' headings.
+_EQUATION_NAMES = {"X": "Surge force X'", "Y": "Sway force Y'", "N": "Yaw moment N'"}
 
 
 
@@ -328,12 +382,14 @@ def latex_document_part(model: AbkowitzModel, precision: int = 4) -> str:
     >>> from sindyship.ships import load_ship
     >>> part = latex_document_part(paper_model(load_ship("kcs")))
     >>> part.count("{align}"), part.count("{tabular}"), part.count("toprule")
-    (2, 2, 1)
+    (2, 6, 3)
     """
     return "\n".join([
         r"% Abkowitz model exported by sindyship " + __version__ + " (needs amsmath, booktabs)",
         "% " + _latex_text(_header(model)),
+        "{\\allowdisplaybreaks  % the equations may break across pages",
         equations_latex(model, precision),
+        "}",
         "",
         coefficient_table_latex(model, precision),
         "",
