@@ -450,6 +450,10 @@ def test_kvlcc2_marin_zigzags_diagnosed_and_turning_circles_flown(kvlcc2_marin):
         s.effect.name for s in result.ranking
     }
     assert result.ranking[0].explained < 0.5  # no single strong missing effect in real data
+    # the zig-zags hold 0.69 to 1.03 U0; the turns slow to a third of it, and the report says so
+    low, _ = result.speed.held_out
+    assert low < 0.4 < 0.65 < result.speed.low and result.speed.held_out_outside
+    assert "outside the range this was judged on" in " ".join(result.report().split())
     print(result.report())
     if top is not None:
         print(top.confirmation.report())
@@ -732,3 +736,23 @@ def test_a_library_missing_an_effect_that_halves_the_error_is_never_complete(kcs
     before = mean(fit(train, kcs, effects=["environment"], optimizer="ls"))
     after = mean(fit(train, kcs, effects=["environment", "asymmetry"], optimizer="ls"))
     assert after < 0.5 * before
+
+
+def test_the_speed_form_advice_says_when_the_held_out_records_leave_its_speed_range():
+    """The choice is made on the training records' speeds; held-out turns that slow to a third
+    of U0 are outside it, and the report says so instead of only 'keep it'."""
+    from sindyship.diagnose.speed import SpeedForms
+
+    kept = SpeedForms("design", 0.69, 1.03, {"design": 1.0, "instantaneous": 0.99}, "design")
+    assert kept.text().endswith("manoeuvres left out: keep it.")
+    assert kept.to_json()["held_out_range"] is None
+    inside = replace(kept, held_out=(0.70, 1.05))
+    assert inside.text() == kept.text() and not inside.held_out_outside
+    outside = replace(kept, held_out=(0.35, 1.01))
+    assert outside.held_out_outside and outside.to_json()["held_out_range"] == [0.35, 1.01]
+    assert ("keep it. But the held-out records span U/U0 0.35 to 1.01, outside the range this "
+            "was judged on: the design form reaches speeds its records never saw through its "
+            "du terms") in outside.text()
+    switch = replace(outside, recommended="instantaneous")
+    assert switch.text().endswith("outside the range this was judged on: judge the fit on the "
+                                  "held-out records.")

@@ -524,7 +524,7 @@ def diagnose(
         },
         seconds=time.perf_counter() - start,
     )
-    result.speed = speed_forms(fitted, ship, base, settings)
+    result.speed = speed_forms(fitted, ship, base, settings, test)
     result.sides = {record.name: rudder_side(record) for record in records}
     if search_beyond:
         _search_beyond(result, fitted, settings, n_jobs)

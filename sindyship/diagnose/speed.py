@@ -15,11 +15,14 @@ from ..optimizers import GroupedProblem
 from ..ships import Ship
 from ..trajectory import Trajectory
 
-__all__ = ["SPEED_FORM_GAIN", "SpeedForms", "speed_forms"]
+__all__ = ["RANGE_MARGIN", "SPEED_FORM_GAIN", "SpeedForms", "speed_forms"]
 
 #: The other speed form is recommended when it leaves this much less of the force error
 #: (leave-one-manoeuvre-out, summed over X, Y and N).
 SPEED_FORM_GAIN = 0.9
+#: How far (as a share of U0) the held-out records' speeds may leave the training records'
+#: range before the report says the choice was made on other speeds.
+RANGE_MARGIN = 0.05
 
 
 @dataclass(frozen=True)
@@ -38,6 +41,10 @@ class SpeedForms:
     recommended : str
         The form to fit with: the other one when it leaves at most :data:`SPEED_FORM_GAIN`
         times the error, else the library's.
+    held_out : (float, float) or None
+        The least and largest speed U/U0 of the held-out records (None without them): the
+        choice is made on the training records, and the report says when the held-out ones
+        leave their range by more than :data:`RANGE_MARGIN`.
     """
 
     form: str
@@ -45,10 +52,19 @@ class SpeedForms:
     high: float
     errors: dict
     recommended: str
+    held_out: tuple[float, float] | None = None
 
     def to_json(self) -> dict:
         return {"form": self.form, "range": [self.low, self.high], "errors": dict(self.errors),
-                "recommended": self.recommended}
+                "recommended": self.recommended,
+                "held_out_range": None if self.held_out is None else list(self.held_out)}
+
+    @property
+    def held_out_outside(self) -> bool:
+        """Whether the held-out records reach speeds outside the training records' range (by
+        more than :data:`RANGE_MARGIN` of U0)."""
+        return self.held_out is not None and (self.held_out[0] < self.low - RANGE_MARGIN
+                                              or self.held_out[1] > self.high + RANGE_MARGIN)
 
     def text(self) -> str:
         """One sentence for the report."""
@@ -56,12 +72,23 @@ class SpeedForms:
         ratio = self.errors[other] / max(self.errors[self.form], 1e-300)
         span = f"the records span U/U0 {self.low:.2f} to {self.high:.2f}"
         if self.recommended == self.form:
-            return (f"Speed form: {self.form} (the forces over {_speed(self.form)}); {span}, "
+            text = (f"Speed form: {self.form} (the forces over {_speed(self.form)}); {span}, "
                     f"and the {other} form leaves {ratio:.2f} times its force error on "
                     "manoeuvres left out: keep it.")
-        return (f"Speed form: {self.form}; {span}, and the {other} form (forces over "
-                f"{_speed(other)}) leaves {ratio:.2f} times its force error on manoeuvres left "
-                f"out: fit with --speed {other}.")
+        else:
+            text = (f"Speed form: {self.form}; {span}, and the {other} form (forces over "
+                    f"{_speed(other)}) leaves {ratio:.2f} times its force error on manoeuvres "
+                    f"left out: fit with --speed {other}.")
+        if self.held_out_outside:
+            low, high = self.held_out
+            text += (f" But the held-out records span U/U0 {low:.2f} to {high:.2f}, outside "
+                     "the range this was judged on: " + (
+                         "the design form reaches speeds its records never saw through its "
+                         "du terms, the instantaneous form scales the forces with the speed "
+                         "(fit both and judge them on the held-out records)."
+                         if self.recommended == "design" else
+                         "judge the fit on the held-out records."))
+        return text
 
 
 def _speed(form: str) -> str:
@@ -69,7 +96,7 @@ def _speed(form: str) -> str:
 
 
 def speed_forms(records: Sequence[Trajectory], ship: Ship, library: TermLibrary,
-                settings: Mapping) -> SpeedForms:
+                settings: Mapping, test: Sequence[Trajectory] = ()) -> SpeedForms:
     """The records' speed range and the force error of both speed forms of ``library``.
 
     Parameters
@@ -79,6 +106,8 @@ def speed_forms(records: Sequence[Trajectory], ship: Ship, library: TermLibrary,
     ship, library
     settings : mapping
         ``rudder_signal``, ``derivative`` and ``window`` of :func:`sindyship.identify.fit`.
+    test : sequence of Trajectory
+        The held-out records, whose speed range the report compares (never the choice).
     """
     speeds = np.concatenate([np.hypot(r["u"], r["v"]) for r in records]) / ship.U0
     errors = {}
@@ -95,5 +124,9 @@ def speed_forms(records: Sequence[Trajectory], ship: Ship, library: TermLibrary,
     other = "instantaneous" if library.speed == "design" else "design"
     recommended = other if errors[other] <= SPEED_FORM_GAIN * errors[library.speed] \
         else library.speed
+    held_out = None
+    if test:
+        tested = np.concatenate([np.hypot(r["u"], r["v"]) for r in test]) / ship.U0
+        held_out = (float(np.min(tested)), float(np.max(tested)))
     return SpeedForms(library.speed, float(np.min(speeds)), float(np.max(speeds)), errors,
-                      recommended)
+                      recommended, held_out)
