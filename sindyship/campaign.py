@@ -16,13 +16,14 @@ Examples
 >>> plan = campaign_trials(seed=1)
 >>> [t.name for t in plan["test"]]
 ['zz15_15', 'tc25_stbd', 'tc25_port']
->>> (run,) = fly_trials(load_ship("kvlcc2"), plan["test"][:1], duration_scale=0.4)
+>>> (run,) = fly_trials(load_ship("kvlcc2"), plan["test"][1:2], duration_scale=0.4)
 >>> float(run["u"][0]) < 0.2 * load_ship("kvlcc2").U0, round(run.meta["execute_s"])
-(True, 55)
+(True, 63)
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -124,6 +125,12 @@ def fly_trials(ship, trials: Sequence[CampaignTrial], *, dt: float = 0.2, noise:
     -------
     list of Trajectory
         With ``meta["execute_s"]``, the time of the rudder execute.
+
+    Warns
+    -----
+    UserWarning
+        For a zig-zag whose commanded rudder reversed fewer than :data:`MIN_REVERSALS` times
+        after its execute: the wind held the ship off its check angles (the record is kept).
     """
     out = []
     for trial in trials:
@@ -140,4 +147,27 @@ def fly_trials(ship, trials: Sequence[CampaignTrial], *, dt: float = 0.2, noise:
         out.append(Trajectory(record.data, name=trial.name,
                               meta={**record.meta, "execute_s": approach,
                                     "trial": dict(trial.__dict__)}))
+        if trial.kind == "zigzag":
+            _warn_unanswered(out[-1], trial, approach)
     return out
+
+
+#: Fewest reversals of a zig-zag's commanded rudder after its execute: fewer, and the ship did
+#: not reach its check angles (the wind held its heading), so the record is no zig-zag.
+MIN_REVERSALS = 2
+
+
+def _warn_unanswered(record: Trajectory, trial: CampaignTrial, execute: float) -> None:
+    """Warn when a zig-zag's helm was not answered: its commanded rudder reversed fewer than
+    :data:`MIN_REVERSALS` times after the execute (in a wind of 5 m/s, seven times the speed of
+    the 7 m KVLCC2, a 15/15 zig-zag can hold its first rudder to the end)."""
+    after = np.degrees(record["delta_c"][record.t >= execute])
+    sides = np.sign(after[np.abs(after) > 0.5 * trial.check])
+    reversals = int(np.count_nonzero(np.diff(sides)))
+    if reversals < MIN_REVERSALS:
+        warnings.warn(
+            f"{trial.name}: the commanded rudder reversed {reversals} time"
+            f"{'' if reversals == 1 else 's'} in the {trial.manoeuvre_s:g} s after the execute: "
+            f"in a wind of {trial.wind:.2g} m/s from {trial.wind_dir:.0f} deg the ship did not "
+            "reach its check angles, so the record is no zig-zag; fly another seed of "
+            "campaign_trials, or this trial with less wind.", stacklevel=3)

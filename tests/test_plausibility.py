@@ -623,6 +623,22 @@ def test_a_helmsmans_held_wheel_before_the_execute_is_no_first_leg():
     assert abs(zigzag.start_time - recognise_zigzag(record).start_time) < 0.5
 
 
+def test_a_campaign_zigzag_whose_helm_the_wind_overrides_is_warned():
+    """Seed 3's held-out 15/15 zig-zag, in a 5 m/s wind seven times the model's speed, holds
+    its first rudder to the end: the campaign says so instead of handing over a turn named
+    zz15_15; seed 0's, which the benchmarks fly, reverses its rudder nine times."""
+    from sindyship.campaign import campaign_trials, fly_trials
+
+    kvlcc2 = load_ship("kvlcc2")
+    stuck = next(t for t in campaign_trials(3)["test"] if t.kind == "zigzag")
+    with pytest.warns(UserWarning, match=r"zz15_15: the commanded rudder reversed [01] time"):
+        fly_trials(kvlcc2, [stuck])
+    answered = next(t for t in campaign_trials(0)["test"] if t.kind == "zigzag")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fly_trials(kvlcc2, [answered])
+
+
 def test_a_zigzag_is_flown_as_its_whole_record_recognised_it(kcs):
     """The flight start recognises the zig-zag on the whole record and the flight flies that
     recognition (it recognised the part from the execute again, which could differ)."""
