@@ -309,6 +309,13 @@ def test_the_generated_simulator_flies_recorded_channels(kcs, tmp_path):
                   ) / kcs.L < 1e-10
     with pytest.raises(ValueError, match="channel 'n'"):
         sim.simulate(record.t, 0.0, None, {})
+    with pytest.raises(ValueError, match=r"^the model's library uses no channel 'rpm' \(it "
+                       r"uses: n\); check the name"):
+        sim.simulate(record.t, 0.0, None, {"n": n, "rpm": n})
+    with pytest.raises(ValueError, match=r"^channel 'n' has shape \(5,\); give one value per "
+                       r"output time"):
+        sim.simulate(record.t, 0.0, None, {"n": n[:5]})
+    assert sim.simulate(record.t, 0.0, None, {"n": 1.8}).diverged_at is None  # a constant
     # without channels the exported default is taken, and one never given is asked for (it
     # had flown NaN, a flight that looked diverged at its first step)
     for call in (lambda: sim.simulate(record.t, 0.0), lambda: sim.rhs(0.0, record.state()[:, 0],
@@ -384,8 +391,9 @@ def test_an_instantaneous_speed_model_flies_as_sindyship_flies_it(kcs, tmp_path,
 
 
 def test_the_generated_simulator_refuses_a_wrong_state_or_an_angle_in_degrees(kcs, tmp_path):
-    """A six-value state raised numpy's "cannot reshape", and 15 "rad" (degrees given by
-    mistake) flew hard over: both are one clear sentence now."""
+    """A six-value state raised numpy's "cannot reshape", 15 "rad" (degrees given by
+    mistake) flew hard over, and a zig-zag took a first side of 0, a rudder beyond its limit
+    (the servo clipped it) and radians: each is one clear sentence now."""
     sim = load_module(generate_python(paper_model(kcs)), tmp_path / "sim_checks.py")
     t = np.arange(0.0, 10.0)
     with pytest.raises(ValueError, match=r"^state0 has shape \(6,\); give 7 finite values"):
@@ -396,6 +404,13 @@ def test_the_generated_simulator_refuses_a_wrong_state_or_an_angle_in_degrees(kc
                        r"give the rudder angle in radians"):
         sim.simulate(t, 15.0)
     assert sim.simulate(t, np.radians(15.0)).diverged_at is None
+    for args, kwargs, message in (((t, 10, 10), {"first_sign": 0}, r"^first_sign is 0; give"),
+                                  ((t, 40, 10), {}, r"^rudder_deg is 40; give 1 to 35 degrees"),
+                                  ((t, 0.2, 0.2), {}, r"^rudder_deg is 0.2; give 1 to 35 "
+                                   r"degrees \(zigzag takes degrees, simulate radians"),
+                                  ((t, 10, 0), {}, r"^check_deg is 0; give 1 to 180 degrees")):
+        with pytest.raises(ValueError, match=message):
+            sim.zigzag(*args, **kwargs)
 
 
 @pytest.mark.parametrize(("options", "message"), [

@@ -37,6 +37,11 @@ def _scaled(channels):
     missing = sorted(set(CHANNEL_SCALING) - set(channels))
     if missing:
         raise ValueError(f"give the channel {missing[0]!r} (the model's library uses it)")
+    unknown = sorted(set(channels) - set(CHANNEL_SCALING))
+    if unknown:
+        used = ", ".join(sorted(CHANNEL_SCALING)) or "none"
+        raise ValueError(f"the model's library uses no channel {unknown[0]!r} (it uses: "
+                         f"{used}); check the name")
     return {name: np.asarray(channels[name], dtype=float) * factor + offset
             for name, (factor, offset) in CHANNEL_SCALING.items()}
 
@@ -109,6 +114,10 @@ def _fly(command, t, state0, step, check_divergence, channels):
         raise ValueError(f"state0 has shape {y.shape}; give {N_STATE} finite values "
                          "[u, v, r, x, y, psi, delta] (SI)")
     h_max = DEFAULT_STEP if step is None else float(step)
+    for name, values in (channels or {}).items():
+        if np.ndim(values) and np.shape(values) != t.shape:
+            raise ValueError(f"channel {name!r} has shape {np.shape(values)}; give one value "
+                             f"per output time {t.shape}, or a constant")
     scaled = _scaled(channels)
     series = None if scaled is None else ChannelSeries(t, {
         name: np.broadcast_to(values, t.shape)[None, :] for name, values in scaled.items()})
@@ -182,6 +191,12 @@ def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, channels=None, *
         +1: first rudder to starboard; -1: to port.
     channels : mapping of str to array_like of shape (N,), optional
         As for ``simulate``.
+
+    Raises
+    ------
+    ValueError
+        For a rudder angle outside 1 deg to the rudder limit ``DELTA_MAX``, a check angle
+        outside 1 to 180 deg, or a first side other than +1 and -1.
     step, check_divergence
         As for ``simulate``.
 
@@ -189,6 +204,14 @@ def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, channels=None, *
     -------
     Flight
     \"\"\"
+    if first_sign not in (1, -1):
+        raise ValueError(f"first_sign is {first_sign!r}; give +1 (first rudder to starboard) "
+                         "or -1 (to port)")
+    limit = math.degrees(DELTA_MAX)
+    for name, angle, most in (("rudder_deg", rudder_deg, limit), ("check_deg", check_deg, 180.0)):
+        if not (math.isfinite(angle) and 1.0 <= angle <= most):
+            raise ValueError(f"{name} is {angle!r}; give 1 to {most:g} degrees (zigzag takes "
+                             "degrees, simulate radians; the rudder stops at DELTA_MAX)")
     command = ZigZagCommand(math.radians(rudder_deg), math.radians(check_deg), first_sign)
     return _fly(command, t, state0, step, check_divergence, channels)
 '''
