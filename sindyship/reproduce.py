@@ -10,6 +10,7 @@ coefficient tables, the saved models, trajectory figures in the style of the pap
 from __future__ import annotations
 
 import json
+import re
 import sys
 import time
 from pathlib import Path
@@ -150,7 +151,8 @@ def _write_outputs(out: Path, output: dict, models: dict, flights: dict, test, s
     for method, model in models.items():
         model.save(out / f"model-{method}.json")
         write_text_atomic(out / f"equations-{method}.tex", latex_document_part(model))
-        write_text_atomic(out / f"simulator-{method}.py", generate_python(
+        module = "simulator_" + re.sub(r"\W", "_", method)  # a name import takes
+        write_text_atomic(out / f"{module}.py", generate_python(
             model, source_note="sindyship reproduce: the paper's KCS training set"))
     labels = {c: c if c in ("equation", "term", "paper_name") else f"{c} [x 1e-5, Prime I]"
               for c in table.columns}

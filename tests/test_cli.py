@@ -389,6 +389,17 @@ def test_reproduce_json_contract(tmp_path):
     assert (tmp_path / "rep" / f"model-prior+{first_added}+refined.json").exists()
     assert (tmp_path / "rep" / "results.json").exists()
     assert (tmp_path / "rep" / "trajectory-zz10_10.png").exists()
+    # every generated simulator has a name import takes (the refined row's had '+' in it)
+    import importlib.util
+
+    simulators = sorted((tmp_path / "rep").glob("simulator*.py"))
+    assert len(simulators) == len(doc["results"])
+    name = f"simulator_prior_{first_added}_refined"
+    assert all(path.stem.isidentifier() for path in simulators)
+    spec = importlib.util.spec_from_file_location(name, tmp_path / "rep" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.zigzag(np.arange(0.0, 60.0), 10, 10).diverged_at is None
 
 
 def test_fit_with_smoothing_records_the_setting(records, tmp_path):

@@ -35,9 +35,10 @@ TRAINING_FLIGHTS_SHOWN = 12
 
 def add_parser(sub) -> None:
     p = sub.add_parser("fit", help=SUMMARY,
-                       description="Identify an Abkowitz model (paper eq. 14-17) from "
-                       "measurement CSVs (or Parquet files with the same columns; quoted glob "
-                       "patterns such as 'fleet/*.parquet' name many) and save it as JSON.")
+                       description="Identify an Abkowitz model (paper eq. 14-15, by the "
+                       "regression of eq. 16-18) from measurement CSVs (or Parquet files with "
+                       "the same columns; quoted glob patterns such as 'fleet/*.parquet' name "
+                       "many) and save it as JSON.")
     add_training_options(p, n_jobs_default=None, recommended=True)
     add_stream_options(p)
     p.add_argument("--seed", type=SEED, default=0,
