@@ -63,3 +63,16 @@ def test_kvlcc2_turns_beside_marin_measurements():
         for key in ("advance_L", "tactical_diameter_L"):
             assert sim[side][key] == pytest.approx(marin[side][key], rel=0.15), (side, key)
     assert marin["tc35_port"]["tactical_diameter_L"] < marin["tc35_stbd"]["tactical_diameter_L"]
+
+
+def test_at_its_published_revolutions_the_kvlcc2_speeds_up_and_the_kcs_holds_u0():
+    """As docs/command-line.md (simulate) says: the KVLCC2's 17.95 rps give 2.6 times its
+    resistance at U0, and its straight run settles at 1.51 U0; the KCS holds U0."""
+    from sindyship.mmg import force_components
+
+    kvlcc2, kcs = load_ship("kvlcc2"), load_ship("kcs")
+    parts = force_components(kvlcc2, 1.0, 0.0, 0.0, 0.0)
+    assert float(parts["propeller"][0]) / -float(parts["hull"][0]) == pytest.approx(2.65, abs=0.05)
+    for ship, settles in ((kvlcc2, 1.51), (kcs, 1.0)):
+        (run,) = fly(MMGModel(ship), [Manoeuvre("straight", duration=3200)])
+        assert run["u"][-1] / ship.U0 == pytest.approx(settles, abs=0.01)
