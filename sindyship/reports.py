@@ -459,6 +459,9 @@ def _flown_as_text(err: dict) -> str:
                "zig-zag")
     if how and err.get("start_s") is not None:
         how += f" from t = {err['start_s']:.6g} s"
+    reason = err.get("start_reason") or ""
+    if kind in ("replay-commanded", "replay-actual") and "(as a zig-zag: " in reason:
+        how += "; " + reason.split(": flown from")[0]  # why a zig-zag-like record is none
     return how
 
 

@@ -573,5 +573,15 @@ def flight_start(record: Trajectory) -> FlightStart:
     if turn is not None:
         return FlightStart(turn.start_time, "turn", f"a turn with {turn.rudder_deg:g} deg "
                            f"rudder, flown from its execute at t = {turn.start_time:.6g} s")
-    return FlightStart(float(t[0]), "record", "no zig-zag or turn recognised: flown from the "
-                       f"first row, t = {t[0]:.6g} s")
+    rudder = np.degrees(record["delta_c"] if record.has("delta_c") else record.rudder)
+    sides = np.sign(rudder[np.abs(rudder) >= 1.0])
+    reversals = int(np.count_nonzero(np.diff(sides)))
+    like = (f" (as a zig-zag: {explain_zigzag(record)[1]})"
+            if reversals >= MIN_REVERSALS_EXPLAINED else "")
+    return FlightStart(float(t[0]), "record", f"no zig-zag or turn recognised{like}: flown "
+                       f"from the first row, t = {t[0]:.6g} s")
+
+
+#: Reversals of the rudder (across 1 deg either side) from which a record the recognition
+#: refuses looks like a zig-zag, and its flight start says why it is none.
+MIN_REVERSALS_EXPLAINED = 2

@@ -639,6 +639,32 @@ def test_a_campaign_zigzag_whose_helm_the_wind_overrides_is_warned():
         fly_trials(kvlcc2, [answered])
 
 
+def test_a_zigzag_like_record_that_is_no_zigzag_says_why(protocol_runs):
+    """Rows missing across a reversal, resampled: the heading changes at the reversals no
+    longer share a check angle, the record is replayed open loop, and the flight start and
+    the evaluation report say why (they had said only that nothing was recognised)."""
+    from sindyship.reports import evaluation_report
+
+    zigzag = next(r for r in protocol_runs["train"] if r.name == "zz20_20")
+    reversal = int(np.flatnonzero(np.diff(np.sign(zigzag["delta_c"])) != 0)[2])
+    gap = zigzag.data.drop(index=range(reversal - 3, reversal + 4))
+    with pytest.warns(PlausibilityNote, match="no sample between"):
+        record = trajectory_from_frame(gap, "zz_gap", resample=1.0)
+    start = flight_start(record)
+    assert start.kind == "record"
+    assert start.reason.startswith("no zig-zag or turn recognised (as a zig-zag: the heading "
+                                   "change at the 27 rudder reversals spreads over ")
+    assert start.reason.endswith("no common check angle): flown from the first row, t = 0 s")
+    line = evaluation_report({"zz_gap": {
+        "mean_distance_L": 0.1, "max_distance_L": 0.4, "diverged_at_s": None, "completed": True,
+        "flown_s": 600.0, "flown_as": "replay-commanded", "start_s": 0.0,
+        "start_reason": start.reason}})
+    assert "from t = 0 s; no zig-zag or turn recognised (as a zig-zag: the heading" in line
+    # a turn, whose rudder never reverses, is not explained as a zig-zag
+    turn = next(r for r in protocol_runs["train"] if r.name == "tc35_stbd")
+    assert "as a zig-zag" not in flight_start(turn.with_name("t")).reason
+
+
 def test_a_zigzag_is_flown_as_its_whole_record_recognised_it(kcs):
     """The flight start recognises the zig-zag on the whole record and the flight flies that
     recognition (it recognised the part from the execute again, which could differ)."""
