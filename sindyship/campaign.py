@@ -148,7 +148,7 @@ def fly_trials(ship, trials: Sequence[CampaignTrial], *, dt: float = 0.2, noise:
                               meta={**record.meta, "execute_s": approach,
                                     "trial": dict(trial.__dict__)}))
         if trial.kind == "zigzag":
-            _warn_unanswered(out[-1], trial, approach)
+            _warn_unanswered(out[-1], trial, approach, duration - approach)
     return out
 
 
@@ -157,7 +157,8 @@ def fly_trials(ship, trials: Sequence[CampaignTrial], *, dt: float = 0.2, noise:
 MIN_REVERSALS = 2
 
 
-def _warn_unanswered(record: Trajectory, trial: CampaignTrial, execute: float) -> None:
+def _warn_unanswered(record: Trajectory, trial: CampaignTrial, execute: float,
+                     flown: float) -> None:
     """Warn when a zig-zag's helm was not answered: its commanded rudder reversed fewer than
     :data:`MIN_REVERSALS` times after the execute (in a wind of 5 m/s, seven times the speed of
     the 7 m KVLCC2, a 15/15 zig-zag can hold its first rudder to the end)."""
@@ -165,9 +166,12 @@ def _warn_unanswered(record: Trajectory, trial: CampaignTrial, execute: float) -
     sides = np.sign(after[np.abs(after) > 0.5 * trial.check])
     reversals = int(np.count_nonzero(np.diff(sides)))
     if reversals < MIN_REVERSALS:
+        shortened = flown < trial.manoeuvre_s - 1e-9
+        why = (f"in the {flown:.3g} s it was shortened to (duration_scale), or against a wind "
+               f"of {trial.wind:.2g} m/s" if shortened else
+               f"against a wind of {trial.wind:.2g} m/s from {trial.wind_dir:.0f} deg")
         warnings.warn(
             f"{trial.name}: the commanded rudder reversed {reversals} time"
-            f"{'' if reversals == 1 else 's'} in the {trial.manoeuvre_s:g} s after the execute: "
-            f"in a wind of {trial.wind:.2g} m/s from {trial.wind_dir:.0f} deg the ship did not "
-            "reach its check angles, so the record is no zig-zag; fly another seed of "
-            "campaign_trials, or this trial with less wind.", stacklevel=3)
+            f"{'' if reversals == 1 else 's'} in the {flown:.3g} s after the execute: the ship "
+            f"did not reach its check angles ({why}), so the record is no zig-zag; fly it "
+            "longer, another seed of campaign_trials, or with less wind.", stacklevel=3)

@@ -207,18 +207,29 @@ def _check_rudder_sign(captive: pd.DataFrame, ship: Ship) -> None:
     angle = captive["delta"].to_numpy(float)[rudder]
     if angle.size < 3 or np.std(angle) == 0.0:
         return
+    wrong = {}
     for dof, sign in (("Y", -1.0), ("N", 1.0)):
         measured = captive[dof].to_numpy(float)[rudder]
         if np.std(measured) == 0.0:
             continue
         correlation = float(np.corrcoef(measured, angle)[0, 1])
         if sign * correlation < 0.0:
-            raise SindyshipInputError(
-                f"the measured {dof} of the rudder tests correlates {correlation:+.2f} with "
-                "the rudder angle, where a rudder aft gives Y negative and N positive for a "
-                "positive angle in sindyship's convention (delta positive turns the bow to "
-                "starboard); flip the column or the angle's sign."
-            )
+            wrong[dof] = correlation
+    if not wrong:
+        return
+    convention = ("a rudder aft gives Y negative and N positive for a positive angle in "
+                  "sindyship's convention (delta positive turns the bow to starboard)")
+    if len(wrong) == 2:  # both forces against the angle: the angle's sign is the odd one
+        raise SindyshipInputError(
+            f"the measured Y and N of the rudder tests correlate {wrong['Y']:+.2f} and "
+            f"{wrong['N']:+.2f} with the rudder angle, where {convention}: negate the "
+            "column delta."
+        )
+    ((dof, correlation),) = wrong.items()
+    raise SindyshipInputError(
+        f"the measured {dof} of the rudder tests correlates {correlation:+.2f} with the rudder "
+        f"angle, where {convention}: negate the column {dof}, or check its axes."
+    )
 
 
 def _check_surge_scale(captive: pd.DataFrame) -> None:

@@ -243,8 +243,7 @@ def _check_length(record: Trajectory, ship, path: Path, cut) -> None:
     lasts = float(record.t[-1] - record.t[0]) if record.n_samples > 1 else 0.0
     if lasts >= MIN_RECORD_LENGTH * scale:
         return
-    after = "" if cut is None else (f" after the automatic cut to the part under way "
-                                    f"({cut[2]})")
+    after = "" if cut is None else f" after the automatic cut ({cut[2]})"
     hint = (" (or --time-range all, if the cut took too much)" if cut is not None else "")
     raise SindyshipInputError(
         f"{path}: the record lasts {lasts:.3g} s{after}, shorter than one ship-length time "

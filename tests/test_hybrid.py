@@ -196,7 +196,12 @@ def test_fit_takes_captive_tests_beside_the_records(kcs, zigzags, programme, tmp
     (["--captive", "{surge}"], "the measured X is 7.29e-05 times the size of the measured Y"),
     (["--captive", "{flipped}"], "the measured Y correlates -0.9"),
     (["--captive", "{astern}"], "has 15 conditions going astern"),
-    (["--captive", "{port_rudder}"], "the measured Y of the rudder tests correlates +"),
+    (["--captive", "{port_rudder}"], "rudder angle, where a rudder aft gives Y negative and N "
+                                     "positive for a positive angle in sindyship's convention "
+                                     "(delta positive turns the bow to starboard): negate the "
+                                     "column delta."),
+    (["--captive", "{flipped_n}"], "the measured N of the rudder tests correlates -1.00 with the "
+                                   "rudder angle"),
     (["--captive", "{other}"], "far from the design speed 12.3 m/s of the ship 'kcs'"),
     (["--captive", "{captive}", "--captive-share", "1"], "--captive-share"),
 ])
@@ -212,13 +217,15 @@ def test_fit_refuses_captive_tests_it_cannot_use(kcs, zigzags, programme, tmp_pa
     write_captive_csv(programme.assign(u=programme["u"] / 10.0, v=programme["v"] / 10.0),
                       files["other"])
     files.update(surge=tmp_path / "surge.csv", flipped=tmp_path / "flipped.csv",
-                 astern=tmp_path / "astern.csv", port_rudder=tmp_path / "port_rudder.csv")
+                 astern=tmp_path / "astern.csv", port_rudder=tmp_path / "port_rudder.csv",
+                 flipped_n=tmp_path / "flipped_n.csv")
     write_captive_csv(programme.assign(X=programme["X"] / 1000.0), files["surge"])
     write_captive_csv(programme.assign(Y=-programme["Y"], N=-programme["N"]), files["flipped"])
     write_captive_csv(pd.concat([programme, programme.assign(u=-programme["u"])]),
                       files["astern"])
     rudder = programme[programme["delta"] != 0.0]  # a positive angle to port: not sindyship's
     write_captive_csv(rudder.assign(delta=-rudder["delta"]), files["port_rudder"])
+    write_captive_csv(rudder.assign(N=-rudder["N"]), files["flipped_n"])
     argv = [word.format(**files) for word in extra]
     code, _, err = run_sindyship("fit", record, "--ship", "kcs", *argv, "--out",
                                  tmp_path / "m.json")

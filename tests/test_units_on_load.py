@@ -33,7 +33,7 @@ def test_a_rudder_in_radians_under_a_degree_header_is_refused(records, name):
                       ship="kcs")
     assert "rudder-size check" in message and "look like radians" in message
     assert "'delta [rad]' or a bare 'delta'" in message
-    assert "deg while the ship turns at up to r' = r L/U0 = " in message
+    assert "deg while the ship turns to both sides at up to r' = r L/U0 = " in message
     # the same numbers under bare headers are radians, and load
     trajectory_from_frame(data, name, ship="kcs")
     # and radians under a bare header read as such but a hundred times smaller: no hint
@@ -45,6 +45,25 @@ def test_a_rudder_in_radians_under_a_degree_header_is_refused(records, name):
 def test_every_protocol_record_passes_the_rudder_size_check(records):
     for record in records.values():
         trajectory_from_frame(record.data, record.name, ship="kcs")
+
+
+@pytest.mark.parametrize(("manoeuvre", "rudder"), [("random", 0.3), ("random", 0.5),
+                                                   ("zigzag", 0.3)])
+def test_an_unstable_ship_looping_on_a_small_rudder_is_no_rudder_in_radians(manoeuvre, rudder):
+    """The KVLCC2 is directionally unstable: with a few tenths of a degree of rudder it turns
+    in its loop at r' = 0.2 to one side (at most 0.05 to the other), 40 times its rudder in
+    radians, and its yaw acceleration follows the rudder; it turns to one side only, which a
+    zig-zag in radians read as degrees never does, and loads."""
+    from sindyship.manoeuvres import Manoeuvre, fly
+    from sindyship.mmg import MMGModel
+    from sindyship.ships import load_ship
+
+    kvlcc2 = load_ship("kvlcc2")
+    (run,) = fly(MMGModel(kvlcc2), [Manoeuvre(manoeuvre, rudder=rudder, check=10.0, dt=0.2,
+                                               duration=900, seed=2)])
+    turning = run["r"] * kvlcc2.L / kvlcc2.U0
+    assert max(abs(turning.min()), turning.max()) > 20 * np.radians(rudder)
+    trajectory_from_frame(run.data, run.name, ship=kvlcc2)
 
 
 def test_a_ship_turning_on_with_its_rudder_amidships_is_no_rudder_in_radians(records, seed):
@@ -96,8 +115,9 @@ def test_positions_in_km_are_not_taken_for_milliseconds(records):
 
 @pytest.mark.parametrize("verb", ["evaluate", "fit"])
 def test_a_record_shorter_than_one_ship_length_time_is_refused(records, tmp_path, verb):
-    """Twenty samples of a zig-zag (19 s of the KCS, L/U0 = 18.6 s) flew 0.0001 L off and
-    scored as a near-perfect flight; two samples flew for 0 s."""
+    """Records shorter than L/U0 scored as near-perfect flights (a review's 20 samples of a
+    KVLCC2 zig-zag flew 0.0001 L off, two samples for 0 s): 15 s of a KCS zig-zag (L/U0 =
+    18.6 s) are refused, 39 s load."""
     from cli_in_process import run_sindyship
 
     from sindyship.measurements import write_csv
@@ -119,3 +139,20 @@ def test_a_record_shorter_than_one_ship_length_time_is_refused(records, tmp_path
               path)  # 39 s
     code, _, err = run_sindyship(*before, path, "--ship", "kcs", *after)
     assert code == 0, err
+
+
+def test_revolutions_above_the_ships_raise_the_speed_limit():
+    """The KVLCC2 at its published revolutions runs at 1.51 U0, with 10 % more revolutions at
+    1.67 U0: simulate's own record loads (the speed check had called it knots); the same speed
+    with the ship's own revolutions is refused."""
+    from sindyship.effects import Effects, simulate_with_effects
+    from sindyship.manoeuvres import Manoeuvre
+    from sindyship.ships import load_ship
+
+    kvlcc2 = load_ship("kvlcc2")
+    (run,) = simulate_with_effects(kvlcc2, [Manoeuvre("straight", dt=0.2, duration=600)],
+                                   Effects(rps=1.1))
+    assert run["u"].max() / kvlcc2.U0 == pytest.approx(1.67, abs=0.02)
+    trajectory_from_frame(run.data, run.name, ship=kvlcc2)
+    message = refusal(run.data.assign(n=kvlcc2.propeller.n_P), ship=kvlcc2)
+    assert "speed check" in message and "look like knots" in message

@@ -254,9 +254,17 @@ def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool =
             else:
                 lines.append(r"&\qquad " + word)
         if n_coriolis:
-            coriolis = " ".join(words[len(words) - n_coriolis:])
-            label = "Coriolis and Munk moment" if dof == "N" and "v'" in coriolis else "Coriolis"
-            lines.append(r"&\qquad \underbrace{" + coriolis + r"}_{\text{" + label + "}}")
+            coriolis = words[len(words) - n_coriolis:]
+            label = ("Coriolis and Munk moment" if dof == "N" and "v'" in " ".join(coriolis)
+                     else "Coriolis")
+            chunks = [[]]
+            for word in coriolis:  # as many to a brace as fit a line
+                if chunks[-1] and (_rendered_length(" ".join([*chunks[-1], word]))
+                                   > line_length - 8):
+                    chunks.append([])
+                chunks[-1].append(word)
+            lines += [r"&\qquad \underbrace{" + " ".join(chunk) + r"}_{\text{" + label + "}}"
+                      for chunk in chunks]
         rows += [line + r" \nonumber \\" for line in lines[:-1]]
         rows.append(lines[-1] + r" \\")
     if model.library.speed == "instantaneous":  # what the variables are over
@@ -346,27 +354,42 @@ def coefficient_table_latex(model: AbkowitzModel, precision: int = 4, *,
         columns.append(_latex_text(reference_label))
     rows = []
     for dof in DOFS:
-        if rows:
-            rows += ["", r"\medskip", ""]
-        rows += [
-            r"\begin{tabular}{l" + "r" * (len(columns) - 1) + "}",
-            r"\toprule",
-            r"\multicolumn{" + str(len(columns)) + r"}{l}{" + _EQUATION_NAMES[dof]
-            + r", Prime I, $\times 10^{-5}$} \\",
-            " & ".join(columns) + r" \\",
-            r"\midrule",
-        ]
-        for term in model.library.terms[dof]:
-            cells = [f"${term.latex(dof)}$",
-                     _table_number(model.coefficients[dof][term.text] * 1e5, precision)]
-            if reference is not None:
-                ref = reference.get(dof, {}).get(term.text)
-                cells.append(_table_number(None if ref is None else float(ref) * 1e5,
-                                           precision))
-            rows.append(" & ".join(cells) + r" \\")
-        rows += [r"\bottomrule", r"\end{tabular}"]
+        terms = model.library.terms[dof]
+        parts = math.ceil(len(terms) / TABLE_ROWS)
+        for part in range(parts):
+            if rows:
+                rows += ["", r"\medskip", ""]
+            more = f" ({part + 1} of {parts})" if parts > 1 else ""
+            rows += [
+                r"\begin{tabular}{l" + "r" * (len(columns) - 1) + "}",
+                r"\toprule",
+                r"\multicolumn{" + str(len(columns)) + r"}{l}{" + _EQUATION_NAMES[dof] + more
+                + r", Prime I, $\times 10^{-5}$} \\",
+                " & ".join(columns) + r" \\",
+                r"\midrule",
+            ]
+            rows += _table_rows(model, dof, terms[part * TABLE_ROWS:(part + 1) * TABLE_ROWS],
+                                precision, reference)
+            rows += [r"\bottomrule", r"\end{tabular}"]
     return "\n".join(rows)
 
+
+def _table_rows(model, dof: str, terms, precision: int, reference) -> list[str]:
+    """The table rows of ``terms`` of one equation."""
+    rows = []
+    for term in terms:
+        cells = [f"${term.latex(dof)}$",
+                 _table_number(model.coefficients[dof][term.text] * 1e5, precision)]
+        if reference is not None:
+            ref = reference.get(dof, {}).get(term.text)
+            cells.append(_table_number(None if ref is None else float(ref) * 1e5, precision))
+        rows.append(" & ".join(cells) + r" \\")
+    return rows
+
+
+#: Most rows of one coefficient table: an equation with more is split into tables of at most
+#: this many (52 rows ran 34 pt off an article's page).
+TABLE_ROWS = 40
 
 #: The equations by name, for the tables' headings.
 _EQUATION_NAMES = {"X": "Surge force X'", "Y": "Sway force Y'", "N": "Yaw moment N'"}
