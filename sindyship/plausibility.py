@@ -53,7 +53,8 @@ The checks, in the order they run, with their thresholds (module constants) and 
     1.6 U0: no ship on trials runs 60 % above its design speed (good records reach 1.0 to
     1.1 U0, with noise or a current); knots under a m/s header read 1.94 U0.  A record with
     revolutions above the ship's own raises the limit in proportion (the KVLCC2 simulated at
-    its published revolutions runs at 1.51 U0, with 10 % more at 1.67 U0).
+    its published revolutions runs at 1.51 U0, with 10 % more at 1.67 U0), by at most
+    ``MAX_HARDER`` = 1.2 (knots at U0 still read above it).
 ``revolutions`` (only with a ship that has a propeller, and records with ``n``)
     Refuses a median n above ``MAX_REVOLUTION_RATIO`` = 5 times the ship's propeller
     revolutions: rpm under a bare header read 60 times too high (91.5 rpm of the full-scale
@@ -141,6 +142,9 @@ MAX_STEP = 1.0  # L/U0
 MIN_STEP = 1e-5  # L/U0
 MAX_DURATION = 1e5  # L/U0
 MAX_SPEED_RATIO = 1.6  # of U0
+#: Most the speed limit is raised for revolutions recorded above the ship's own (a factor):
+#: 1.6 x 1.2 = 1.92 U0 stays below the 1.94 U0 that knots at U0 read as m/s give.
+MAX_HARDER = 1.2
 #: Most a record's median propeller revolutions may exceed the ship's own (a ratio): rpm read
 #: as rps are 60 times too high.
 MAX_REVOLUTION_RATIO = 5.0
@@ -315,8 +319,8 @@ def _check_speed(u: np.ndarray, ship, context: _Context, n: np.ndarray | None) -
     high = float(np.max(np.convolve(u, np.full(window, 1.0 / window), mode="valid")))
     ratio = high / ship.U0
     harder = 1.0
-    if n is not None and ship.has_mmg:
-        harder = max(1.0, float(np.max(np.abs(n))) / ship.propeller.n_P)
+    if n is not None and ship.has_mmg:  # at most MAX_HARDER: knots at U0 still read 1.94 U0
+        harder = min(max(1.0, float(np.max(np.abs(n))) / ship.propeller.n_P), MAX_HARDER)
     if ratio <= MAX_SPEED_RATIO * harder:
         return
     knots = (context.unit("u") in (None, "m/s")
