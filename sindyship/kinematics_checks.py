@@ -115,31 +115,38 @@ def check_heading(data, context) -> None:
         f"column '{psi_header}' changes {gain:.4g} times as much as the integral of "
         f"'{r_header}' from psi[0] (expected 1 +- {HEADING_GAIN_TOLERANCE})"
     )
+    context.refuse("heading", problem, _heading_fix(gain, data, context))
+
+
+def _heading_fix(gain: float, data, context) -> str:
+    """What to do about psi turning ``gain`` times the integral of r: the unit or sign that
+    explains the gain, the track deciding between psi and r where either could."""
+    psi_header, r_header = context.header("psi"), context.header("r")
     degree = math.pi / 180.0
+    either = f"check the units of '{psi_header}' and '{r_header}'"
     if _near(gain, 1.0 / degree):  # psi in degrees read as rad, or r in rad/s read as deg/s
         if context.unit("r") is not None and _track_takes_psi(data, 1.0):
-            fix = (f"the track agrees with psi, so '{r_header}' looks like rad/s: write the "
-                   "header as 'r [rad/s]' or a bare 'r'")
-        elif context.unit("psi") is None:
-            fix = "the heading looks like degrees, so write the header as 'psi [deg]'"
-        else:
-            fix = f"check the units of '{psi_header}' and '{r_header}'"
-    elif _near(gain, degree):  # r in deg/s read as rad/s, or psi in rad read as degrees
+            return (f"the track agrees with psi, so '{r_header}' looks like rad/s: write the "
+                    "header as 'r [rad/s]' or a bare 'r'")
+        if context.unit("psi") is None:
+            return "the heading looks like degrees, so write the header as 'psi [deg]'"
+        if _track_takes_psi(data, degree):
+            return (f"the track agrees with psi read as degrees, so '{psi_header}' looks "
+                    "like deg: write the header as 'psi [deg]'")
+        return either
+    if _near(gain, degree):  # r in deg/s read as rad/s, or psi in rad read as degrees
         if context.unit("psi") is not None and _track_takes_psi(data, 1.0 / degree):
-            fix = (f"the track agrees with psi read as radians, so '{psi_header}' looks like "
-                   "rad: write the header as 'psi [rad]' or a bare 'psi'")
-        elif context.unit("r") is None:
-            fix = "the yaw rate looks like deg/s, so write the header as 'r [deg/s]'"
-        else:
-            fix = f"check the units of '{psi_header}' and '{r_header}'"
-    elif _near(gain, 1e-3) and context.unit("t") in (None, "s"):
-        fix = "the times look like milliseconds, so write the header as 't [ms]'"
-    elif _near(gain, -1.0):
-        fix = ("psi and r turn opposite ways: psi is clockwise from north and r positive to "
-               "starboard, so negate the one with the wrong sign")
-    else:
-        fix = "check the units and signs of psi and r"
-    context.refuse("heading", problem, fix)
+            return (f"the track agrees with psi read as radians, so '{psi_header}' looks "
+                    "like rad: write the header as 'psi [rad]' or a bare 'psi'")
+        if context.unit("r") is None:
+            return "the yaw rate looks like deg/s, so write the header as 'r [deg/s]'"
+        return either
+    if _near(gain, 1e-3) and context.unit("t") in (None, "s"):
+        return "the times look like milliseconds, so write the header as 't [ms]'"
+    if _near(gain, -1.0):
+        return ("psi and r turn opposite ways: psi is clockwise from north and r positive to "
+                "starboard, so negate the one with the wrong sign")
+    return "check the units and signs of psi and r"
 
 
 def _track_takes_psi(data, factor: float) -> bool:

@@ -104,6 +104,9 @@ def test_the_track_tells_which_of_psi_and_r_has_the_wrong_unit(records):
     assert "heading check" in r_in_rad and "check the unit of 'r [deg/s]'" in r_in_rad
     psi_in_degrees = refusal(data.assign(psi=np.degrees(data["psi"])))
     assert "the heading looks like degrees, so write the header as 'psi [deg]'" in psi_in_degrees
+    bracket = refusal(data.assign(psi=np.degrees(data["psi"])).rename(columns={
+        "psi": "psi [rad]", "r": "r [rad/s]"}))
+    assert "'psi [rad]' looks like deg: write the header as 'psi [deg]'" in bracket
 
 
 def test_positions_in_km_are_not_taken_for_milliseconds(records):

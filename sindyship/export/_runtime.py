@@ -114,11 +114,11 @@ def _fly(command, t, state0, step, check_divergence, channels):
         raise ValueError(f"state0 has shape {y.shape}; give {N_STATE} finite values "
                          "[u, v, r, x, y, psi, delta] (SI)")
     h_max = DEFAULT_STEP if step is None else float(step)
+    scaled = _scaled(channels)  # first: a name the library does not use
     for name, values in (channels or {}).items():
         if np.ndim(values) and np.shape(values) != t.shape:
             raise ValueError(f"channel {name!r} has shape {np.shape(values)}; give one value "
                              f"per output time {t.shape}, or a constant")
-    scaled = _scaled(channels)
     series = None if scaled is None else ChannelSeries(t, {
         name: np.broadcast_to(values, t.shape)[None, :] for name, values in scaled.items()})
     integ = _Integrator(_Model(series=series), [command], _SERVO)
