@@ -163,7 +163,7 @@ def _warn_unanswered(record: Trajectory, trial: CampaignTrial, execute: float,
     :data:`MIN_REVERSALS` times after the execute (in a wind of 5 m/s, seven times the speed of
     the 7 m KVLCC2, a 15/15 zig-zag can hold its first rudder to the end)."""
     after = np.degrees(record["delta_c"][record.t >= execute])
-    sides = np.sign(after[np.abs(after) > 0.5 * trial.check])
+    sides = np.sign(after[np.abs(after) > 0.5 * abs(trial.rudder)])  # the rudder put over
     reversals = int(np.count_nonzero(np.diff(sides)))
     if reversals < MIN_REVERSALS:
         shortened = flown < trial.manoeuvre_s - 1e-9
