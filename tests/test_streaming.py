@@ -318,6 +318,30 @@ def test_a_streamed_fit_notes_coarse_sampling_as_the_fit_in_memory_does(files, c
     assert "0.16" in in_memory[0]
 
 
+def test_a_streamed_fit_notes_records_slower_than_the_ships_speed_as_in_memory(
+        files, client, tmp_path, capsys):
+    """The KCS's records given a ship whose U0 is twice theirs never reach 0.7 U0: both fits
+    say so in the same line (the streamed one from each record's highest speed)."""
+    from pathlib import Path
+
+    import sindyship
+
+    source = (Path(sindyship.__file__).parent / "ships" / "kcs.toml").read_text()
+    ship = tmp_path / "fast.toml"
+    ship.write_text(source.replace('name = "kcs"', 'name = "fast"').replace(
+        "U0 = 12.348 ", "U0 = 24.696 "))
+    common = [*map(str, files["csv"]), "--ship", str(ship), "--optimizer", "ls"]
+    assert main(["fit", *common, "--out", str(tmp_path / "memory.json")]) == 0
+    in_memory = [line for line in capsys.readouterr().err.splitlines()
+                 if line.startswith("note: no record reaches")]
+    assert main(["fit", *common, "--stream", "--scheduler", client.scheduler.address,
+                 "--out", str(tmp_path / "streamed.json")]) == 0
+    streamed = [line for line in capsys.readouterr().err.splitlines()
+                if line.startswith("note: no record reaches")]
+    assert len(in_memory) == 1 and streamed == in_memory
+    assert "times the design speed U0 = 24.7 m/s of ship fast" in in_memory[0]
+
+
 def test_a_parquet_timestamp_column_is_read_as_seconds_from_the_first_sample(tmp_path, kcs):
     pytest.importorskip("pyarrow")
     from sindyship.streaming import read_record
