@@ -31,6 +31,7 @@ import numpy as np
 
 from .effects import Effects, simulate_with_effects
 from .manoeuvres import Manoeuvre
+from .rudder_holds import reversals
 from .trajectory import Trajectory
 
 __all__ = ["CampaignTrial", "campaign_trials", "fly_trials"]
@@ -163,15 +164,14 @@ def _warn_unanswered(record: Trajectory, trial: CampaignTrial, execute: float,
     :data:`MIN_REVERSALS` times after the execute (in a wind of 5 m/s, seven times the speed of
     the 7 m KVLCC2, a 15/15 zig-zag can hold its first rudder to the end)."""
     after = np.degrees(record["delta_c"][record.t >= execute])
-    sides = np.sign(after[np.abs(after) > 0.5 * abs(trial.rudder)])  # the rudder put over
-    reversals = int(np.count_nonzero(np.diff(sides)))
-    if reversals < MIN_REVERSALS:
+    reversed_ = reversals(after, 0.5 * abs(trial.rudder))  # the rudder put over
+    if reversed_ < MIN_REVERSALS:
         shortened = flown < trial.manoeuvre_s - 1e-9
         why = (f"in the {flown:.3g} s it was shortened to (duration_scale), or against a wind "
                f"of {trial.wind:.2g} m/s" if shortened else
                f"against a wind of {trial.wind:.2g} m/s from {trial.wind_dir:.0f} deg")
         warnings.warn(
-            f"{trial.name}: the commanded rudder reversed {reversals} time"
-            f"{'' if reversals == 1 else 's'} in the {flown:.3g} s after the execute: the ship "
+            f"{trial.name}: the commanded rudder reversed {reversed_} time"
+            f"{'' if reversed_ == 1 else 's'} in the {flown:.3g} s after the execute: the ship "
             f"did not reach its check angles ({why}), so the record is no zig-zag; fly it "
             "longer, another seed of campaign_trials, or with less wind.", stacklevel=3)

@@ -182,10 +182,8 @@ def _check_force_sign(dof: str, measured: np.ndarray, expected: np.ndarray) -> N
     """Refuse a sway force or yaw moment that falls where the ship's estimated derivatives
     say it rises: axes or signs other than sindyship's.  On the KCS's and the KVLCC2's
     virtual tests they correlate by 0.93 or more (every test type whose prediction varies)."""
-    if measured.size < 3 or np.std(measured) == 0.0 or np.std(expected) == 0.0:
-        return
-    correlation = float(np.corrcoef(measured, expected)[0, 1])
-    if correlation < 0.0:
+    correlation = _correlation(measured, expected)
+    if correlation is not None and correlation < 0.0:
         raise SindyshipInputError(
             f"the measured {dof} correlates {correlation:+.2f} with what the ship's estimated "
             "derivatives predict, so its sign convention is not sindyship's (v and Y positive "
@@ -205,15 +203,10 @@ def _check_rudder_sign(captive: pd.DataFrame, ship: Ship) -> None:
     """
     rudder = classify_tests(captive, ship) == "rudder"
     angle = captive["delta"].to_numpy(float)[rudder]
-    if angle.size < 3 or np.std(angle) == 0.0:
-        return
     wrong = {}
     for dof, sign in (("Y", -1.0), ("N", 1.0)):
-        measured = captive[dof].to_numpy(float)[rudder]
-        if np.std(measured) == 0.0:
-            continue
-        correlation = float(np.corrcoef(measured, angle)[0, 1])
-        if sign * correlation < 0.0:
+        correlation = _correlation(captive[dof].to_numpy(float)[rudder], angle)
+        if correlation is not None and sign * correlation < 0.0:
             wrong[dof] = correlation
     if not wrong:
         return
@@ -230,6 +223,14 @@ def _check_rudder_sign(captive: pd.DataFrame, ship: Ship) -> None:
         f"the measured {dof} of the rudder tests correlates {correlation:+.2f} with the rudder "
         f"angle, where {convention}: negate the column {dof}, or check its axes."
     )
+
+
+def _correlation(a: np.ndarray, b: np.ndarray) -> float | None:
+    """Pearson correlation of ``a`` and ``b``; None for fewer than three values or either
+    constant (nothing to judge a sign by)."""
+    if a.size < 3 or np.std(a) == 0.0 or np.std(b) == 0.0:
+        return None
+    return float(np.corrcoef(a, b)[0, 1])
 
 
 def _check_surge_scale(captive: pd.DataFrame) -> None:

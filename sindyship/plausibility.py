@@ -312,11 +312,17 @@ def _check_sampling(t: np.ndarray, ship, context: _Context) -> None:
         )
 
 
+def _five_sample_mean(values: np.ndarray) -> np.ndarray:
+    """Running means of five consecutive samples (fewer in a shorter record): the largest
+    speed or yaw rate a check judges, noise averaged."""
+    window = min(5, len(values))
+    return np.convolve(values, np.full(window, 1.0 / window), mode="valid")
+
+
 def _check_speed(u: np.ndarray, ship, context: _Context, n: np.ndarray | None) -> None:
     """The largest u against ``MAX_SPEED_RATIO`` U0, a limit raised in proportion to
     revolutions recorded above the ship's own (a ship driven harder runs faster)."""
-    window = min(5, len(u))
-    high = float(np.max(np.convolve(u, np.full(window, 1.0 / window), mode="valid")))
+    high = float(np.max(_five_sample_mean(u)))
     ratio = high / ship.U0
     harder = 1.0
     if n is not None and ship.has_mmg:  # at most MAX_HARDER: knots at U0 still read 1.94 U0
@@ -400,8 +406,7 @@ def _check_rudder_size(data, ship, context: _Context) -> None:
     side turned to less is compared: a directionally unstable ship turns in its loop at
     r' = 0.2 to one side whatever its rudder (the KVLCC2 with 0.3 to 0.7 deg of random rudder
     or a 0.3/10 zig-zag: at most 0.05 to the other side), while a zig-zag turns both ways."""
-    window = min(5, len(data["t"]))
-    mean = np.convolve(data["r"], np.full(window, 1.0 / window), mode="valid")
+    mean = _five_sample_mean(data["r"])
     turning = min(float(np.max(mean)), float(-np.min(mean))) * ship.L / ship.U0
     for name in [n for n in ("delta", "delta_c") if n in data]:
         largest = float(np.max(np.abs(data[name])))

@@ -19,7 +19,7 @@ import numpy as np
 __all__ = ["FRAGMENTED_HOLDS", "HOLD_RANGE", "HOLD_SAMPLES", "MIN_SAMPLES_PER_READING",
            "READINGS_PER_LEG", "back_to_peak", "cut_short", "execute", "find_holds",
            "leg_time", "left_hold", "longest_alternation", "ramp_start", "read_in_blocks",
-           "samples_per_reading", "settled", "stretch_end"]
+           "reversals", "samples_per_reading", "settled", "stretch_end"]
 
 HOLD_RANGE = 1.0  # deg
 HOLD_SAMPLES = 5
@@ -218,6 +218,19 @@ def ramp_start(command: np.ndarray, raw: list, plateau: int, sign: int) -> int:
     while index > 0 and sign * (command[index] - command[index - 1]) > _MOVING:
         index -= 1
     return index if index in (0, plateau) else index + 1
+
+
+def reversals(command: np.ndarray, beyond: float) -> int:
+    """How many times the rudder ``command`` [deg] crosses from one side to the other,
+    counting only angles at least ``beyond`` [deg] from amidships.
+
+    Examples
+    --------
+    >>> reversals(np.array([0.0, 10.0, 10.0, 0.2, -10.0, -0.5, 10.0]), 1.0)
+    2
+    """
+    sides = np.sign(command[np.abs(command) >= beyond])
+    return int(np.count_nonzero(np.diff(sides)))
 
 
 def leg_time(t: np.ndarray, command: np.ndarray) -> float | None:

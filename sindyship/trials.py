@@ -69,6 +69,7 @@ from sindyship.rudder_holds import (
     longest_alternation,
     ramp_start,
     read_in_blocks,
+    reversals,
     samples_per_reading,
     settled,
 )
@@ -574,10 +575,8 @@ def flight_start(record: Trajectory) -> FlightStart:
         return FlightStart(turn.start_time, "turn", f"a turn with {turn.rudder_deg:g} deg "
                            f"rudder, flown from its execute at t = {turn.start_time:.6g} s")
     rudder = np.degrees(record["delta_c"] if record.has("delta_c") else record.rudder)
-    sides = np.sign(rudder[np.abs(rudder) >= 1.0])
-    reversals = int(np.count_nonzero(np.diff(sides)))
     like = (f" (as a zig-zag: {explain_zigzag(record)[1]})"
-            if reversals >= MIN_REVERSALS_EXPLAINED else "")
+            if reversals(rudder, 1.0) >= MIN_REVERSALS_EXPLAINED else "")
     return FlightStart(float(t[0]), "record", f"no zig-zag or turn recognised{like}: flown "
                        f"from the first row, t = {t[0]:.6g} s")
 

@@ -109,7 +109,7 @@ def speed_forms(records: Sequence[Trajectory], ship: Ship, library: TermLibrary,
     test : sequence of Trajectory
         The held-out records, whose speed range the report compares (never the choice).
     """
-    speeds = np.concatenate([np.hypot(r["u"], r["v"]) for r in records]) / ship.U0
+    low, high = _speed_range(records, ship)
     errors = {}
     for form in ("design", "instantaneous"):
         problems = design(records, ship, library.with_speed(form), **settings)
@@ -124,9 +124,11 @@ def speed_forms(records: Sequence[Trajectory], ship: Ship, library: TermLibrary,
     other = "instantaneous" if library.speed == "design" else "design"
     recommended = other if errors[other] <= SPEED_FORM_GAIN * errors[library.speed] \
         else library.speed
-    held_out = None
-    if test:
-        tested = np.concatenate([np.hypot(r["u"], r["v"]) for r in test]) / ship.U0
-        held_out = (float(np.min(tested)), float(np.max(tested)))
-    return SpeedForms(library.speed, float(np.min(speeds)), float(np.max(speeds)), errors,
-                      recommended, held_out)
+    return SpeedForms(library.speed, low, high, errors, recommended,
+                      _speed_range(test, ship) if test else None)
+
+
+def _speed_range(records: Sequence[Trajectory], ship: Ship) -> tuple[float, float]:
+    """The least and largest speed U/U0 (U = sqrt(u^2 + v^2)) over the records."""
+    speeds = np.concatenate([np.hypot(r["u"], r["v"]) for r in records]) / ship.U0
+    return float(np.min(speeds)), float(np.max(speeds))
