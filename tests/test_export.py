@@ -316,6 +316,13 @@ def test_the_generated_simulator_flies_recorded_channels(kcs, tmp_path):
                        r"output time"):
         sim.simulate(record.t, 0.0, None, {"n": n[:5]})
     assert sim.simulate(record.t, 0.0, None, {"n": 1.8}).diverged_at is None  # a constant
+    # revolutions in rpm (60 times the rps) are refused, as export's --channel refuses them
+    with pytest.raises(ValueError, match=r"^channel 'n' reaches 132, 68\.6 times the ship's "
+                       r"propeller revolutions 1\.92524 rps; give n in rps \(rpm divided by "
+                       r"60\)$"):
+        sim.simulate(record.t, 0.0, None, {"n": 60.0 * n})
+    with pytest.raises(ValueError, match="give n in rps"):
+        sim.rhs(0.0, record.state()[:, 0], 0.0, {"n": 116.0})
     # without channels the exported default is taken, and one never given is asked for (it
     # had flown NaN, a flight that looked diverged at its first step)
     for call in (lambda: sim.simulate(record.t, 0.0), lambda: sim.rhs(0.0, record.state()[:, 0],

@@ -42,6 +42,12 @@ def _scaled(channels):
         used = ", ".join(sorted(CHANNEL_SCALING)) or "none"
         raise ValueError(f"the model's library uses no channel {unknown[0]!r} (it uses: "
                          f"{used}); check the name")
+    if "n" in channels and N_SHIP > 0.0:
+        largest = float(np.max(np.abs(np.asarray(channels["n"], dtype=float)), initial=0.0))
+        if largest > MAX_REVOLUTION_RATIO * N_SHIP:
+            raise ValueError(f"channel 'n' reaches {largest:g}, {largest / N_SHIP:.3g} times "
+                             f"the ship's propeller revolutions {N_SHIP:g} rps; give n in rps "
+                             "(rpm divided by 60)")
     return {name: np.asarray(channels[name], dtype=float) * factor + offset
             for name, (factor, offset) in CHANNEL_SCALING.items()}
 

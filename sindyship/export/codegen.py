@@ -13,6 +13,7 @@ import sympy
 from sympy.printing.numpy import NumPyPrinter
 
 from .. import __version__
+from ..plausibility import MAX_REVOLUTION_RATIO
 from ..targets import DOFS, abkowitz_mass_matrix
 from ..terms import SPEED_FLOOR, channel_scaling, read_over_speed
 from . import _compiled
@@ -60,6 +61,11 @@ def _constant(value: float) -> str:
     """A float as Python source that reads back to the same double (NaN as ``math.nan``)."""
     value = float(value)
     return "math.nan" if math.isnan(value) else repr(value)
+
+
+def _revolutions(ship: Ship) -> float:
+    """The ship's propeller revolutions [rps], 0 for a ship file that gives none."""
+    return float(ship.propeller.n_P) if ship.has_mmg else 0.0
 
 
 def _example_lines(model: AbkowitzModel, channel_names: Mapping[str, str],
@@ -358,6 +364,8 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         f"DELTA_MAX = {_constant(integrator.delta_max)}  # largest rudder angle [rad]",
         f"RUDDER_INPUT = {_literal(integrator.rudder_input)}  # rudder angle the forces see",
         f"DEFAULT_STEP = {_constant(default_step(ship))}  # Runge-Kutta step [s]",
+        f"N_SHIP = {_constant(_revolutions(ship))}  # propeller revolutions [rps] (0: none given)",
+        f"MAX_REVOLUTION_RATIO = {_constant(MAX_REVOLUTION_RATIO)}  # larger n is in another unit",
         f"SPEED_FORM = {_literal(model.library.speed)}  # the forces over U0 or over U",
         *([f"SPEED_FLOOR = {_constant(SPEED_FLOOR)}  # least U/U0 the forces are scaled with",
            "#: Channels read over the speed U (their scaling with U0 divided by U/U0)",
