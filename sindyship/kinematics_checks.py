@@ -68,9 +68,9 @@ def unwrap_heading(data, context) -> tuple[np.ndarray, str | None]:
     steps = np.zeros_like(psi)
     steps[jumps + 1] = 2 * math.pi * turns
     note = (
-        f"{context.source}: column '{context.header('psi')}' wraps around {jumps.size} "
-        f"time{'s' if jumps.size > 1 else ''}, first into {context.row(int(jumps[0]) + 1)}; "
-        "unwrapped it (psi must be continuous)."
+        f"{context.source}: column '{context.header('psi')}' is kept within one turn and jumps "
+        f"by a full turn {'once' if jumps.size == 1 else f'{jumps.size} times'}, first into "
+        f"{context.row(int(jumps[0]) + 1)}; unwrapped it (psi must be continuous)."
     )
     return psi - np.cumsum(steps), note
 

@@ -247,7 +247,8 @@ def test_wrapped_heading_is_unwrapped_with_a_note(protocol_runs, tmp_path):
     turn = protocol_runs["train"][1]
     wrapped = np.angle(np.exp(1j * turn["psi"]))
     path = write_csv(Trajectory(turn.data.assign(psi=wrapped), "tc"), tmp_path / "tc.csv")
-    with pytest.warns(PlausibilityNote, match=r"tc.csv: column 'psi' wraps around \d+ time"):
+    with pytest.warns(PlausibilityNote, match=r"tc.csv: column 'psi' is kept within one turn and "
+                      r"jumps by a full turn \d+ times, first into row"):
         record = read_csv(path, ship="kcs")
     np.testing.assert_allclose(record["psi"], turn["psi"], atol=1e-9)
     assert len(record.meta["notes"]) == 1 and "unwrapped" in record.meta["notes"][0]
@@ -424,7 +425,7 @@ def logged_trial(kcs, tmp_path_factory):
 
 
 def test_logged_trial_loads_with_a_note_and_its_window_is_found(logged_trial, kcs):
-    with pytest.warns(PlausibilityNote, match="wraps around"):
+    with pytest.warns(PlausibilityNote, match="jumps by a full turn"):
         record = read_csv(logged_trial, ship=kcs)
     assert record.t[-1] == 1099.0  # the blank trailing rows are no samples
     start, stop, reason = underway_window(record, kcs)
