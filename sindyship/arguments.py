@@ -16,10 +16,10 @@ import numpy as np
 
 from .errors import SindyshipInputError
 from .ships import Ship, load_ship
-from .trajectory import Trajectory
+from .trajectory import RUDDER_COLUMNS, Trajectory
 
-__all__ = ["as_records", "as_ship", "check_distinct_names", "check_motion", "check_scale",
-           "check_two_records", "positive_number"]
+__all__ = ["as_records", "as_ship", "check_distinct_names", "check_motion", "check_records",
+           "check_scale", "check_two_records", "positive_number"]
 
 #: Channels a record needs finite in every sample to be fitted or flown against.
 MOTION_CHANNELS = ("t", "u", "v", "r", "x", "y", "psi")
@@ -122,7 +122,7 @@ def check_two_records(records, verb: str) -> None:
 
 
 def check_motion(records, name: str = "records") -> None:
-    """Every record's time, motion, position and heading are finite numbers.
+    """Every record's time, motion, position, heading and rudder angles are finite numbers.
 
     Examples
     --------
@@ -141,6 +141,7 @@ def check_motion(records, name: str = "records") -> None:
                     f"{name}: {record.name or 'a record'} has no column {channel!r}; a record "
                     "needs t, u, v, r, x, y, psi and a rudder angle."
                 )
+        for channel in [*MOTION_CHANNELS, *(c for c in RUDDER_COLUMNS if record.has(c))]:
             values = record[channel]
             bad = ~np.isfinite(values)
             if bad.any():
@@ -148,23 +149,68 @@ def check_motion(records, name: str = "records") -> None:
                 when = f"t = {record.t[k]:g} s" if channel != "t" else f"sample {k}"
                 raise SindyshipInputError(
                     f"{name}: {record.name or 'a record'} has a missing or infinite {channel} at "
-                    f"{when}; give records with every sample of u, v, r, x, y and psi."
+                    f"{when}; give records with every sample of u, v, r, x, y, psi and the "
+                    "rudder angle."
                 )
 
 
 def check_scale(records, ship: Ship, name: str = "records") -> None:
-    """Refuse records far faster than the ship's design speed (another ship, or full-scale
-    records given a model's particulars)."""
+    """Refuse records far faster than the ship's design speed, or never under way at it
+    (another ship, or records of one scale given the other scale's particulars).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> frame = pd.DataFrame({"t": [0.0, 1.0], "u": 1.18, "v": 0.0, "r": 0.0, "x": [0.0, 1.18],
+    ...                       "y": 0.0, "psi": 0.0, "delta": 0.0})
+    >>> check_scale([Trajectory(frame, "zz20")], load_ship("kcs"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: records: zz20 never goes faster than 1.18 m/s, 0.0956 ...
+    """
+    from .trials import UNDERWAY_SPEED
+
     for record in records:
         if not record.has("u") or record.n_samples == 0:
             continue
-        top = float(np.nanmax(record["u"]))
+        top = float(np.nanmax(np.hypot(record["u"], record["v"]) if record.has("v")
+                              else np.abs(record["u"])))
         if top > MAX_SPEED_RATIO * ship.U0:
             raise SindyshipInputError(
                 f"{name}: {record.name or 'a record'} reaches {top:.4g} m/s, "
                 f"{top / ship.U0:.3g} times the design speed U0 = {ship.U0:.4g} m/s of ship "
                 f"{ship.name!r}; give the ship (and scale) the records were measured on."
             )
+        if top < UNDERWAY_SPEED * ship.U0:
+            raise SindyshipInputError(
+                f"{name}: {record.name or 'a record'} never goes faster than {top:.4g} m/s, "
+                f"{top / ship.U0:.3g} times the design speed U0 = {ship.U0:.4g} m/s of ship "
+                f"{ship.name!r}, and is no record of it under way; give the ship (and scale) "
+                "the records were measured on."
+            )
+
+
+def check_records(records, ship: Ship, name: str = "records") -> list[Trajectory]:
+    """Records of ``ship``, each checked as a measurement CSV is (those built in memory;
+    :func:`sindyship.measurements.check_trajectory`): a speed of another ship
+    (:func:`check_scale`), motion that is not finite (:func:`check_motion`), then units,
+    signs, order and sampling.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> frame = pd.DataFrame({"t": [0.0, 1000.0, 2000.0], "u": 12.0, "v": 0.0, "r": 0.0,
+    ...                       "x": [0.0, 12.0, 24.0], "y": 0.0, "psi": 0.0, "delta": 0.0})
+    >>> check_records([Trajectory(frame, "run")], load_ship("kcs"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: record 'run' (...): the sampling check refuses ...
+    """
+    from .measurements import check_trajectory
+
+    check_scale(records, ship, name)
+    check_motion(records, name)
+    return [check_trajectory(record, ship) for record in records]
 
 
 def positive_number(value, name: str, *, allow_zero: bool = False) -> float:

@@ -145,7 +145,7 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
     zig-zag flown closed loop ``zigzag``: its overshoots and period flown and recorded
     (:func:`zigzag_overshoots`).
     """
-    from .arguments import as_records, check_motion
+    from .arguments import as_records, check_records
     from .model import AbkowitzModel
 
     if isinstance(model, str | os.PathLike):
@@ -153,8 +153,7 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
     if not hasattr(model, "ship"):
         raise TypeError(f"model must be an AbkowitzModel or a saved model's path, not "
                         f"{type(model).__name__}.")
-    records = as_records(records)
-    check_motion(records)
+    records = check_records(as_records(records), model.ship)
     cut = [flown_part(record) for record in records]
     flown = fly_like_batch(model, cut, step=step)
     out = {}

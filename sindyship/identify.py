@@ -309,7 +309,8 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
     Parameters
     ----------
     records : sequence of Trajectory (or measurement CSV paths)
-        Training records (SI), each uniformly sampled, with finite motion.
+        Training records (SI), each uniformly sampled, with finite motion; one made by hand
+        is checked as a measurement CSV is (:func:`sindyship.arguments.check_records`).
     ship : Ship or str
         Gives L, U0 and the Prime I inertia (paper Table 6); its MMG coefficients are not used.
         A built-in name (``"kcs"``) or a ship TOML file is loaded.
@@ -337,12 +338,10 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
     -------
     AbkowitzModel
     """
-    from .arguments import as_records, as_ship, check_motion, check_scale, positive_number
+    from .arguments import as_records, as_ship, check_records, positive_number
 
     ship = as_ship(ship)
-    records = as_records(records)
-    check_motion(records)
-    check_scale(records, ship)
+    records = check_records(as_records(records), ship)
     window = positive_number(window, "window")
     if optimizer not in _optimizer_names():
         raise SindyshipInputError(f"optimizer must be one of {', '.join(_optimizer_names())}, "

@@ -25,7 +25,7 @@ from .simulation import (
     ZigZagCommand,
     simulate_batch,
 )
-from .trajectory import Trajectory
+from .trajectory import Trajectory, checks_done
 
 MANOEUVRE_KINDS = ("turning-circle", "zigzag", "spiral", "pull-out", "straight", "random")
 
@@ -332,7 +332,8 @@ def fly(dynamics, manoeuvres: Sequence[Manoeuvre], *, state0: np.ndarray | None 
         for i, res in zip(idx, results, strict=True):
             m = manoeuvres[i]
             meta = {"manoeuvre": m.kind, "rudder_deg": m.rudder, "check_deg": m.check,
-                    "first_sign": m.first_sign, **m.meta}
+                    "first_sign": m.first_sign, **m.meta,
+                    "checks": checks_done(ship)}
             records[i] = result_to_trajectory(res, m.label, meta)
     return records  # type: ignore[return-value]
 

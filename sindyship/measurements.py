@@ -50,7 +50,7 @@ from sindyship._io import write_text_atomic
 from sindyship.csv_text import DECIMAL_COMMA, FILE_ROW, REQUIRED_TEXT, parse_csv_text, read_text
 from sindyship.errors import SindyshipInputError
 from sindyship.plausibility import check_record, resampling_gap_note, resolve_skip
-from sindyship.trajectory import REQUIRED_COLUMNS, RUDDER_COLUMNS, Trajectory
+from sindyship.trajectory import REQUIRED_COLUMNS, RUDDER_COLUMNS, Trajectory, checks_done
 from sindyship.units import UNITS, Column, parse_headers, renaming_hint
 
 __all__ = [
@@ -61,6 +61,7 @@ __all__ = [
     "MAX_YAW_RATE",
     "SAMPLING_TOLERANCE",
     "UNITS",
+    "check_trajectory",
     "read_csv",
     "trajectory_from_frame",
     "write_csv",
@@ -72,6 +73,12 @@ MAX_SPEED = 100.0  # m/s
 MAX_REVOLUTIONS = 100.0  # rps
 MAX_WIND_DIRECTION = 4.0 * math.pi  # rad: two turns (a direction in degrees passes 12.6)
 SAMPLING_TOLERANCE = 0.01  # fraction of the median time step
+#: The SI unit a Trajectory holds each channel in: the header its checks read it under.
+SI_UNITS = {"t": "s", "u": "m/s", "v": "m/s", "r": "rad/s", "x": "m", "y": "m", "psi": "rad",
+            "delta": "rad", "delta_c": "rad", "n": "rps", "wind_speed": "m/s",
+            "wind_dir": "rad", "phi": "rad", "p": "rad/s"}
+#: How a record in memory is named in the messages of its checks.
+IN_MEMORY = "a Trajectory, in SI units; sindyship.measurements.trajectory_from_frame reads others"
 
 
 class PlausibilityNote(UserWarning):
@@ -263,8 +270,64 @@ def trajectory_from_frame(
         "resampled": None if resample is None else float(resample),
         "logged_step": logged,
         "notes": notes,
+        "checks": checks_done(ship, skip, rudder_check),
     }
     return Trajectory(data, name=name, meta=meta)
+
+
+def check_trajectory(record: Trajectory, ship=None) -> Trajectory:
+    """A record built in memory, checked as :func:`read_csv` checks a file.
+
+    A :class:`Trajectory` made by hand holds SI units without headers to say so, and nothing
+    checks it when it is made; :func:`sindyship.fit`, :func:`sindyship.evaluate`,
+    :func:`sindyship.refine` and the diagnosis check it here first, so that a rudder in
+    degrees, a yaw rate in deg/s, times in milliseconds, speeds in knots, a flipped sign,
+    shuffled or missing rows are refused instead of fitted.  A record that passed them for
+    ``ship`` (read by :func:`read_csv` or :func:`trajectory_from_frame`, or flown by the
+    simulator; ``meta["checks"]``, :func:`~sindyship.trajectory.checks_done`) is returned as it is.
+
+    Parameters
+    ----------
+    record : Trajectory
+        Channels in SI (:data:`SI_UNITS`).
+    ship : Ship, optional
+        Enables the checks scaled by its L, U0 and revolutions.
+
+    Returns
+    -------
+    Trajectory
+        The record (its heading unwrapped where it wrapped), ``meta["checks"]`` set.
+
+    Raises
+    ------
+    SindyshipInputError
+        Naming the record, the check and the fix; a record in other units is read with
+        :func:`trajectory_from_frame`, whose headers name them (``delta [deg]``) and which
+        takes ``skip_checks``.
+
+    Examples
+    --------
+    >>> frame = pd.DataFrame({"t": [0.0, 1.0, 2.0], "u": 8.0, "v": 0.0, "r": 0.0,
+    ...                       "x": [0.0, 8.0, 16.0], "y": 0.0, "psi": 0.0,
+    ...                       "delta": [0.0, 5.0, 10.0]})
+    >>> check_trajectory(Trajectory(frame, "run"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: record 'run' (a Trajectory, in SI units; ...
+    """
+    done = record.meta.get("checks")
+    ship_done = None if done is None else done["ship"]
+    if done is not None and (ship is None or ship_done == checks_done(ship)["ship"]):
+        return record
+    frame = record.data.rename(columns=lambda c: f"{c} [{SI_UNITS[c]}]" if c in SI_UNITS else c)
+    checked = trajectory_from_frame(
+        frame, record.name, source=record.meta.get("source") or f"record {record.name!r} "
+        f"({IN_MEMORY})", ship=ship,
+        skip_checks=() if done is None else done["skipped"],
+        rudder_check=True if done is None else done["rudder_check"])
+    meta = {**record.meta, "checks": checked.meta["checks"],
+            "notes": [*record.meta.get("notes", []), *checked.meta["notes"]]}
+    return Trajectory(checked.data, name=record.name, meta=meta)
 
 
 def write_csv(trajectory: Trajectory, path: str | os.PathLike[str]) -> Path:

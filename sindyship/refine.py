@@ -222,11 +222,11 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
         a turning circle at the rudder limit that diverges, or whose tactical diameter moves
         by more than a factor :data:`sindyship.refine_checks.TURN_CHECK_FACTOR`).
     """
-    from .arguments import as_records, check_motion
+    from .arguments import as_records, check_records
 
     records = as_records(records, allow_empty=True)
     _check_arguments(model, records, max_evaluations, segment_s, prior_weight)
-    check_motion(records)
+    records = check_records(records, model.ship)
     settings = {"max_evaluations": int(max_evaluations), "segment_s": segment_s,
                 "prior_weight": PRIOR_WEIGHT if prior_weight is None else float(prior_weight),
                 "progress": "refining by flights" if progress else None, "n_jobs": n_jobs}

@@ -32,7 +32,15 @@ class Trajectory:
         A short identifier (a file stem, or a manoeuvre name such as ``"tc35_stbd"``).
     meta : dict
         Free-form facts about how the record was made (manoeuvre, rudder and check angles,
-        effects); written nowhere by the CSV contract, kept for reports.
+        effects); written nowhere by the CSV contract, kept for reports.  ``meta["checks"]``
+        says which checks of a measurement CSV it passed (:func:`checks_done`).
+
+    Notes
+    -----
+    Nothing is checked when a Trajectory is made: the functions that fit or fly records check
+    one made by hand as a measurement CSV is checked, the first time they see it
+    (:func:`sindyship.measurements.check_trajectory`).  A table in other units is read with
+    :func:`sindyship.measurements.trajectory_from_frame`, whose headers name them.
 
     Examples
     --------
@@ -84,3 +92,18 @@ class Trajectory:
 
     def with_name(self, name: str) -> Trajectory:
         return Trajectory(self.data, name=name, meta=dict(self.meta))
+
+
+def checks_done(ship, skipped=(), rudder_check: bool = True) -> dict:
+    """The checks a record passed, kept in its ``meta["checks"]``: the ship they were scaled
+    by (name, L, U0; None without one), those skipped, and whether degree-like rudder angles
+    and yaw rates were refused (:func:`sindyship.measurements.check_trajectory` reads it).
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> checks_done(load_ship("kcs"), ["heading"])
+    {'ship': ['kcs', 230.0, 12.348], 'skipped': ['heading'], 'rudder_check': True}
+    """
+    key = None if ship is None else [ship.name, float(ship.L), float(ship.U0)]
+    return {"ship": key, "skipped": sorted(skipped), "rudder_check": bool(rudder_check)}

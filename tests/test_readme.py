@@ -142,6 +142,27 @@ def test_the_python_example_runs(tmp_path, monkeypatch):
     assert "Verdict: add asymmetry" in out.getvalue()
 
 
+def test_the_python_recipe_of_the_recommended_model_is_the_default_fit(kcs, protocol_runs,
+                                                                       tmp_path):
+    """The README: ``ss.refine(ss.fit(train, ship, optimizer="prior", library="abkowitz-vr"),
+    train)`` is the model of ``sindyship fit`` without options, coefficient for coefficient."""
+    import sindyship as ss
+    from sindyship.measurements import write_csv
+
+    assert 'ss.refine(ss.fit(train, ship, optimizer="prior", library="abkowitz-vr"),\ntrain)' \
+        in README
+    train = protocol_runs["train"][2:6]
+    paths = [str(write_csv(r, tmp_path / f"{r.name}.csv")) for r in train]
+    status, _, err = run_sindyship("fit", *paths, "--ship", "kcs", "--out",
+                                   str(tmp_path / "m.json"))
+    assert status == 0, err
+    cli = ss.AbkowitzModel.load(tmp_path / "m.json")
+    ours = ss.refine(ss.fit(train, kcs, optimizer="prior", library="abkowitz-vr"), train)
+    for dof in ("X", "Y", "N"):
+        assert ours.coefficients[dof] == pytest.approx(cli.coefficients[dof], rel=1e-9,
+                                                       abs=1e-15), dof
+
+
 # ------------------------------------------------------------------ numbers pinned to the code
 def _row(method: str, effects=()):
     return next(r for r in NUMBERS["table10"]

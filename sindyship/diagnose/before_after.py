@@ -298,6 +298,11 @@ def before_after(
     >>> bool(change.ratio("held-out") < 0.5)
     True
     """
+    from ..arguments import as_records, as_ship, check_records
+
+    ship = as_ship(ship)
+    train = check_records(as_records(train, "train"), ship, "train")
+    test = check_records(as_records(test, "test", allow_empty=True), ship, "test")
     base = resolve_library(library)
     added = [e if isinstance(e, Effect) else load_effect(e) for e in effects]
     extended = base.extended(*added)

@@ -68,8 +68,11 @@ def compare(
     >>> row.errors["mean_distance_L"] < 1e-6, row.errors["diverged_at_s"]
     (True, None)
     """
+    from ..arguments import as_records, check_records
+
     if kind not in SETS:
         raise ValueError(f"kind must be one of {SETS}, not {kind!r}")
+    records = check_records(as_records(records), model.ship)
     flown = list(flights) if flights is not None else fly_model(model, records)
     return [
         ManoeuvreComparison(rec.name, kind, rec, f, error_summary(f, rec, model.ship.L))

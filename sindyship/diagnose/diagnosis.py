@@ -440,10 +440,11 @@ def diagnose(
         be evaluated on.
     """
     start = time.perf_counter()
-    from ..arguments import as_ship
+    from ..arguments import as_records, as_ship, check_records
 
     ship = as_ship(ship)
-    records, test = list(records), list(test)
+    records = check_records(as_records(records), ship)
+    test = check_records(as_records(test, "test", allow_empty=True), ship, "test")
     _check_arguments(records, test, threshold)
     base = resolve_library(library)
     rudder_signal = resolve_rudder_signal(records, rudder_signal)

@@ -380,12 +380,18 @@ def discover(
     >>> found.best.family, round(found.best.delays["delta"])
     ('delay:delta', 4)
     """
-    from ..arguments import as_ship, check_distinct_names, check_two_records
+    from ..arguments import (
+        as_records,
+        as_ship,
+        check_distinct_names,
+        check_records,
+        check_two_records,
+    )
     from ..library import load_effect
 
     start = time.perf_counter()
     ship = as_ship(ship)
-    records = list(records)
+    records = check_records(as_records(records), ship)
     check_two_records(records, "discover")
     check_distinct_names(records)
     base = resolve_library(library)

@@ -167,6 +167,11 @@ def diagnose_iteratively(
     """
     from tqdm.auto import tqdm
 
+    from ..arguments import as_records, as_ship, check_records
+
+    ship = as_ship(ship)
+    records = check_records(as_records(records), ship)  # once, not in every round
+    test = check_records(as_records(test, "test", allow_empty=True), ship, "test")
     lib = resolve_library(library)
     if options.get("smoothing") == "auto":  # choose once, on the plain library
         from ..smoothing import choose_smoothing
