@@ -78,6 +78,20 @@ def test_added_masses_are_estimated_when_absent(own_ship, kcs, protocol_runs):
     assert all(e["completed"] for e in errors.values())
 
 
+def test_the_assumed_rudder_rate_of_a_model_is_froude_scaled_up(own_ship):
+    """The IMO steering-gear rate (2.32 deg/s at full scale) on a 1:45.7 model is 15.7 deg/s,
+    as the built-in KVLCC2 model's 15.8; it had been divided by sqrt(45.7) (0.343 deg/s: a
+    held-out zig-zag flew 24 L off, overshooting 53 deg against 4.8)."""
+    model = own_ship(KCS_PARTICULARS.replace("[mass]", "scale = 45.7\n[mass]"))
+    assert model.servo.rate_max == pytest.approx(65.0 / 28.0 * 45.7 ** 0.5, rel=1e-12)
+    assert model.servo.rate_max == pytest.approx(load_ship("kvlcc2").servo.rate_max, rel=0.01)
+    assert "rate_max = 15.7 deg/s" in model.assumptions[1]
+    partial = own_ship(KCS_PARTICULARS.replace("[mass]", "scale = 45.7\n[mass]")
+                       + "[servo]\nT_R = 0.2\n")  # a [servo] without rate_max scales it too
+    assert partial.servo.rate_max == model.servo.rate_max and partial.servo.T_R == 0.2
+    assert own_ship(KCS_PARTICULARS).servo.rate_max == pytest.approx(65.0 / 28.0, rel=1e-12)
+
+
 def test_an_identification_ship_cannot_be_simulated(own_ship):
     with pytest.raises(SindyshipInputError, match="no MMG hull"):
         MMGModel(own_ship(KCS_PARTICULARS))

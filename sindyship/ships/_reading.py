@@ -262,7 +262,8 @@ def _abkowitz_added_masses(data: dict, source: str) -> dict[str, float]:
 
 #: Rudder servo of a ship file that gives none: a time constant of 0.1 L/U0, the rate of the
 #: IMO steering-gear rule (35 deg to 30 deg the other side in 28 s, 2.32 deg/s full scale,
-#: Froude-scaled by the ship's ``scale``) and 35 deg hard over.
+#: Froude-scaled by the ship's ``scale``: a model's times are shorter by sqrt(scale), its
+#: rates faster by as much) and 35 deg hard over.
 DEFAULT_SERVO = {"T_R": 0.1, "rate_max": 65.0 / 28.0, "delta_max": 35.0}
 
 
@@ -350,8 +351,8 @@ def _identification_ship(data: dict, source: str) -> Ship:
                                                  for key in assumed)
             + " (Prime I); give them in [abkowitz] or as m_x, m_y, J_zz in [mass]")
     servo_table = {**DEFAULT_SERVO, **dict(data.get("servo") or {})}
-    if "servo" not in data:
-        servo_table["rate_max"] = DEFAULT_SERVO["rate_max"] / math.sqrt(particulars.scale)
+    if "rate_max" not in (data.get("servo") or {}):
+        servo_table["rate_max"] = DEFAULT_SERVO["rate_max"] * math.sqrt(particulars.scale)
     servo = _group(Servo, servo_table, "servo", source)
     servo_assumed = [key for key in DEFAULT_SERVO if key not in (data.get("servo") or {})]
     if servo_assumed:
