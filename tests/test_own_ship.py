@@ -92,6 +92,30 @@ def test_the_assumed_rudder_rate_of_a_model_is_froude_scaled_up(own_ship):
     assert own_ship(KCS_PARTICULARS).servo.rate_max == pytest.approx(65.0 / 28.0, rel=1e-12)
 
 
+@pytest.mark.parametrize("edit, message", [
+    (("delta_max = 35.0", "delta_max = 0.61"),  # radians: every flight clipped to 0.6 deg
+     r"\[servo\] delta_max = 0\.61 is outside its physical range \[5, 90\) \(deg: rudders go "
+     r"hard over at 25-45 deg\)\.$"),
+    (("displacement = 52030.0", "displacement = 152030.0"),
+     r"displacement = 152030 m\^3 in L x B x d = 230 x 32\.2 x 10\.8 m is a block coefficient "
+     r"of 1\.9, outside the 0\.25-1 of ship hulls; check the values and their units"),
+    (("displacement = 52030.0", "displacement = 7000.0"), r"block coefficient of 0\.0875"),
+    (("L = 230.0", "L = 754.6"),  # feet, beside a beam and draught in metres
+     r"block coefficient of 0\.198"),
+    (("k_zz = 0.25", "k_zz = 0.25\nm = 0.23"),
+     r"\[mass\] m = 0\.23 and the displacement's rho displacement / \(0\.5 rho L\^2 d\) = "
+     r"0\.1821 differ by 26%; correct the one that is wrong \(or leave m out to take it from "
+     r"the displacement\)\.$"),
+])
+def test_particulars_that_contradict_each_other_are_refused(own_ship, edit, message):
+    """Each had loaded and fitted without a word (a block coefficient of 1.9 moved the
+    prior's Y'_v from -0.0213 to -0.0372; a rudder limit of 0.61 deg clipped every flight)."""
+    with pytest.raises(SindyshipInputError, match=message):
+        own_ship((KCS_PARTICULARS + TABLE_6).replace(*edit))
+    own_ship(KCS_PARTICULARS + TABLE_6)  # as given, the KCS loads
+    own_ship((KCS_PARTICULARS + TABLE_6).replace("k_zz = 0.25", "k_zz = 0.25\nm = 0.18228"))
+
+
 def test_an_identification_ship_cannot_be_simulated(own_ship):
     with pytest.raises(SindyshipInputError, match="no MMG hull"):
         MMGModel(own_ship(KCS_PARTICULARS))

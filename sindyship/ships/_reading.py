@@ -64,8 +64,13 @@ _RANGES = {
     ("particulars", "rho"): (900.0, 1100.0, "[]", "kg/m^3: fresh water is 1000, sea water 1025"),
     ("servo", "T_R"): (0.01, 10.0, "[]", "units of L/U0: the KCS has 1, a model's fast servo 0.1"),
     ("servo", "rate_max"): (0.1, 100.0, "[]", "deg/s: steering gear turns 2.3-20 deg/s"),
-    ("servo", "delta_max"): (0.0, 90.0, "()", "deg"),
+    ("servo", "delta_max"): (5.0, 90.0, "[)", "deg: rudders go hard over at 25-45 deg"),
 }
+#: Block coefficients displacement / (L B d) of ship hulls: below, a length in feet or a
+#: displacement in another unit; above 1, a hull fuller than its box.
+BLOCK_COEFFICIENT_RANGE = (0.25, 1.0)
+#: How far a given mass m may stand from the displacement's, rho displacement, as a fraction.
+MASS_TOLERANCE = 0.05
 #: Largest Froude number U0 / sqrt(g L) of a displacement ship's approach speed.
 MAX_FROUDE = 1.0
 
@@ -95,6 +100,15 @@ def _check_physics(particulars: Particulars, servo: Servo | None, source: str,
                 f"{source}: [particulars] {key} = {getattr(particulars, key):g} m is more than the "
                 f"length L = {particulars.L:g} m; check the values and their units."
             )
+    c_b = particulars.displacement / (particulars.L * particulars.B * particulars.d)
+    low, high = BLOCK_COEFFICIENT_RANGE
+    if not low <= c_b <= high:
+        raise SindyshipInputError(
+            f"{source}: [particulars] displacement = {particulars.displacement:g} m^3 in L x B x d "
+            f"= {particulars.L:g} x {particulars.B:g} x {particulars.d:g} m is a block "
+            f"coefficient of {c_b:.3g}, outside the {low:g}-{high:g} of ship hulls; check the "
+            "values and their units (metres, m^3)."
+        )
     if abs(particulars.x_G) > 0.5 * particulars.L:
         raise SindyshipInputError(
             f"{source}: [particulars] x_G = {particulars.x_G:g} m lies outside the hull (more than "
@@ -206,8 +220,16 @@ def _mass_properties(data: dict, p: Particulars, source: str) -> MassProperties:
                 "radius of gyration over L: 0.25 for most ships)."
             )
     scale_m = 0.5 * p.rho * p.L**2 * p.d
+    displaced = p.rho * p.displacement / scale_m
     if "m" not in mass_table:
-        mass_table["m"] = p.rho * p.displacement / scale_m
+        mass_table["m"] = displaced
+    given = _finite(mass_table["m"], "[mass] m", source)
+    if abs(given / displaced - 1.0) > MASS_TOLERANCE:
+        raise SindyshipInputError(
+            f"{source}: [mass] m = {given:g} and the displacement's rho displacement / (0.5 rho "
+            f"L^2 d) = {displaced:.4g} differ by {abs(given / displaced - 1.0):.0%}; correct the "
+            "one that is wrong (or leave m out to take it from the displacement)."
+        )
     if "I_zz" not in mass_table:
         if k_zz is None:
             raise SindyshipInputError(f"{source}: [mass] needs I_zz or k_zz.")
