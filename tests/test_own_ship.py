@@ -192,24 +192,34 @@ def test_the_command_line_names_what_the_ship_assumes(tmp_path, protocol_runs):
     assert "speed_reference" in notes[3]
 
 
-def test_a_design_speed_in_knots_is_named_by_the_fit(tmp_path, protocol_runs):
-    """U0 = 24 (knots, written for m/s): the records never reach 0.7 U0, which a fit says
-    in a note (the model is made non-dimensional with the wrong speed); with U0 in m/s it
-    says nothing of the speed."""
+def test_a_design_speed_in_knots_is_refused_by_the_fit(tmp_path, protocol_runs):
+    """U0 = 24 (knots, written for m/s): the records never reach 0.6 U0, and fit, diagnose
+    and discover refuse them (the model, the automatic time range and the sampling notes
+    would all scale with the wrong speed: a turn had been cut to 124 s of 3200); records
+    that reach 0.65 U0 are fitted with a note, and with U0 in m/s nothing is said."""
     from sindyship.measurements import write_csv
 
     records = []
     for run in protocol_runs["train"][:2]:
         records.append(tmp_path / f"{run.name}.csv")
         write_csv(run, records[-1])
-    for speed, noted in (("24.0", True), ("12.348", False)):
-        path = tmp_path / "ship.toml"
+    path = tmp_path / "ship.toml"
+    path.write_text(KCS_PARTICULARS.replace("U0 = 12.348", "U0 = 24.0"), encoding="utf-8")
+    for verb in ("fit", "diagnose", "discover"):
+        code, out, err = run_sindyship(verb, *records, "--ship", path,
+                                       *(("--out", tmp_path / "m.json") if verb == "fit" else ()))
+        assert code == 2 and out == "", err
+        assert err.strip().endswith(
+            "no training record goes faster than 12.35 m/s, 0.51 times the design speed U0 = 24 "
+            "m/s of ship 'my-kcs'; give the ship the records are of, with its approach speed U0 "
+            "in m/s."), err
+    for speed, noted in (("19.0", True), ("12.348", False)):
         path.write_text(KCS_PARTICULARS.replace("U0 = 12.348", f"U0 = {speed}"),
                         encoding="utf-8")
         code, _, err = run_sindyship("fit", *records, "--ship", path, "--optimizer", "ls",
                                      "--out", tmp_path / "m.json")
         assert code == 0, err
-        assert ("note: no record reaches more than 0.51 times the design speed U0 = 24 m/s"
+        assert ("note: no record reaches more than 0.65 times the design speed U0 = 19 m/s"
                 in err) is noted, err
 
 

@@ -320,8 +320,9 @@ def test_a_streamed_fit_notes_coarse_sampling_as_the_fit_in_memory_does(files, c
 
 def test_a_streamed_fit_notes_records_slower_than_the_ships_speed_as_in_memory(
         files, client, tmp_path, capsys):
-    """The KCS's records given a ship whose U0 is twice theirs never reach 0.7 U0: both fits
-    say so in the same line (the streamed one from each record's highest speed)."""
+    """The KCS's records given a ship whose U0 is 1.6 times theirs never reach 0.7 U0: both
+    fits say so in the same line (the streamed one from each record's highest speed); given
+    twice their U0 they never reach 0.6 U0, and both refuse them in the same line."""
     from pathlib import Path
 
     import sindyship
@@ -331,6 +332,14 @@ def test_a_streamed_fit_notes_records_slower_than_the_ships_speed_as_in_memory(
     ship.write_text(source.replace('name = "kcs"', 'name = "fast"').replace(
         "U0 = 12.348 ", "U0 = 24.696 "))
     common = [*map(str, files["csv"]), "--ship", str(ship), "--optimizer", "ls"]
+    refusals = []
+    for stream in ((), ("--stream", "--scheduler", client.scheduler.address)):
+        assert main(["fit", *common, *stream, "--out", str(tmp_path / "m.json")]) == 2
+        refusals.append(capsys.readouterr().err.strip().splitlines()[-1])
+    assert refusals[0] == refusals[1] and "0.50 times the design speed U0 = 24.7 m/s" in \
+        refusals[0] and not (tmp_path / "m.json").exists()
+    ship.write_text(source.replace('name = "kcs"', 'name = "fast"').replace(
+        "U0 = 12.348 ", "U0 = 19.7568 "))
     assert main(["fit", *common, "--out", str(tmp_path / "memory.json")]) == 0
     in_memory = [line for line in capsys.readouterr().err.splitlines()
                  if line.startswith("note: no record reaches")]
@@ -339,7 +348,7 @@ def test_a_streamed_fit_notes_records_slower_than_the_ships_speed_as_in_memory(
     streamed = [line for line in capsys.readouterr().err.splitlines()
                 if line.startswith("note: no record reaches")]
     assert len(in_memory) == 1 and streamed == in_memory
-    assert "times the design speed U0 = 24.7 m/s of ship fast" in in_memory[0]
+    assert "0.63 times the design speed U0 = 19.76 m/s of ship fast" in in_memory[0]
 
 
 def test_a_parquet_timestamp_column_is_read_as_seconds_from_the_first_sample(tmp_path, kcs):

@@ -92,7 +92,7 @@ def run(args) -> int:
     from ..arguments import check_two_records
     from ..library import load_effect, names_a_file
     from ..records import expand_paths
-    from ._common import load_cli_ship, note_records_ship
+    from ._common import check_training_speed, load_cli_ship, note_records_ship
 
     start = time.perf_counter()
     args.data, args.test = expand_paths(args.data), expand_paths(args.test)
@@ -104,6 +104,7 @@ def run(args) -> int:
     records, test = read_record_sets(args.data, args.test, resample=args.resample,
                                      ship=ship, skip_checks=args.skip_check,
                                      time_range=args.time_range)
+    check_training_speed(ship, records)
     check_simulation_cost(ship, max(record.duration for record in records + test))
     from ..identify import check_term_values, resolve_library
 

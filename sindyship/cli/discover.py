@@ -59,7 +59,7 @@ def run(args) -> int:
     from ..arguments import check_two_records
     from ..library import load_effect
     from ..records import expand_paths
-    from ._common import load_cli_ship, note_records_ship
+    from ._common import check_training_speed, load_cli_ship, note_records_ship
 
     args.data = expand_paths(args.data)
     if args.out is not None:
@@ -69,6 +69,7 @@ def run(args) -> int:
     ship = load_cli_ship(args.ship)
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
+    check_training_speed(ship, records)
     from ..identify import resolve_library
 
     library = resolve_library(args.library, (), speed_form(args, ship))

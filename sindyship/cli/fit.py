@@ -9,6 +9,7 @@ from ._common import (
     bounded_float,
     bounded_int,
     check_inputs,
+    check_training_speed,
     emit,
     load_cli_ship,
     note_records_ship,
@@ -216,6 +217,7 @@ def run(args) -> int:
                  "by itself).")
     records = read_records(args.data, args.resample, ship=ship, skip_checks=args.skip_check,
                            time_range=args.time_range)
+    check_training_speed(ship, records)
     resolve_cli_rudder_signal(args, delta_recorded(records))
     smoothing = _smoothing(args, records, ship, effects, params, speed)
     if smoothing is not None:
@@ -368,6 +370,7 @@ def _run_streamed(args, ship, params: dict, speed: str) -> int:
     more than half of it) and flies their segments on the cluster's workers."""
     effects = split_names(args.effects)
     model, summary, whole = streamed_fit(args, ship, effects, params, speed)
+    check_training_speed(ship, fastest=max(whole.fastest, default=None))
     report_prior_fit(model)
     if args.refine and _too_many_to_refine(summary["samples"], model):
         args.refine = 0
