@@ -72,6 +72,11 @@ class _Package(types.ModuleType):
             return  # the import system's binding: the name goes on to the function
         super().__setattr__(name, value)
 
+    def __reduce__(self):
+        """Pickled by name, as a plain module is by cloudpickle: a function that uses ``ss``
+        goes to joblib's and Dask's workers, which import the package there."""
+        return importlib.import_module, (self.__name__,)
+
 
 sys.modules[__name__].__class__ = _Package
 

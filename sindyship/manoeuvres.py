@@ -169,6 +169,13 @@ class Manoeuvre:
                 "a zig-zag needs a positive rudder amplitude and check angle (e.g. --rudder 20 "
                 "--check 20)."
             )
+        if self.first_sign not in (1, -1):
+            raise SindyshipInputError(
+                f"first_sign is {self.first_sign!r}; give +1 (starboard first) or -1 (port).")
+        if not math.isfinite(self.rudder) or abs(self.rudder) >= 90.0:
+            raise SindyshipInputError(
+                f"rudder {self.rudder!r} deg is no rudder angle; Manoeuvre takes degrees, up to "
+                "the ship's rudder limit.")
 
     @property
     def label(self) -> str:
@@ -320,7 +327,17 @@ def fly(dynamics, manoeuvres: Sequence[Manoeuvre], *, state0: np.ndarray | None 
         raise TypeError(f"dynamics must be a model (MMGModel, an identified model or its "
                         f"dynamics), not {type(dynamics).__name__}.")
     ship = dynamics.ship
+    for m in manoeuvres:
+        if abs(m.rudder) > ship.servo.delta_max:
+            raise SindyshipInputError(
+                f"{m.label}: rudder {m.rudder:g} deg is beyond the rudder limit of {ship.name} "
+                f"({ship.servo.delta_max:g} deg); give an angle of magnitude up to "
+                f"{ship.servo.delta_max:g} deg.")
     s0 = initial_state(ship) if state0 is None else np.asarray(state0, dtype=float)
+    if s0.shape != (7,) or not np.all(np.isfinite(s0)):
+        raise SindyshipInputError(
+            f"state0 has shape {s0.shape}; give 7 finite values [u, v, r, x, y, psi, delta] "
+            "(SI, rad).")
     groups: dict[tuple, list[int]] = {}
     for i, m in enumerate(manoeuvres):
         groups.setdefault((m.duration, m.dt), []).append(i)

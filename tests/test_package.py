@@ -40,3 +40,21 @@ print("ok")
                           timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip() == "ok"
+
+
+def test_the_package_pickles_by_name_so_a_function_using_it_goes_to_workers():
+    """A notebook function that uses ``ss`` could not go to joblib's workers (cloudpickle
+    dispatches on the module type, which the package's own class is not)."""
+    import pickle
+
+    import joblib
+
+    import sindyship as ss
+
+    assert pickle.loads(pickle.dumps(ss)) is ss
+
+    def version(_):
+        return ss.__version__, ss.load_ship("kcs").L
+
+    assert joblib.Parallel(n_jobs=2)(joblib.delayed(version)(i) for i in range(2)) == \
+        [(ss.__version__, 230.0)] * 2

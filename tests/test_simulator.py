@@ -215,3 +215,30 @@ def test_a_replayed_rudder_is_interpolated_exactly_as_numpy_does():
         for t in probes:
             assert rudder.value(float(t), None) == float(np.interp(t, times, angles)), (n, t)
     assert math.isnan(PrescribedRudder(np.array([0.0, 1.0]), np.zeros(2)).value(math.nan, None))
+
+
+@pytest.mark.parametrize("arguments, message", [
+    ({"kind": "zigzag", "rudder": 20, "check": 20, "first_sign": 0},
+     r"^first_sign is 0; give \+1 \(starboard first\) or -1 \(port\)\.$"),
+    ({"kind": "spiral", "rudder": 20, "first_sign": 2}, r"^first_sign is 2"),
+    ({"kind": "random", "rudder": 120}, r"^rudder 120 deg is no rudder angle; Manoeuvre takes "
+                                        r"degrees, up to the ship's rudder limit\.$"),
+])
+def test_a_manoeuvre_refuses_what_it_would_fly_wrongly(arguments, message):
+    """A zig-zag with first side 0 had flown as a starboard one.  A rudder below 1 deg is
+    taken (an unstable ship loops on it: tests/test_units_on_load.py)."""
+    with pytest.raises(SindyshipInputError, match=message):
+        Manoeuvre(**arguments)
+
+
+def test_fly_refuses_a_rudder_beyond_the_ships_limit_and_a_state_of_another_shape(kcs):
+    """A 60 deg turn had flown as tc60_stbd with its actual rudder held at 35 deg."""
+    with pytest.raises(SindyshipInputError, match=(
+            r"^tc60_stbd: rudder 60 deg is beyond the rudder limit of kcs \(35 deg\); give an "
+            r"angle of magnitude up to 35 deg\.$")):
+        fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=60)])
+    with pytest.raises(SindyshipInputError, match=(
+            r"^state0 has shape \(3,\); give 7 finite values \[u, v, r, x, y, psi, delta\]")):
+        fly(MMGModel(kcs), [Manoeuvre("straight", duration=10)], state0=np.array([12.0, 0, 0]))
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=-35, duration=10)])
+    assert run.name == "tc35_port"
