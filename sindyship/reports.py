@@ -334,10 +334,12 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
         flown = [s.effect.name for s in diagnosis.ranking if s.confirmation is not None]
         checked = (f", re-flying the training records with {', '.join(flown)} brings them no "
                    "clearly closer" if flown else "")
-        text = (f"Verdict: complete - no catalogued effect explains "
-                f"{100 * diagnosis.threshold:.0f} % or more of the remaining force error"
-                f"{checked}, every training flight completed and the library predicts most of "
-                "every force.")
+        refuted = any(s.meaningful and s.confirmation is not None
+                      and s.confirmation.confirmed is False for s in diagnosis.ranking)
+        why = (diagnosis.no_catalogued_effect if refuted else "no catalogued effect explains "
+               f"{100 * diagnosis.threshold:.0f} % or more of the remaining force error{checked}")
+        text = (f"Verdict: complete - {why}, every training flight completed and the library "
+                "predicts most of every force.")
     elif verdict == "add-effect":
         top = diagnosis.top
         why = "" if top.meaningful else (

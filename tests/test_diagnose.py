@@ -756,3 +756,42 @@ def test_the_speed_form_advice_says_when_the_held_out_records_leave_its_speed_ra
     switch = replace(outside, recommended="instantaneous")
     assert switch.text().endswith("outside the range this was judged on: judge the fit on the "
                                   "held-out records.")
+
+
+def test_an_effect_is_named_only_once_re_flown_and_every_refuted_one_hands_over(kcs):
+    """A shallow patch two ship lengths north (no catalogued effect): re-flying refutes the
+    two effects the force error singles out first; the third, environment, had been named
+    without a flight (followed, it left the turns 6.4 and 7.4 L off).  Now it is re-flown,
+    refuted too, and the search beyond the catalogue runs and finds the edge."""
+    plan = protocol_manoeuvres()
+    hidden = parse_effects(["shallow_patch=0.8", "patch_distance=2", "patch_dir=0"])
+    runs = {key: simulate_with_effects(kcs, plan[key], hidden) for key in plan}
+    result = diagnose(runs["train"], kcs, test=runs["test"])
+    meaningful = [s for s in result.ranking if s.meaningful]
+    assert [s.effect.name for s in meaningful][:3] == ["asymmetry", "higher_order",
+                                                      "environment"]
+    assert all(s.confirmation is not None and s.confirmation.confirmed is False
+               for s in meaningful)
+    assert result.top is None and result.verdict == "add-discovered"
+    assert result.discovery.best.family == "edge"
+    verdict = " ".join(result.report().split("Verdict: ")[1].split())
+    assert verdict.startswith("re-flying the training records refutes asymmetry, higher_order, "
+                              "environment, the catalogued effects the force error singles "
+                              "out, but edge was discovered beyond the catalogue")
+
+
+def test_a_complete_verdict_says_re_flying_refuted_the_meaningful_effects(symmetric):
+    """One per cent of noise on a ship without asymmetry: higher_order and crossflow are
+    meaningful by their share of the error above the noise, and re-flying refutes both; the
+    verdict had read "no catalogued effect explains 5 % or more" beside them."""
+    plan = protocol_manoeuvres()
+    runs = {key: simulate_with_effects(symmetric, plan[key], parse_effects(["noise=0.01"]))
+            for key in plan}
+    result = diagnose(runs["train"], symmetric, test=runs["test"])
+    meaningful = [s.effect.name for s in result.ranking if s.meaningful]
+    assert meaningful == ["higher_order", "crossflow"] and result.verdict == "complete"
+    assert all(result.score(name).confirmation.confirmed is False for name in meaningful)
+    verdict = " ".join(result.report().split("Verdict: ")[1].split())
+    assert verdict == ("complete - re-flying the training records refutes higher_order, "
+                       "crossflow, the catalogued effects the force error singles out, every "
+                       "training flight completed and the library predicts most of every force.")

@@ -66,7 +66,8 @@ def add_parser(sub) -> None:
                    f"(default {MEANINGFUL_SHARE})")
     p.add_argument("--confirm", type=bounded_int(0, MAX_CONFIRM), default=2,
                    help="best candidates to confirm by refitting and re-flying, 0 to "
-                   f"{MAX_CONFIRM} (default 2)")
+                   f"{MAX_CONFIRM} (default 2); while they are refuted, the next meaningful "
+                   "one is re-flown too")
 
 
 def _write_folder(out: Path, result, iterative, text: str, document: dict, progress_bar: bool

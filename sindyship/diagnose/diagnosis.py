@@ -256,11 +256,7 @@ class Diagnosis:
     @property
     def meaningful_top(self) -> EffectScore | None:
         """The best meaningful effect that re-flying does not refute, or None."""
-        for score in self.ranking:
-            if score.meaningful and (score.confirmation is None
-                                     or score.confirmation.confirmed is not False):
-                return score
-        return None
+        return _meaningful_top(self.ranking)
 
     def score(self, name: str) -> EffectScore:
         """The score of one effect by name."""
@@ -335,6 +331,36 @@ def _finite_or_inf(value: float) -> float:
     return value if math.isfinite(value) else math.inf
 
 
+def _meaningful_top(ranking: Sequence[EffectScore]) -> EffectScore | None:
+    for score in ranking:
+        if score.meaningful and (score.confirmation is None
+                                 or score.confirmation.confirmed is not False):
+            return score
+    return None
+
+
+def confirm_by_flights(scores: Sequence[EffectScore], model: AbkowitzModel,
+                       fitted: Sequence[Trajectory], sets: list, flown: list, settings: Mapping,
+                       *, optimizer: str, n_jobs: int | None, progress: bool) -> None:
+    """Refit with each effect and fly the ``sets`` again: each score's ``confirmation``, its
+    flights against the ``model``'s (``flown``, one list per set)."""
+    if not scores:
+        return
+    models = []
+    for score in scores:
+        lib = model.library.extended(score.effect)
+        models.append(_fit(fitted, model.ship, lib, design(fitted, model.ship, lib, **settings),
+                           optimizer=optimizer, **settings))
+    after = _fly_many([(m, recs) for m in models for _, recs in sets], n_jobs=n_jobs,
+                      progress=progress, what="flights")
+    n_sets = len(sets)
+    for j, (score, refit) in enumerate(zip(scores, models, strict=True)):
+        rows = _change_rows(sets, flown, after[j * n_sets:(j + 1) * n_sets], model.ship.L)
+        score.confirmation = BeforeAfter(model.library.name, refit.library.name,
+                                         (score.effect.name,), rows, model_before=model,
+                                         model_after=refit)
+
+
 def flight_confirmed(score: EffectScore) -> bool:
     """Whether re-flying the training records with an effect brings them closer by a clear
     margin (geometric mean of after over before at most :data:`FLIGHT_OVERRIDE_RATIO`, no new
@@ -405,7 +431,9 @@ def diagnose(
     threshold : float
         Share of the cross-validated force error an effect must explain to be meaningful.
     confirm : int
-        Number of best meaningful candidates to confirm by refitting and re-flying.
+        Number of best meaningful candidates to confirm by refitting and re-flying; while
+        re-flying refutes those, the next meaningful one is re-flown too (an effect is named
+        only once its flights do not refute it).  0 re-flies none.
     fly_training : bool
         Fly the training records (compare, confirmation).  Without it only the held-out
         records are flown, and a candidate's ``confirmation.confirmed`` is None.
@@ -464,39 +492,17 @@ def diagnose(
     candidates = [s for s in ranking if s.meaningful] + [
         s for s in ranking if not s.meaningful]
     chosen = candidates[: max(int(confirm), 0)] if sets else []
-    models = [model]
-    for score in chosen:
-        lib = base.extended(score.effect)
-        models.append(
-            _fit(
-                fitted,
-                ship,
-                lib,
-                design(fitted, ship, lib, **settings),
-                optimizer=optimizer,
-                **settings,
-            )
-        )
-    flown = _fly_many(
-        [(m, recs) for m in models for _, recs in sets],
-        n_jobs=n_jobs,
-        progress=progress,
-        what="flights",
-    )
+    flown = _fly_many([(model, recs) for _, recs in sets], n_jobs=n_jobs, progress=progress,
+                      what="flights")
     comparisons = []
     for k, (kind, recs) in enumerate(sets):
         comparisons += compare(model, recs, kind=kind, flights=flown[k])
-    n_sets = len(sets)
-    for j, score in enumerate(chosen, start=1):
-        rows = _change_rows(sets, flown[:n_sets], flown[j * n_sets : (j + 1) * n_sets], ship.L)
-        score.confirmation = BeforeAfter(
-            base.name,
-            models[j].library.name,
-            (score.effect.name,),
-            rows,
-            model_before=model,
-            model_after=models[j],
-        )
+    confirm_by_flights(chosen, model, fitted, sets, flown, settings, optimizer=optimizer,
+                       n_jobs=n_jobs, progress=progress)
+    while chosen and (top := _meaningful_top(ranking)) is not None and top.confirmation is None:
+        # an effect is named only once re-flown: down the ranking while those are refuted
+        confirm_by_flights([top], model, fitted, sets, flown, settings, optimizer=optimizer,
+                           n_jobs=n_jobs, progress=progress)
     result = Diagnosis(
         ship=ship,
         library=base,
