@@ -152,6 +152,20 @@ def _check_arguments(model, records, max_evaluations, segment_s, prior_weight) -
         raise ValueError(f"prior_weight must be a non-negative number, not {prior_weight!r}.")
 
 
+def _refused_validation(check: dict) -> str:
+    """Why the refinement was refused: a divergence first (the mean distances of a diverged
+    flight cover only the time before it, and can read as closer), else the distances."""
+    if check["diverged"]:
+        return ("refined on half of the records, the model diverged on "
+                f"{', '.join(check['diverged'])} of the other half, which the fit flies longer "
+                "(over the time both flights cover, "
+                f"{check['ratio']:.3f} times as far off as fitted); the fitted coefficients are "
+                "kept")
+    return ("refined on half of the records, the model flew the other half "
+            f"{check['ratio']:.3f} times as far off as fitted ({check['why']}); the fitted "
+            "coefficients are kept")
+
+
 def _positive(value) -> bool:
     return (not isinstance(value, bool) and isinstance(value, numbers.Real)
             and math.isfinite(value) and value > 0)
@@ -245,9 +259,7 @@ def refine(model: AbkowitzModel, records: Sequence[Trajectory], *,
                                            "segment_s": "whole" if last is None else last})
         kept.info["refined"].update(
             stages=[],  # its fitted flights were flown once, to report them; no stage ran
-            stopped=("refined on half of the records, the model flew the other half "
-                     f"{check['ratio']:.3f} times as far off as fitted ({check['why']}); the "
-                     "fitted coefficients are kept"),
+            stopped=_refused_validation(check),
             refused_validation=True, validation=check)
         if "straight_run" in model.info:  # the fit's own record, as it was
             kept.info["straight_run"] = dict(model.info["straight_run"])

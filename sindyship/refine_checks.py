@@ -121,7 +121,7 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
     why = (f"{', '.join(worse)} diverged" if worse else
            "no closer" if not accepted else "closer")
     return {"refined_on": [r.name for r in fitted_on], "flown": [r.name for r in flown],
-            "ratio": ratio, "accepted": accepted, "why": why}
+            "ratio": ratio, "accepted": accepted, "why": why, "diverged": worse}
 
 
 def flown_whole(models: Sequence[AbkowitzModel], records) -> list[list[tuple]]:

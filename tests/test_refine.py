@@ -580,3 +580,19 @@ def test_a_refinement_is_refused_when_its_hard_over_turn_diverges_widens_or_keep
     assert verdict({"tactical_diameter_L": 2.5, "final_speed": 0.037}) == (
         "slows to 0.037 U0 in a hard-over turn to starboard, where the fit it started from "
         "keeps 0.43 U0")
+
+
+def test_a_refusal_for_a_divergence_names_it_before_the_distances():
+    """The refusal had read "flew the other half 0.387 times as far off as fitted
+    (zz15_15 diverged)", as if closer: a diverged flight's mean covers only its time before."""
+    from sindyship.refine import _refused_validation
+
+    diverged = {"ratio": 0.387, "why": "zz15_15 diverged", "diverged": ["zz15_15"]}
+    assert _refused_validation(diverged) == (
+        "refined on half of the records, the model diverged on zz15_15 of the other half, "
+        "which the fit flies longer (over the time both flights cover, 0.387 times as far off "
+        "as fitted); the fitted coefficients are kept")
+    farther = {"ratio": 1.898, "why": "no closer", "diverged": []}
+    assert _refused_validation(farther) == (
+        "refined on half of the records, the model flew the other half 1.898 times as far off "
+        "as fitted (no closer); the fitted coefficients are kept")
