@@ -116,6 +116,27 @@ def test_particulars_that_contradict_each_other_are_refused(own_ship, edit, mess
     own_ship((KCS_PARTICULARS + TABLE_6).replace("k_zz = 0.25", "k_zz = 0.25\nm = 0.18228"))
 
 
+@pytest.mark.parametrize("text, message", [
+    ('hull_form = "beta"\n', r"hull_form belongs to a ship file with the MMG model's \[hull\], "
+                             r"\[propeller\] and \[rudder\], which this one lacks; remove it"),
+    ('coriolis = "rigid-body"\n', r"coriolis belongs to a ship file with the MMG model's"),
+])
+def test_mmg_keys_in_a_file_for_identification_are_named(own_ship, text, message):
+    """hull_form had led to "top-level key 'speed_reference' is missing" and coriolis was
+    ignored without a word."""
+    with pytest.raises(SindyshipInputError, match=message):
+        own_ship(text + KCS_PARTICULARS)
+
+
+def test_an_added_mass_derivative_of_the_wrong_sign_is_named(own_ship):
+    """It had been refused as "[mass] m_x = -0.0064516 is outside its physical range", a key
+    the file never gave."""
+    with pytest.raises(SindyshipInputError, match=(
+            r"\[abkowitz\] X_udot = 0\.0004 is positive; an added mass makes it negative "
+            r"\(X_udot = -m_x d/L\), so check its sign\.$")):
+        own_ship(KCS_PARTICULARS + "[abkowitz]\nX_udot = 0.0004\n")
+
+
 def test_an_identification_ship_cannot_be_simulated(own_ship):
     with pytest.raises(SindyshipInputError, match="no MMG hull"):
         MMGModel(own_ship(KCS_PARTICULARS))

@@ -279,7 +279,13 @@ def _abkowitz_added_masses(data: dict, source: str) -> dict[str, float]:
     unknown = sorted(set(abkowitz) - valid_abk)
     if unknown:
         raise SindyshipInputError(f"{source}: unknown [abkowitz] key {unknown[0]!r}.")
-    return {k: float(_finite(v, f"[abkowitz] {k}", source)) for k, v in abkowitz.items()}
+    values = {k: float(_finite(v, f"[abkowitz] {k}", source)) for k, v in abkowitz.items()}
+    for key, mass in (("X_udot", "m_x"), ("Y_vdot", "m_y"), ("N_rdot", "J_zz")):
+        if values.get(key, 0.0) > 0.0:
+            raise SindyshipInputError(
+                f"{source}: [abkowitz] {key} = {values[key]:g} is positive; an added mass makes "
+                f"it negative ({key} = -{mass} d/L), so check its sign.")
+    return values
 
 
 #: Rudder servo of a ship file that gives none: a time constant of 0.1 L/U0, the rate of the
@@ -426,7 +432,15 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
     :data:`DEFAULT_SERVO`).
     """
     _check_misspelt(data, source)
-    if not any(section in data for section in ("hull", "propeller", "rudder", "hull_form")):
+    mmg = [section for section in ("hull", "propeller", "rudder") if section in data]
+    if not mmg:
+        given = [key for key in ("hull_form", "coriolis") if key in data]
+        if given:
+            raise SindyshipInputError(
+                f"{source}: {' and '.join(given)} belong{'s' if len(given) == 1 else ''} to a "
+                "ship file with the MMG model's [hull], [propeller] and [rudder], which this one "
+                "lacks; remove it for a ship for identification only (its Coriolis terms are the "
+                "rigid body's with the added masses), or give those sections.")
         return _identification_ship(data, source)
     _check_top_level(data, source)
     particulars = _group(Particulars, data.get("particulars"), "particulars", source)
