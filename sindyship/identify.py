@@ -454,7 +454,14 @@ def _fit_each(problems: dict[str, Design], optimizer: str, params: dict | None,
         problem = problems[dof]
         estimator = make_optimizer(optimizer, **dof_params(optimizer, params, ship, dof,
                                                             problem.terms, speed))
-        fitted[dof] = estimator.fit(problem.features, problem.target, groups=problem.groups)
+        try:
+            fitted[dof] = estimator.fit(problem.features, problem.target, groups=problem.groups)
+        except (TypeError, ValueError) as exc:
+            if type(exc).__name__ != "InvalidParameterError":  # scikit-learn's, on a value
+                raise
+            raise SindyshipInputError(
+                f"optimizer {optimizer!r} refuses its parameters ({params}): "
+                f"{str(exc).rstrip('.')}.") from None
     return fitted
 
 

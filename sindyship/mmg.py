@@ -25,7 +25,7 @@ import numpy as np
 
 from .conditions import wind_force
 from .errors import SindyshipInputError
-from .ships import Ship
+from .ships import Ship, load_ship
 from .simulation.kernels import ChannelSeries
 
 
@@ -293,6 +293,11 @@ class MMGModel:
     patch: tuple[float, float, float] | None = None
 
     def __post_init__(self):
+        if isinstance(self.ship, str | os.PathLike):  # a built-in name or a ship file
+            object.__setattr__(self, "ship", load_ship(self.ship))
+        if not isinstance(self.ship, Ship):
+            raise TypeError(f"ship must be a Ship, a built-in ship name such as 'kcs' or a ship "
+                            f"TOML file, not {type(self.ship).__name__}.")
         ship = self.ship
         if not ship.has_mmg:
             raise SindyshipInputError(

@@ -451,6 +451,9 @@ class AbkowitzModel:
                 "revolutions n at two settings for 1, n and n^2), or they do not belong to the "
                 f"ship {self.ship.name!r} (check its file's units); record more distinct "
                 "values, drop terms from the library, or fit with --optimizer prior.")
+        if Path(path).is_dir():
+            raise SindyshipInputError(f"{path} is a folder; give the model a file name, such as "
+                                      f"{Path(path) / 'model.json'}.")
         write_text_atomic(path, json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n")
 
     @classmethod

@@ -169,3 +169,31 @@ def test_a_missing_rudder_angle_is_named_as_such(runs, kcs):
             r"^records: zz20_20 has a missing or infinite delta at t = 100 s; give records "
             r"with every sample of u, v, r, x, y, psi and the rudder angle\.$")):
         ss.fit([Trajectory(data, runs[0].name), *runs[1:]], kcs)
+
+
+def test_wrong_arguments_to_the_python_functions_are_named(runs, kcs, tmp_path):
+    """Each had failed deep inside: an AttributeError on a str or a dict, an
+    IsADirectoryError on the atomic rename, scikit-learn's InvalidParameterError at fit."""
+    from sindyship.export import equations_latex, generate_python
+
+    mmg = ss.MMGModel("kcs")  # a ship's name, as fit takes it
+    assert mmg.ship == kcs
+    with pytest.raises(TypeError, match=r"^ship must be a Ship, a built-in ship name"):
+        ss.MMGModel(230.0)
+    model = paper_model(kcs)
+    for call in (lambda: generate_python(mmg), lambda: equations_latex(model.to_dict())):
+        with pytest.raises(TypeError, match=r"^model must be an identified AbkowitzModel "
+                           r"\(sindyship\.fit makes one, AbkowitzModel\.load reads one\)"):
+            call()
+    with pytest.raises(TypeError, match=r"AbkowitzModel\.from_dict\(it\)\), not dict\.$"):
+        equations_latex(model.to_dict())
+    with pytest.raises(ss.SindyshipInputError, match=r" is a folder; give the model a file "
+                       r"name, such as .*model\.json\.$"):
+        model.save(tmp_path)
+    for optimizer, params, message in (
+            ("lasso", {"cv": "loo"}, r"^optimizer 'lasso' refuses its parameters \(\{'cv': "
+                                     r"'loo'\}\): The 'cv' parameter of LassoCV must be"),
+            ("stlsq", {"threshold": -1}, r"^optimizer 'stlsq' refuses its parameters \(\{"
+                                         r"'threshold': -1\}\): The 'threshold' parameter")):
+        with pytest.raises(ss.SindyshipInputError, match=message):
+            ss.fit(runs, kcs, optimizer=optimizer, params=params)

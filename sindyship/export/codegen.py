@@ -18,7 +18,13 @@ from ..targets import DOFS, abkowitz_mass_matrix
 from ..terms import SPEED_FLOOR, channel_scaling, read_over_speed
 from . import _compiled
 from ._runtime import RUNTIME
-from .symbolic import _active_terms, _coriolis_polynomials, coefficient_symbol, force_expressions
+from .symbolic import (
+    _active_terms,
+    _coriolis_polynomials,
+    check_model,
+    coefficient_symbol,
+    force_expressions,
+)
 
 if TYPE_CHECKING:
     from ..model import AbkowitzModel
@@ -281,6 +287,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     >>> flight.states.shape, flight.diverged_at
     ((7, 60), None)
     """
+    check_model(model)
     from ..errors import SindyshipInputError
     from ..simulation import default_step, integrator_for
 

@@ -44,6 +44,23 @@ def coefficient_symbol(dof: str, term: Term) -> sympy.Symbol:
     return sympy.Symbol(term.identifier(dof), real=True)
 
 
+def check_model(model) -> None:
+    """Refuse anything but an identified model (an MMG model, a saved model's dictionary).
+
+    Examples
+    --------
+    >>> check_model({"coefficients": {}})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    TypeError: model must be an identified AbkowitzModel (sindyship.fit makes one, ...
+    """
+    if not all(hasattr(model, name) for name in ("library", "coefficients", "ship")):
+        hint = (" (for a saved model's dictionary, AbkowitzModel.from_dict(it))"
+                if isinstance(model, dict) else "")
+        raise TypeError("model must be an identified AbkowitzModel (sindyship.fit makes one, "
+                        f"AbkowitzModel.load reads one){hint}, not {type(model).__name__}.")
+
+
 def _active_terms(model: AbkowitzModel, dof: str) -> list[tuple[Term, float]]:
     """The terms of ``dof`` with a non-zero coefficient, in library order."""
     return [(term, model.coefficients[dof][term.text]) for term in model.library.terms[dof]
@@ -77,6 +94,7 @@ def force_expressions(model: AbkowitzModel, numeric: bool = False) -> dict[str, 
     >>> forces["Y"].has(sympy.Symbol("Y_vvr", real=True))
     True
     """
+    check_model(model)
     out = {}
     for dof in DOFS:
         # one Add of every term: adding them one at a time re-sorts the sum each time,
@@ -133,6 +151,7 @@ def model_equations(model: AbkowitzModel, numeric: bool = False) -> dict[str, sy
     >>> float(eqs["X"].rhs.subs(point))  # X'_0 of the paper is 0
     0.0
     """
+    check_model(model)
     M = abkowitz_mass_matrix(model.ship)
     forces = force_expressions(model, numeric=numeric)
     extra = coriolis_expressions(model.ship)

@@ -21,6 +21,7 @@ from .symbolic import (
     _CORIOLIS_TEXT,
     _active_terms,
     _coriolis_polynomials,
+    check_model,
 )
 
 if TYPE_CHECKING:
@@ -171,6 +172,7 @@ def equations_text(model: AbkowitzModel, precision: int = 4, *, width: int = 100
     >>> [line[:3] for line in text.splitlines() if line[1:3] == ": "]
     ['X: ', 'Y: ', 'N: ']
     """
+    check_model(model)
     precision = _check_precision(precision)
     lines = textwrap.wrap(_header(model), width=width, subsequent_indent="    ")
     for dof in DOFS:
@@ -237,6 +239,7 @@ def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool =
     >>> print(lines[2].split(" + 0.00246")[0])
     &\\qquad -0.00227 \\Delta u' - 0.000508 \\Delta u'^{2}
     """
+    check_model(model)
     precision = _check_precision(precision)
     if line_length < 1:
         raise SindyshipInputError(f"line_length must be at least 1, not {line_length}.")
@@ -347,6 +350,7 @@ def coefficient_table_latex(model: AbkowitzModel, precision: int = 4, *,
     >>> [line for line in table.splitlines() if line.startswith("$Y'_{vvr}")]
     ["$Y'_{vvr}$ & $-230253$ & $-230253$ \\\\\\\\"]
     """
+    check_model(model)
     precision = _check_precision(precision)
     heading = _latex_text(label if label is not None else model.optimizer.get("name", "model"))
     columns = ["Coefficient", heading]
