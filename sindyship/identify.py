@@ -459,9 +459,8 @@ def _fit_each(problems: dict[str, Design], optimizer: str, params: dict | None,
         except (TypeError, ValueError) as exc:
             if type(exc).__name__ != "InvalidParameterError":  # scikit-learn's, on a value
                 raise
-            raise SindyshipInputError(
-                f"optimizer {optimizer!r} refuses its parameters ({params}): "
-                f"{str(exc).rstrip('.')}.") from None
+            raise SindyshipInputError(f"optimizer {optimizer!r} refuses its parameters "
+                                      f"({params}): {str(exc).rstrip('.')}.") from None
     return fitted
 
 

@@ -18,16 +18,8 @@ from .errors import SindyshipInputError
 from .library import DOFS
 from .targets import is_under_resolved
 
-__all__ = [
-    "DOF_NAMES",
-    "SETS",
-    "before_after_report",
-    "diagnosis_report",
-    "error_cell",
-    "evaluation_report",
-    "iteration_report",
-    "reproduce_report",
-]
+__all__ = ["DOF_NAMES", "SETS", "before_after_report", "diagnosis_report", "error_cell",
+           "evaluation_report", "iteration_report", "reproduce_report"]
 
 #: The equations by name, for text.
 DOF_NAMES = {"X": "surge force X", "Y": "sway force Y", "N": "yaw moment N"}
@@ -429,16 +421,26 @@ def diagnosis_report(diagnosis, ship_argument: str | None = None,
     return "\n".join(lines)
 
 
+def _why_added(diagnosis) -> str:
+    """Why a round adds another effect than the first: those re-flying refutes, its flights."""
+    top = diagnosis.top
+    if top is None:  # a discovered effect: its own report says why
+        return ""
+    refuted = [s.effect.name for s in diagnosis.ranking if s.meaningful and s.confirmation
+               is not None and s.confirmation.confirmed is False]
+    parts = ([f"re-flying refutes {', '.join(refuted)}"] if refuted else []) + (
+        [] if top.meaningful else [f"with {top.effect.name} the training flights: {_closer(top)}"])
+    return f" ({'; '.join(parts)})" if top is not diagnosis.ranking[0] and parts else ""
+
+
 def iteration_report(iterative) -> str:
     """One paragraph per round, then the errors of every library."""
     lines = []
     for k, rnd in enumerate(iterative.rounds, 1):
         d = rnd.diagnosis
         top = ", ".join(f"{s.effect.name} {100 * s.explained:.1f} %" for s in d.ranking[:4])
-        lines.append(
-            f"Round {k}: library {d.library.name}: {top or 'no testable effect'}"
-            + (f" -> add {rnd.added}" if rnd.added else "")
-        )
+        lines.append(f"Round {k}: library {d.library.name}: {top or 'no testable effect'}"
+                     + (f" -> add {rnd.added}{_why_added(d)}" if rnd.added else ""))
     lines.append(f"Stopped: {iterative.stopped}")
     table = iterative.table
     if not table.empty:

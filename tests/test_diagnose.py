@@ -795,3 +795,36 @@ def test_a_complete_verdict_says_re_flying_refuted_the_meaningful_effects(symmet
     assert verdict == ("complete - re-flying the training records refutes higher_order, "
                        "crossflow, the catalogued effects the force error singles out, every "
                        "training flight completed and the library predicts most of every force.")
+
+
+def test_a_round_that_adds_another_effect_than_the_first_says_why(kcs, kcs_rounds):
+    """The rounds' summary had read "wind 35.8 %, asymmetry 0.0 % -> add asymmetry" with no
+    reason: re-flying refuted wind, and asymmetry brought the training flights closer."""
+    from sindyship.diagnose import BeforeAfter
+    from sindyship.evaluation import compare_flights, error_summary
+    from sindyship.reports import _why_added
+
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=35, duration=600)])
+
+    def change(before_off, after_off):
+        flights = []
+        for off in (before_off, after_off):
+            data = run.data.copy()
+            data["x"] = data["x"] + off * kcs.L
+            flights.append(Trajectory(data, name=run.name, meta={"diverged_at": None}))
+        row = {"manoeuvre": run.name, "set": "training",
+               "before": error_summary(flights[0], run, kcs.L),
+               "after": error_summary(flights[1], run, kcs.L),
+               "common": compare_flights(*flights, run, kcs.L)}
+        return BeforeAfter("abkowitz", "abkowitz+x", ("x",), [row])
+
+    first = kcs_rounds.rounds[0].diagnosis
+    best, second = first.ranking[0], first.ranking[1]
+    refuted = replace(best, meaningful=True, confirmation=change(0.2, 0.3))
+    favoured = replace(second, meaningful=False, confirmation=change(0.2, 0.1))
+    judged = replace(first, ranking=[refuted, favoured, *first.ranking[2:]], discovery=None)
+    assert judged.top is favoured
+    assert _why_added(judged) == (
+        f" (re-flying refutes {best.effect.name}; with {second.effect.name} the training "
+        "flights: brings them 2 times closer)")
+    assert _why_added(first) == ""  # the first by its share of the force error
