@@ -220,7 +220,7 @@ def _score_lines(k: int, score) -> list[str]:
                    + ("" if score.significant.get(d, True) else "?") for d in DOFS)
     mark = "" if score.meaningful else "  (not meaningful)"
     signal = ""
-    if abs(score.explained_signal - score.explained) > 0.005:
+    if f"{100 * score.explained_signal:.1f}" != f"{100 * score.explained:.1f}":  # judged on it
         signal = f"; {100 * score.explained_signal:.1f} % of the error above noise"
     lines = [
         f" {k}. {score.effect.name} - {score.effect.title}: explains "

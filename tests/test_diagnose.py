@@ -828,3 +828,16 @@ def test_a_round_that_adds_another_effect_than_the_first_says_why(kcs, kcs_round
         f" (re-flying refutes {best.effect.name}; with {second.effect.name} the training "
         "flights: brings them 2 times closer)")
     assert _why_added(first) == ""  # the first by its share of the force error
+
+
+def test_the_share_the_threshold_judges_is_printed_whenever_it_differs(kcs_rounds):
+    """A meaningful effect at 5.4 % of the force error and 5.7 % of the error above the noise
+    (the share the 5 % threshold judges) had been printed with the first alone."""
+    from sindyship.reports import _score_lines
+
+    score = kcs_rounds.rounds[0].diagnosis.ranking[0]
+    close = replace(score, explained=0.054, explained_signal=0.057)
+    assert "explains 5.4 % (" in _score_lines(1, close)[0]
+    assert "; 5.7 % of the error above noise" in _score_lines(1, close)[0]
+    same = replace(score, explained=0.054, explained_signal=0.0541)
+    assert "above noise" not in _score_lines(1, same)[0]
