@@ -659,3 +659,28 @@ def test_the_library_in_discrete_sindy_prints_with_default_and_own_names():
     with pytest.warns(UserWarning, match="by position"):
         model.fit(x[:, 1:], t=1, feature_names=["sway", "yaw"])
         assert model.get_feature_names() == ["sway", "yaw^2"]
+
+
+def test_a_library_and_a_model_copy_and_pickle_for_workers(kcs, protocol_runs):
+    """copy.deepcopy and pickle had failed on the library's read-only term mapping, so a model
+    could not be an argument of a joblib or Dask task."""
+    import copy
+    import pickle
+
+    import joblib
+
+    from sindyship.evaluation import evaluate
+    from sindyship.identify import fit
+
+    library = load_library("abkowitz").extended(load_effect("asymmetry"))
+    library = TermLibrary(library.name, library.system, library.description, library.terms,
+                          effects=library.effects, delays={"delta": 2.0}, speed="instantaneous")
+    for copied in (copy.deepcopy(library), pickle.loads(pickle.dumps(library))):
+        assert copied == library and copied.delays == {"delta": 2.0}
+        assert copied.speed == "instantaneous" and copied.effects == library.effects
+    model = fit(protocol_runs["train"][:4], kcs, effects=["asymmetry"])
+    twin = pickle.loads(pickle.dumps(model))
+    assert twin.coefficients == model.coefficients and twin.library == model.library
+    held_out = protocol_runs["test"][:1]
+    (remote,) = joblib.Parallel(n_jobs=2)(joblib.delayed(evaluate)(m, held_out) for m in [model])
+    assert remote == evaluate(model, held_out)

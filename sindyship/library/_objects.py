@@ -99,6 +99,13 @@ class TermLibrary:
         return hash((self.name, self.system, self.description, *self.terms.items(), self.effects,
                      *sorted(self.delays.items()), self.speed))
 
+    def __reduce__(self):
+        """Rebuilt from its fields (its term mapping is read-only): a library, and a model
+        that holds it, go to joblib's and Dask's workers and through ``copy.deepcopy``."""
+        texts = {dof: [term.text for term in terms] for dof, terms in self.terms.items()}
+        return type(self), (self.name, self.system, self.description, texts, self.source,
+                            self.effects, dict(self.delays), self.speed)
+
     def aligned(self, record):
         """The record with every delayed channel read ``delay`` seconds later.
 
