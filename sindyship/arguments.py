@@ -68,6 +68,9 @@ def as_records(records, name: str = "records", *, allow_empty: bool = False
 
     if isinstance(records, Trajectory | str | os.PathLike):
         records = [records]
+    if isinstance(records, dict):
+        raise TypeError(f"{name} must be a list of Trajectory (or of measurement CSV paths), "
+                        f"not a dict; pass list({name}.values()).")
     if not isinstance(records, Iterable):
         raise TypeError(f"{name} must be a list of Trajectory (or of measurement CSV paths), "
                         f"not {type(records).__name__}.")

@@ -176,6 +176,9 @@ def test_wrong_arguments_to_the_python_functions_are_named(runs, kcs, tmp_path):
     IsADirectoryError on the atomic rename, scikit-learn's InvalidParameterError at fit."""
     from sindyship.export import equations_latex, generate_python
 
+    with pytest.raises(TypeError, match=r"^records must be a list of Trajectory \(or of "
+                       r"measurement CSV paths\), not a dict; pass list\(records\.values\(\)\)\.$"):
+        ss.evaluate(paper_model(kcs), {run.name: run for run in runs})  # keys read as paths
     mmg = ss.MMGModel("kcs")  # a ship's name, as fit takes it
     assert mmg.ship == kcs
     with pytest.raises(TypeError, match=r"^ship must be a Ship, a built-in ship name"):
