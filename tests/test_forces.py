@@ -288,3 +288,18 @@ def test_another_ships_training_records_are_refused_by_forces(kcs, tmp_path, cap
     assert main(["forces", str(tmp_path / "model.json"), str(tmp_path / "captive.csv"),
                  "--training", str(tmp_path / "zz.csv")]) == 2
     assert "zz: the ship is never under way" in capsys.readouterr().err
+
+
+def test_captive_tests_run_far_above_the_ships_speed_are_refused(kcs):
+    """The full-scale KCS's tests (12.35 m/s) given a ship whose U0 is 1.9 times slower had
+    been compared (X correlation -0.13) and fitted (a hybrid fit then flew 60 L off); tests
+    at half the design speed stay taken."""
+    from sindyship.errors import SindyshipInputError
+
+    smaller = kcs.scaled((6.5 / kcs.U0) ** 2)  # U0 = 6.5 m/s
+    model = AbkowitzModel(smaller, load_library("abkowitz"), taylor_reference(kcs))
+    with pytest.raises(SindyshipInputError, match=(
+            r"^the captive tests run at 12\.3 m/s \(median\), far from the design speed 6\.5 m/s "
+            r"of the model's ship 'kcs-x0\.277098'; give captive tests of the same ship")):
+        compare_forces(model, captive_tests(kcs, "all", points=5))
+    compare_forces(model, captive_tests(smaller, "all", points=5, speed=0.5 * smaller.U0))
