@@ -15,6 +15,7 @@ __all__ = [
     "COLLINEAR_VIF",
     "CONFIRMING_RATIO",
     "FLIGHT_OVERRIDE_RATIO",
+    "FLIGHTS_PREFER_RATIO",
     "MEANINGFUL_SHARE",
     "UNEXPLAINED_SHARE",
 ]
@@ -31,6 +32,10 @@ CONFIRMING_RATIO = 0.9
 #: as a confirmation): under noise a force share can hide what the flights show, and a verdict
 #: never disagrees with a confirmation.
 FLIGHT_OVERRIDE_RATIO = CONFIRMING_RATIO
+#: Of two meaningful effects both confirmed by re-flying, the one the force error ranks lower
+#: is named when its training flights' ratio is at most this share of the other's (twice as
+#: close): the flights judge the model's use, the force share only points to candidates.
+FLIGHTS_PREFER_RATIO = 0.5
 #: Share of a measured force (squared relative RMS error of the leave-one-manoeuvre-out
 #: predictions) above which most of it is unexplained and the library cannot be complete.
 UNEXPLAINED_SHARE = 0.5

@@ -337,6 +337,12 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
         why = "" if top.meaningful else (
             f" (its share of the force error is below the threshold, but re-flying the training "
             f"records with it {_closer(top)})")
+        first = next((s for s in diagnosis.ranking if s.meaningful and (
+            s.confirmation is None or s.confirmation.confirmed is not False)), top)
+        if first is not top:
+            why = (f" (rather than {first.effect.name}, which explains more of the force error: "
+                   f"re-flying the training records with {top.effect.name} {_closer(top)}, "
+                   f"with {first.effect.name} {_closer(first).removeprefix('brings them ')})")
         given = diagnosis.library.effects if effect_arguments is None else effect_arguments
         options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
         text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... {options}; then "

@@ -12,6 +12,7 @@ import numpy as np
 from .._diagnosis_thresholds import (
     COLLINEAR_VIF,
     FLIGHT_OVERRIDE_RATIO,
+    FLIGHTS_PREFER_RATIO,
     MEANINGFUL_SHARE,
     NOISE_CAP,
     NOISE_VISIBLE,
@@ -332,11 +333,18 @@ def _finite_or_inf(value: float) -> float:
 
 
 def _meaningful_top(ranking: Sequence[EffectScore]) -> EffectScore | None:
-    for score in ranking:
-        if score.meaningful and (score.confirmation is None
-                                 or score.confirmation.confirmed is not False):
-            return score
-    return None
+    """The best meaningful effect re-flying does not refute; among those it confirms, one whose
+    training flights come :data:`FLIGHTS_PREFER_RATIO` times as close or closer than the best's
+    is named instead (the closest)."""
+    kept = [s for s in ranking if s.meaningful
+            and (s.confirmation is None or s.confirmation.confirmed is not False)]
+    if not kept or kept[0].confirmation is None or kept[0].confirmation.confirmed is not True:
+        return kept[0] if kept else None
+    confirmed = [s for s in kept if s.confirmation is not None and s.confirmation.confirmed]
+    closest = min(confirmed, key=lambda s: _finite_or_inf(s.confirmation.ratio("training")))
+    best = kept[0].confirmation.ratio("training")  # NaN: it cures a divergence, and stays
+    return closest if closest.confirmation.ratio("training") <= FLIGHTS_PREFER_RATIO * best \
+        else kept[0]
 
 
 def confirm_by_flights(scores: Sequence[EffectScore], model: AbkowitzModel,
