@@ -467,3 +467,18 @@ def test_on_the_kcs_protocol_the_lag_takes_up_the_missing_asymmetry_until_it_is_
     assert added.family == "delay:delta" and added.delays["delta"] == pytest.approx(4.0, abs=0.05)
     low, high = added.intervals["delta"]
     assert 3.85 <= low <= 4.0 <= high <= 4.4
+
+
+def test_a_contest_won_on_more_manoeuvres_with_the_larger_mean_says_so():
+    """A finding that flew 5 of 8 manoeuvres better at a geometric mean of 0.485 L against
+    0.448 L had been reported as "heading flies better and wins"."""
+    from sindyship.diagnose.contest import FlightContest
+
+    names = [f"m{k}" for k in range(8)]
+    contest = FlightContest("heading", "environment", 0.485, 0.448, [], [], names[:5],
+                            names[5:], "finding", {})
+    assert contest.sentence().endswith("heading flies better on more manoeuvres and wins, though "
+                                     "its geometric mean distance is the larger.")
+    clear = FlightContest("heading", "environment", 0.3, 0.448, [], [], names[:5], names[5:],
+                          "finding", {})
+    assert clear.sentence().endswith("; heading flies better and wins.")

@@ -82,7 +82,10 @@ class FlightContest:
         else:
             won = (self.finding if self.winner == "finding" else
                    "the library alone" if alone else self.catalogued)
-            verdict = f"{won} flies better and wins"
+            means = (self.finding_L, self.catalogued_L)
+            larger = means[self.winner != "finding"] > means[self.winner == "finding"]
+            verdict = (f"{won} flies better on more manoeuvres and wins, though its geometric "
+                       "mean distance is the larger" if larger else f"{won} flies better and wins")
         return (f"Left-out flights (geometric mean distance; manoeuvres flown better): {ours}; "
                 f"{theirs}; {verdict}.")
 
