@@ -16,15 +16,19 @@ import numpy as np
 
 from .errors import SindyshipInputError
 from .ships import Ship, load_ship
-from .trajectory import RUDDER_COLUMNS, Trajectory
+from .trajectory import RUDDER_COLUMNS, Trajectory, checks_done
 
 __all__ = ["as_records", "as_ship", "check_distinct_names", "check_motion", "check_records",
-           "check_scale", "check_two_records", "positive_number"]
+           "check_scale", "check_training_speed", "check_two_records", "positive_number"]
 
 #: Channels a record needs finite in every sample to be fitted or flown against.
 MOTION_CHANNELS = ("t", "u", "v", "r", "x", "y", "psi")
 #: A record whose speed peaks above this many design speeds belongs to another ship (or scale).
 MAX_SPEED_RATIO = 3.0
+#: Training records none of which goes faster than this share of U0 are refused: the fit,
+#: the automatic time range and the sampling notes all scale with U0 (a U0 in knots read as
+#: m/s leaves the records at 0.51 of it; trials at another approach speed give that as U0).
+SLOWEST_TRAINING = 0.6
 #: Why a verb that leaves one manoeuvre out needs two training records or more.
 LEAVE_ONE_OUT = {
     "diagnose": "effects are scored by leave-one-manoeuvre-out cross-validation",
@@ -189,8 +193,35 @@ def check_scale(records, ship: Ship, name: str = "records") -> None:
                 f"{name}: {record.name or 'a record'} never goes faster than {top:.4g} m/s, "
                 f"{top / ship.U0:.3g} times the design speed U0 = {ship.U0:.4g} m/s of ship "
                 f"{ship.name!r}, and is no record of it under way; give the ship (and scale) "
-                "the records were measured on."
+                "the records were measured on, with U0 their approach speed."
             )
+
+
+def check_training_speed(ship: Ship, records=(), *, fastest: float | None = None) -> None:
+    """Refuse training records none of which reaches :data:`SLOWEST_TRAINING` times the
+    ship's design speed U0: a U0 in knots (1.94 times too large), or another ship's records,
+    made the automatic time range keep 124 s of a 3200 s turn and fitted the rest.  A
+    streamed fit gives the ``fastest`` speed of its records instead.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> frame = pd.DataFrame({"t": [0.0, 1.0], "u": 6.0, "v": 0.0, "r": 0.0, "x": [0.0, 6.0],
+    ...                       "y": 0.0, "psi": 0.0, "delta": 0.0})
+    >>> check_training_speed(load_ship("kcs"), [Trajectory(frame, "zz")])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sindyship.errors.SindyshipInputError: no training record goes faster than 6 m/s, 0.49 times...
+    """
+    if fastest is None:
+        fastest = max((float(np.nanmax(np.hypot(r["u"], r["v"]))) for r in records),
+                      default=None)
+    if fastest is not None and fastest < SLOWEST_TRAINING * ship.U0:
+        raise SindyshipInputError(
+            f"no training record goes faster than {fastest:.4g} m/s, {fastest / ship.U0:.2f} "
+            f"times the design speed U0 = {ship.U0:.4g} m/s of ship {ship.name!r}; give the "
+            "ship the records are of, with its approach speed U0 in m/s."
+        )
 
 
 def check_records(records, ship: Ship, name: str = "records") -> list[Trajectory]:
@@ -211,7 +242,8 @@ def check_records(records, ship: Ship, name: str = "records") -> list[Trajectory
     """
     from .measurements import check_trajectory
 
-    check_scale(records, ship, name)
+    check_scale([r for r in records if (r.meta.get("checks") or {}).get("ship")
+                 != checks_done(ship)["ship"]], ship, name)  # another ship's, unless it flew it
     check_motion(records, name)
     return [check_trajectory(record, ship) for record in records]
 

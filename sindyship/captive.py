@@ -175,8 +175,11 @@ def _sweep(test: str, points: int, beta_max: float, delta_max: float, r_max: flo
 
 #: Most conditions of one sweep (a drift-yaw grid holds its square).
 MAX_POINTS = 201
-#: Fastest carriage, as a multiple of the design speed.
-MAX_SPEED_RATIO = 3.0
+#: Fastest carriage, as a multiple of the design speed: tests run faster are of another ship
+#: or scale (the KCS's tests given a coaster whose U0 is 6.5 m/s run at 1.9 times it).
+MAX_SPEED_RATIO = 1.6
+#: Slowest carriage: the design speed divided by this (tests at half speed are common).
+SPEED_SCALE_FACTOR = 3.0
 
 
 def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: float | None = None,
@@ -235,10 +238,11 @@ def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: flo
         raise SindyshipInputError(f"a captive sweep takes 2 to {MAX_POINTS} points, not "
                                   f"{points!r}.")
     U = ship.U0 if speed is None else float(speed)
-    if not (np.isfinite(U) and 0 < U <= MAX_SPEED_RATIO * ship.U0):
+    if not (np.isfinite(U) and ship.U0 / SPEED_SCALE_FACTOR < U <= MAX_SPEED_RATIO * ship.U0):
         raise SindyshipInputError(
-            f"the carriage speed must be positive and at most {MAX_SPEED_RATIO:g} times the "
-            f"ship's design speed ({MAX_SPEED_RATIO * ship.U0:.4g} m/s), not {speed!r} m/s."
+            f"the carriage speed must be more than a third of the ship's design speed and at "
+            f"most {MAX_SPEED_RATIO:g} times it ({ship.U0 / SPEED_SCALE_FACTOR:.4g} to "
+            f"{MAX_SPEED_RATIO * ship.U0:.4g} m/s), not {speed!r} m/s."
         )
     beta, r_nd, delta = _sweep(test, int(points), beta_max, delta_max, r_max)
     u = U * np.cos(beta)
@@ -371,13 +375,6 @@ def check_force_scale(dof: str, measured: np.ndarray, predicted: np.ndarray,
         )
 
 
-#: Captive tests whose median speed is below the ship's design speed divided by this factor
-#: are of another ship or scale (tests at half speed are common).
-SPEED_SCALE_FACTOR = 3.0
-#: Captive tests whose median speed is above this many design speeds are of another ship or
-#: scale: no ship is tested far beyond the speed it runs at (the KCS's tests given a coaster
-#: whose U0 is 6.5 m/s run at 1.9 times it).
-MAX_CAPTIVE_SPEED = 1.6
 
 
 def check_captive_scale(captive: pd.DataFrame, ship: Ship, *, reads_revolutions: bool,
@@ -389,7 +386,7 @@ def check_captive_scale(captive: pd.DataFrame, ship: Ship, *, reads_revolutions:
     from .plausibility import excess_revolutions
 
     speed = float(np.median(np.hypot(captive["u"], captive["v"])))
-    if not speed > ship.U0 / SPEED_SCALE_FACTOR or not speed <= ship.U0 * MAX_CAPTIVE_SPEED:
+    if not speed > ship.U0 / SPEED_SCALE_FACTOR or not speed <= ship.U0 * MAX_SPEED_RATIO:
         raise SindyshipInputError(
             f"the captive tests run at {speed:.3g} m/s (median), far from the design speed "
             f"{ship.U0:.3g} m/s of {whose} {ship.name!r}; give captive tests of the same ship "

@@ -344,5 +344,6 @@ def fitted_again(model: AbkowitzModel, records: Sequence[Trajectory]) -> Abkowit
                 **_estimate(model)}
     kept = _captive_of(model)
     if kept is None:
-        return fit(records, model.ship, **settings)
-    return fit_hybrid(records, model.ship, kept[0], captive_share=kept[1], **settings)
+        return fit(records, model.ship, part_of_set=True, **settings)
+    return fit_hybrid(records, model.ship, kept[0], captive_share=kept[1], part_of_set=True,
+                      **settings)

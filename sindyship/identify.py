@@ -296,8 +296,8 @@ def recommended_library(speed: str = "design") -> str:
 def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary = "abkowitz",
         effects: Sequence[str] = (), optimizer: str = "ls", params: dict | None = None,
         rudder_signal: str = "actual", derivative: str = "five-point", window: float = 21.0,
-        problems: dict[str, Design] | None = None, speed: str | None = None
-        ) -> AbkowitzModel:
+        problems: dict[str, Design] | None = None, speed: str | None = None,
+        part_of_set: bool = False) -> AbkowitzModel:
     """Identify an Abkowitz model from records.
 
     The ``prior`` optimizer also requires a model that is stable in straight running: it
@@ -333,15 +333,20 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
     speed : {"design", "instantaneous"}, optional
         The speed form of the library (:attr:`sindyship.library.TermLibrary.speed`); default
         the library's own.
+    part_of_set : bool
+        The records are part of a training set (left out one by one): the set's speed
+        check (:func:`sindyship.arguments.check_training_speed`) is not made on them.
 
     Returns
     -------
     AbkowitzModel
     """
-    from .arguments import as_records, as_ship, check_records, positive_number
+    from .arguments import as_records, as_ship, check_records, check_training_speed, positive_number
 
     ship = as_ship(ship)
     records = check_records(as_records(records), ship)
+    if not part_of_set:
+        check_training_speed(ship, records)
     window = positive_number(window, "window")
     if optimizer not in _optimizer_names():
         raise SindyshipInputError(f"optimizer must be one of {', '.join(_optimizer_names())}, "
@@ -351,14 +356,10 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
     if problems is None:
         problems = design(records, ship, lib, rudder_signal=rudder_signal,
                           derivative=derivative, window=window)
-    info = {
-        "training": [r.name for r in records],
-        "n_samples": int(len(problems["X"].target)),
-        "derivative": derivative,
-        "window_s": window if derivative != "five-point" else None,
-        "selected": None,  # filled in by fitted_model
-        "envelope": training_envelope(records, ship),
-    }
+    info = {"training": [r.name for r in records], "n_samples": int(len(problems["X"].target)),
+            "derivative": derivative, "window_s": window if derivative != "five-point" else None,
+            "selected": None,  # filled in by fitted_model
+            "envelope": training_envelope(records, ship)}
     if ship.assumptions:  # what an identification-only ship file left to sindyship
         info["ship_assumptions"] = list(ship.assumptions)
     terms = {dof: problems[dof].terms for dof in DOFS}
@@ -367,8 +368,7 @@ def fit(records: Sequence[Trajectory], ship: Ship, *, library: str | TermLibrary
         chosen = dict(params or {}) if strength is None else {**(params or {}),
                                                              "strength": strength}
         return fitted_model(ship, lib, _fit_each(problems, optimizer, chosen, ship, lib.speed),
-                            terms,
-                            optimizer=optimizer, rudder_signal=rudder_signal, info=info)
+                            terms, optimizer=optimizer, rudder_signal=rudder_signal, info=info)
 
     model = fitted_with(None)
     if optimizer == "prior":
@@ -587,7 +587,6 @@ def training_envelope(records: Sequence[Trajectory], ship: Ship) -> dict[str, li
     delta = np.concatenate([rec.rudder for rec in records])
     return {name: [float(np.min(x)), float(np.max(x))]
             for name, x in zip(ENVELOPE_VARIABLES, (v, r, delta), strict=True)}
-
 
 
 def _selected(estimator) -> dict:

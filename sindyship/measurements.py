@@ -73,12 +73,11 @@ MAX_SPEED = 100.0  # m/s
 MAX_REVOLUTIONS = 100.0  # rps
 MAX_WIND_DIRECTION = 4.0 * math.pi  # rad: two turns (a direction in degrees passes 12.6)
 SAMPLING_TOLERANCE = 0.01  # fraction of the median time step
-#: The SI unit a Trajectory holds each channel in: the header its checks read it under.
-SI_UNITS = {"t": "s", "u": "m/s", "v": "m/s", "r": "rad/s", "x": "m", "y": "m", "psi": "rad",
-            "delta": "rad", "delta_c": "rad", "n": "rps", "wind_speed": "m/s",
-            "wind_dir": "rad", "phi": "rad", "p": "rad/s"}
-#: How a record in memory is named in the messages of its checks.
-IN_MEMORY = "a Trajectory, in SI units; sindyship.measurements.trajectory_from_frame reads others"
+#: The channels of a record in memory that its checks read (others pass unread).
+CHECKED_CHANNELS = ("t", "u", "v", "r", "x", "y", "psi", "delta", "delta_c", "n", "wind_dir")
+#: A record in memory in its checks' messages (their headers and options: a table's, read).
+IN_MEMORY = ("a Trajectory, in SI units; read a table with other units, or with the options "
+             "named here, by sindyship.measurements.trajectory_from_frame")
 
 
 class PlausibilityNote(UserWarning):
@@ -289,7 +288,7 @@ def check_trajectory(record: Trajectory, ship=None) -> Trajectory:
     Parameters
     ----------
     record : Trajectory
-        Channels in SI (:data:`SI_UNITS`).
+        Channels in SI; those of :data:`CHECKED_CHANNELS` are checked, others pass unread.
     ship : Ship, optional
         Enables the checks scaled by its L, U0 and revolutions.
 
@@ -319,15 +318,16 @@ def check_trajectory(record: Trajectory, ship=None) -> Trajectory:
     ship_done = None if done is None else done["ship"]
     if done is not None and (ship is None or ship_done == checks_done(ship)["ship"]):
         return record
-    frame = record.data.rename(columns=lambda c: f"{c} [{SI_UNITS[c]}]" if c in SI_UNITS else c)
+    data = record.data.reset_index(drop=True)
+    read = [c for c in data.columns if c in CHECKED_CHANNELS]
     checked = trajectory_from_frame(
-        frame, record.name, source=record.meta.get("source") or f"record {record.name!r} "
-        f"({IN_MEMORY})", ship=ship,
-        skip_checks=() if done is None else done["skipped"],
+        data[read], record.name, source=record.meta.get("source") or f"record {record.name!r} "
+        f"({IN_MEMORY})", ship=ship, skip_checks=() if done is None else done["skipped"],
         rudder_check=True if done is None else done["rudder_check"])
+    data = data.assign(**{c: checked.data[c].to_numpy() for c in read})  # psi unwrapped
     meta = {**record.meta, "checks": checked.meta["checks"],
             "notes": [*record.meta.get("notes", []), *checked.meta["notes"]]}
-    return Trajectory(checked.data, name=record.name, meta=meta)
+    return Trajectory(data, name=record.name, meta=meta)
 
 
 def write_csv(trajectory: Trajectory, path: str | os.PathLike[str]) -> Path:

@@ -303,3 +303,8 @@ def test_captive_tests_run_far_above_the_ships_speed_are_refused(kcs):
             r"of the model's ship 'kcs-x0\.277098'; give captive tests of the same ship")):
         compare_forces(model, captive_tests(kcs, "all", points=5))
     compare_forces(model, captive_tests(smaller, "all", points=5, speed=0.5 * smaller.U0))
+    for speed in (24.7, 4.0):  # the generator refuses what forces would (it took 3 U0)
+        with pytest.raises(SindyshipInputError, match=(
+                r"^the carriage speed must be more than a third of the ship's design speed and "
+                r"at most 1\.6 times it \(4\.116 to 19\.76 m/s\), not ")):
+            captive_tests(kcs, "all", points=5, speed=speed)

@@ -98,14 +98,14 @@ def test_the_assumed_rudder_rate_of_a_model_is_froude_scaled_up(own_ship):
      r"hard over at 25-45 deg\)\.$"),
     (("displacement = 52030.0", "displacement = 152030.0"),
      r"displacement = 152030 m\^3 in L x B x d = 230 x 32\.2 x 10\.8 m is a block coefficient "
-     r"of 1\.9, outside the 0\.25-1 of ship hulls; check the values and their units"),
-    (("displacement = 52030.0", "displacement = 7000.0"), r"block coefficient of 0\.0875"),
+     r"of 1\.901, outside the 0\.25-1 of ship hulls; check the values and their units"),
+    (("displacement = 52030.0", "displacement = 7000.0"), r"block coefficient of 0\.08752"),
     (("L = 230.0", "L = 754.6"),  # feet, beside a beam and draught in metres
-     r"block coefficient of 0\.198"),
+     r"block coefficient of 0\.1983"),
     (("k_zz = 0.25", "k_zz = 0.25\nm = 0.23"),
      r"\[mass\] m = 0\.23 and the displacement's rho displacement / \(0\.5 rho L\^2 d\) = "
-     r"0\.1821 differ by 26%; correct the one that is wrong \(or leave m out to take it from "
-     r"the displacement\)\.$"),
+     r"0\.1821 differ by 26%; give m as mass / \(0\.5 rho L\^2 d\) \(Prime II\), correct the "
+     r"one that is wrong, or leave m out to take it from the displacement\.$"),
 ])
 def test_particulars_that_contradict_each_other_are_refused(own_ship, edit, message):
     """Each had loaded and fitted without a word (a block coefficient of 1.9 moved the

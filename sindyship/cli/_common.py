@@ -368,30 +368,6 @@ def load_cli_ship(name, *, simulated: bool = False):
 #: ``evaluate`` notes a flight that starts outside them, ``fit``, ``diagnose`` and ``discover``
 #: records none of which reaches the lower one.
 SPEED_NOTE_RANGE = (0.7, 1.3)
-#: Training records none of which goes faster than this share of U0 are refused: the fit,
-#: the automatic time range and the sampling notes all scale with U0 (a U0 in knots read as
-#: m/s leaves the records at 0.51 of it; trials at another approach speed give that as U0).
-SLOWEST_TRAINING = 0.6
-
-
-def check_training_speed(ship, records=(), *, fastest: float | None = None) -> None:
-    """Refuse training records none of which reaches :data:`SLOWEST_TRAINING` times the
-    ship's design speed U0: a U0 in knots (1.94 times too large), or another ship's records,
-    made the automatic time range keep 124 s of a 3200 s turn and fitted the rest.  A
-    streamed fit gives the ``fastest`` speed of its records instead."""
-    import numpy as np
-
-    if fastest is None:
-        fastest = max((float(np.max(np.hypot(r["u"], r["v"]))) for r in records),
-                      default=None)
-    if fastest is not None and fastest < SLOWEST_TRAINING * ship.U0:
-        raise SindyshipInputError(
-            f"no training record goes faster than {fastest:.4g} m/s, {fastest / ship.U0:.2f} "
-            f"times the design speed U0 = {ship.U0:.4g} m/s of ship {ship.name!r}; give the "
-            "ship the records are of, with its approach speed U0 in m/s."
-        )
-
-
 def note_records_ship(args, ship, records=None, *, sampling: bool = True,
                       streamed=None) -> None:
     """Say that records given no ``--ship`` are taken as :data:`RECORDS_SHIP`'s, and when

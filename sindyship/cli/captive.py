@@ -25,7 +25,8 @@ def add_parser(sub) -> None:
                    help="conditions per sweep, 2 to 201; drift-yaw uses points x points "
                    "(default: 21)")
     p.add_argument("--speed", type=bounded_float(0, 1000, "m/s"), default=None,
-                   help="carriage speed [m/s], at most three times the ship's design speed "
+                   help="carriage speed [m/s], more than a third of the ship's design speed "
+                   "and at most 1.6 times it "
                    "(default: the ship's design speed U0)")
     p.add_argument("--out", required=True,
                    help="output captive CSV: u, v [m/s], r [rad/s], delta [rad], n [rps], "

@@ -90,10 +90,10 @@ def _write_folder(out: Path, result, iterative, text: str, document: dict, progr
 def run(args) -> int:
     """Run ``sindyship diagnose``; text report on stdout, or one JSON document with --json."""
     from .._io import check_output, output_folder
-    from ..arguments import check_two_records
+    from ..arguments import check_training_speed, check_two_records
     from ..library import load_effect, names_a_file
     from ..records import expand_paths
-    from ._common import check_training_speed, load_cli_ship, note_records_ship
+    from ._common import load_cli_ship, note_records_ship
 
     start = time.perf_counter()
     args.data, args.test = expand_paths(args.data), expand_paths(args.test)

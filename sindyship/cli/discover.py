@@ -56,10 +56,10 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     """Run ``sindyship discover``; text report on stdout, or one JSON document with --json."""
     from .._io import check_output, write_text_atomic
-    from ..arguments import check_two_records
+    from ..arguments import check_training_speed, check_two_records
     from ..library import load_effect
     from ..records import expand_paths
-    from ._common import check_training_speed, load_cli_ship, note_records_ship
+    from ._common import load_cli_ship, note_records_ship
 
     args.data = expand_paths(args.data)
     if args.out is not None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..arguments import check_training_speed
 from ._common import (
     OUT_NOTE,
     SEED,
@@ -9,7 +10,6 @@ from ._common import (
     bounded_float,
     bounded_int,
     check_inputs,
-    check_training_speed,
     emit,
     load_cli_ship,
     note_records_ship,

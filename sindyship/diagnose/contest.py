@@ -174,7 +174,7 @@ def flight_contest(fitted: Sequence[Trajectory], measured: Sequence[Trajectory],
             keep = problems["X"].groups != k
             others = [r for j, r in enumerate(fitted) if j != k]
             model = fit(others, ship, library=extended, problems=_subset(problems, keep),
-                        **settings)
+                        part_of_set=True, **settings)
             jobs.append((model, [record]))
     flights = [out[0] for out in fly_jobs_like(jobs)]
     flown = {"finding": flights[:len(measured)], "catalogued": flights[len(measured):]}

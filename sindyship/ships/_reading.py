@@ -106,7 +106,7 @@ def _check_physics(particulars: Particulars, servo: Servo | None, source: str,
         raise SindyshipInputError(
             f"{source}: [particulars] displacement = {particulars.displacement:g} m^3 in L x B x d "
             f"= {particulars.L:g} x {particulars.B:g} x {particulars.d:g} m is a block "
-            f"coefficient of {c_b:.3g}, outside the {low:g}-{high:g} of ship hulls; check the "
+            f"coefficient of {c_b:.4g}, outside the {low:g}-{high:g} of ship hulls; check the "
             "values and their units (metres, m^3)."
         )
     if abs(particulars.x_G) > 0.5 * particulars.L:
@@ -227,8 +227,9 @@ def _mass_properties(data: dict, p: Particulars, source: str) -> MassProperties:
     if abs(given / displaced - 1.0) > MASS_TOLERANCE:
         raise SindyshipInputError(
             f"{source}: [mass] m = {given:g} and the displacement's rho displacement / (0.5 rho "
-            f"L^2 d) = {displaced:.4g} differ by {abs(given / displaced - 1.0):.0%}; correct the "
-            "one that is wrong (or leave m out to take it from the displacement)."
+            f"L^2 d) = {displaced:.4g} differ by {abs(given / displaced - 1.0):.0%}; give m as "
+            "mass / (0.5 rho L^2 d) (Prime II), correct the one that is wrong, or leave m out "
+            "to take it from the displacement."
         )
     if "I_zz" not in mass_table:
         if k_zz is None:

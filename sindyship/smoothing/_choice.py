@@ -45,7 +45,7 @@ def _fold_task(smoothed: Sequence[Trajectory], raw: Trajectory, held_out: int, s
     start = _with_initial_state(raw, smoothed[held_out])
     with threadpool_limits(limits=1, user_api="blas"):
         model = fit(train, ship, library=library, optimizer=optimizer, params=params,
-                    **fit_settings)
+                    part_of_set=True, **fit_settings)
         (flown,) = fly_like(model, [start], step=step)
     return distance_errors(flown, raw, ship.L)
 
