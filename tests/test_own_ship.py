@@ -120,6 +120,8 @@ def test_particulars_that_contradict_each_other_are_refused(own_ship, edit, mess
     ('hull_form = "beta"\n', r"hull_form belongs to a ship file with the MMG model's \[hull\], "
                              r"\[propeller\] and \[rudder\], which this one lacks; remove it"),
     ('coriolis = "rigid-body"\n', r"coriolis belongs to a ship file with the MMG model's"),
+    ('hull_form = "beta"\ncoriolis = "rigid-body"\n',
+     r"hull_form and coriolis belong to a ship file .* lacks; remove them for a ship for "),
 ])
 def test_mmg_keys_in_a_file_for_identification_are_named(own_ship, text, message):
     """hull_form had led to "top-level key 'speed_reference' is missing" and coriolis was

@@ -440,7 +440,8 @@ def ship_from_dict(data: dict, source: str = "<ship>") -> Ship:
             raise SindyshipInputError(
                 f"{source}: {' and '.join(given)} belong{'s' if len(given) == 1 else ''} to a "
                 "ship file with the MMG model's [hull], [propeller] and [rudder], which this one "
-                "lacks; remove it for a ship for identification only (its Coriolis terms are the "
+                f"lacks; remove {'it' if len(given) == 1 else 'them'} for a ship for "
+                "identification only (its Coriolis terms are the "
                 "rigid body's with the added masses), or give those sections.")
         return _identification_ship(data, source)
     _check_top_level(data, source)
