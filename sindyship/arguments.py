@@ -16,7 +16,7 @@ import numpy as np
 
 from .errors import SindyshipInputError
 from .ships import Ship, load_ship
-from .trajectory import RUDDER_COLUMNS, Trajectory, checks_done
+from .trajectory import RUDDER_COLUMNS, Trajectory, checked_for
 
 __all__ = ["as_records", "as_ship", "check_distinct_names", "check_motion", "check_records",
            "check_scale", "check_training_speed", "check_two_records", "positive_number"]
@@ -178,10 +178,9 @@ def check_scale(records, ship: Ship, name: str = "records") -> None:
     from .trials import UNDERWAY_SPEED
 
     for record in records:
-        if not record.has("u") or record.n_samples == 0:
+        if not (record.has("u") and record.has("v")) or record.n_samples == 0:
             continue
-        top = float(np.nanmax(np.hypot(record["u"], record["v"]) if record.has("v")
-                              else np.abs(record["u"])))
+        top = record.fastest
         if top > MAX_SPEED_RATIO * ship.U0:
             raise SindyshipInputError(
                 f"{name}: {record.name or 'a record'} reaches {top:.4g} m/s, "
@@ -214,8 +213,7 @@ def check_training_speed(ship: Ship, records=(), *, fastest: float | None = None
     sindyship.errors.SindyshipInputError: no training record goes faster than 6 m/s, 0.49 times...
     """
     if fastest is None:
-        fastest = max((float(np.nanmax(np.hypot(r["u"], r["v"]))) for r in records),
-                      default=None)
+        fastest = max((record.fastest for record in records), default=None)
     if fastest is not None and fastest < SLOWEST_TRAINING * ship.U0:
         raise SindyshipInputError(
             f"no training record goes faster than {fastest:.4g} m/s, {fastest / ship.U0:.2f} "
@@ -242,8 +240,7 @@ def check_records(records, ship: Ship, name: str = "records") -> list[Trajectory
     """
     from .measurements import check_trajectory
 
-    check_scale([r for r in records if (r.meta.get("checks") or {}).get("ship")
-                 != checks_done(ship)["ship"]], ship, name)  # another ship's, unless it flew it
+    check_scale([r for r in records if not checked_for(r, ship)], ship, name)  # unless it flew it
     check_motion(records, name)
     return [check_trajectory(record, ship) for record in records]
 

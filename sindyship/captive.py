@@ -182,6 +182,13 @@ MAX_SPEED_RATIO = 1.6
 SPEED_SCALE_FACTOR = 3.0
 
 
+def _carriage_speed_of(ship: Ship, speed: float) -> bool:
+    """Whether captive tests of ``ship`` may run at ``speed`` [m/s] (more than U0 divided by
+    :data:`SPEED_SCALE_FACTOR`, at most :data:`MAX_SPEED_RATIO` times U0)."""
+    return bool(np.isfinite(speed) and ship.U0 / SPEED_SCALE_FACTOR < speed
+                <= MAX_SPEED_RATIO * ship.U0)
+
+
 def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: float | None = None,
                   beta_max: float = 20.0, delta_max: float = 35.0, r_max: float = 0.6
                   ) -> pd.DataFrame:
@@ -238,7 +245,7 @@ def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: flo
         raise SindyshipInputError(f"a captive sweep takes 2 to {MAX_POINTS} points, not "
                                   f"{points!r}.")
     U = ship.U0 if speed is None else float(speed)
-    if not (np.isfinite(U) and ship.U0 / SPEED_SCALE_FACTOR < U <= MAX_SPEED_RATIO * ship.U0):
+    if not _carriage_speed_of(ship, U):
         raise SindyshipInputError(
             f"the carriage speed must be more than a third of the ship's design speed and at "
             f"most {MAX_SPEED_RATIO:g} times it ({ship.U0 / SPEED_SCALE_FACTOR:.4g} to "
@@ -386,7 +393,7 @@ def check_captive_scale(captive: pd.DataFrame, ship: Ship, *, reads_revolutions:
     from .plausibility import excess_revolutions
 
     speed = float(np.median(np.hypot(captive["u"], captive["v"])))
-    if not speed > ship.U0 / SPEED_SCALE_FACTOR or not speed <= ship.U0 * MAX_SPEED_RATIO:
+    if not _carriage_speed_of(ship, speed):
         raise SindyshipInputError(
             f"the captive tests run at {speed:.3g} m/s (median), far from the design speed "
             f"{ship.U0:.3g} m/s of {whose} {ship.name!r}; give captive tests of the same ship "

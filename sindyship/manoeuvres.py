@@ -284,6 +284,17 @@ def result_to_trajectory(result: SimulationResult, name: str, meta: dict | None 
     return Trajectory(frame, name=name, meta=info)
 
 
+def check_rudder_limit(angle: float | None, ship, what: str) -> None:
+    """Refuse a rudder (or check) angle [deg] beyond the ship's rudder limit (``[servo]
+    delta_max``); ``what`` names it in the message (``"--rudder"``)."""
+    limit = ship.servo.delta_max
+    if angle is not None and abs(angle) > limit:
+        raise SindyshipInputError(
+            f"{what} {angle:g} deg is beyond the rudder limit of {ship.name} ({limit:g} deg); "
+            f"give an angle of magnitude up to {limit:g} deg."
+        )
+
+
 def fly(dynamics, manoeuvres: Sequence[Manoeuvre], *, state0: np.ndarray | None = None,
         step: float | None = None, check_divergence: bool = True) -> list[Trajectory]:
     """Fly manoeuvres with a model (MMG or identified) and return their records.
@@ -328,11 +339,7 @@ def fly(dynamics, manoeuvres: Sequence[Manoeuvre], *, state0: np.ndarray | None 
                         f"dynamics), not {type(dynamics).__name__}.")
     ship = dynamics.ship
     for m in manoeuvres:
-        if abs(m.rudder) > ship.servo.delta_max:
-            raise SindyshipInputError(
-                f"{m.label}: rudder {m.rudder:g} deg is beyond the rudder limit of {ship.name} "
-                f"({ship.servo.delta_max:g} deg); give an angle of magnitude up to "
-                f"{ship.servo.delta_max:g} deg.")
+        check_rudder_limit(m.rudder, ship, f"{m.label}: rudder")
     s0 = initial_state(ship) if state0 is None else np.asarray(state0, dtype=float)
     if s0.shape != (7,) or not np.all(np.isfinite(s0)):
         raise SindyshipInputError(

@@ -50,22 +50,18 @@ from sindyship._io import write_text_atomic
 from sindyship.csv_text import DECIMAL_COMMA, FILE_ROW, REQUIRED_TEXT, parse_csv_text, read_text
 from sindyship.errors import SindyshipInputError
 from sindyship.plausibility import check_record, resampling_gap_note, resolve_skip
-from sindyship.trajectory import REQUIRED_COLUMNS, RUDDER_COLUMNS, Trajectory, checks_done
+from sindyship.trajectory import (
+    REQUIRED_COLUMNS,
+    RUDDER_COLUMNS,
+    Trajectory,
+    checked_for,
+    checks_done,
+)
 from sindyship.units import UNITS, Column, parse_headers, renaming_hint
 
-__all__ = [
-    "PlausibilityNote",
-    "MAX_REVOLUTIONS",
-    "MAX_RUDDER_ANGLE",
-    "MAX_SPEED",
-    "MAX_YAW_RATE",
-    "SAMPLING_TOLERANCE",
-    "UNITS",
-    "check_trajectory",
-    "read_csv",
-    "trajectory_from_frame",
-    "write_csv",
-]
+__all__ = ["PlausibilityNote", "MAX_REVOLUTIONS", "MAX_RUDDER_ANGLE", "MAX_SPEED", "MAX_YAW_RATE",
+           "SAMPLING_TOLERANCE", "UNITS", "check_trajectory", "read_csv", "trajectory_from_frame",
+           "write_csv"]
 
 MAX_RUDDER_ANGLE = 1.0  # rad
 MAX_YAW_RATE = 0.5  # rad/s
@@ -315,8 +311,7 @@ def check_trajectory(record: Trajectory, ship=None) -> Trajectory:
     sindyship.errors.SindyshipInputError: record 'run' (a Trajectory, in SI units; ...
     """
     done = record.meta.get("checks")
-    ship_done = None if done is None else done["ship"]
-    if done is not None and (ship is None or ship_done == checks_done(ship)["ship"]):
+    if done is not None and (ship is None or checked_for(record, ship)):
         return record
     data = record.data.reset_index(drop=True)
     read = [c for c in data.columns if c in CHECKED_CHANNELS]

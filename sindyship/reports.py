@@ -326,10 +326,9 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
         flown = [s.effect.name for s in diagnosis.ranking if s.confirmation is not None]
         checked = (f", re-flying the training records with {', '.join(flown)} brings them no "
                    "clearly closer" if flown else "")
-        refuted = any(s.meaningful and s.confirmation is not None
-                      and s.confirmation.confirmed is False for s in diagnosis.ranking)
-        why = (diagnosis.no_catalogued_effect if refuted else "no catalogued effect explains "
-               f"{100 * diagnosis.threshold:.0f} % or more of the remaining force error{checked}")
+        why = (diagnosis.no_catalogued_effect if diagnosis.refuted else "no catalogued effect "
+               f"explains {100 * diagnosis.threshold:.0f} % or more of the remaining force error"
+               f"{checked}")
         text = (f"Verdict: complete - {why}, every training flight completed and the library "
                 "predicts most of every force.")
     elif verdict == "add-effect":
@@ -337,8 +336,7 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
         why = "" if top.meaningful else (
             f" (its share of the force error is below the threshold, but re-flying the training "
             f"records with it {_closer(top)})")
-        first = next((s for s in diagnosis.ranking if s.meaningful and (
-            s.confirmation is None or s.confirmation.confirmed is not False)), top)
+        first = diagnosis.first_unrefuted or top
         if first is not top:
             why = (f" (rather than {first.effect.name}, which explains more of the force error: "
                    f"re-flying the training records with {top.effect.name} {_closer(top)}, "
@@ -432,8 +430,7 @@ def _why_added(diagnosis) -> str:
     top = diagnosis.top
     if top is None:  # a discovered effect: its own report says why
         return ""
-    refuted = [s.effect.name for s in diagnosis.ranking if s.meaningful and s.confirmation
-               is not None and s.confirmation.confirmed is False]
+    refuted = [s.effect.name for s in diagnosis.refuted]
     parts = ([f"re-flying refutes {', '.join(refuted)}"] if refuted else []) + (
         [] if top.meaningful else [f"with {top.effect.name} the training flights: {_closer(top)}"])
     return f" ({'; '.join(parts)})" if top is not diagnosis.ranking[0] and parts else ""

@@ -82,6 +82,11 @@ class Trajectory:
         return float(np.median(np.diff(self.t)))
 
     @property
+    def fastest(self) -> float:
+        """The largest speed through the water sqrt(u^2 + v^2) [m/s] (missing samples left out)."""
+        return float(np.nanmax(np.hypot(self["u"], self["v"])))
+
+    @property
     def rudder(self) -> np.ndarray:
         """The actual rudder angle if recorded, else the commanded one [rad]."""
         return self["delta"] if self.has("delta") else self["delta_c"]
@@ -107,3 +112,10 @@ def checks_done(ship, skipped=(), rudder_check: bool = True) -> dict:
     """
     key = None if ship is None else [ship.name, float(ship.L), float(ship.U0)]
     return {"ship": key, "skipped": sorted(skipped), "rudder_check": bool(rudder_check)}
+
+
+def checked_for(record: Trajectory, ship) -> bool:
+    """Whether ``record`` passed the checks of a measurement CSV scaled by ``ship``
+    (:func:`checks_done`)."""
+    done = record.meta.get("checks")
+    return done is not None and done["ship"] == checks_done(ship)["ship"]

@@ -389,9 +389,7 @@ def note_records_ship(args, ship, records=None, *, sampling: bool = True,
         fastest = max(streamed.fastest, default=None)
         steps = dict(zip(streamed.names, streamed.steps, strict=True))
     elif records:
-        import numpy as np
-
-        fastest = max(float(np.max(np.hypot(r["u"], r["v"]))) for r in records)
+        fastest = max(record.fastest for record in records)
         steps = sampling_steps(records, ship)
     else:
         return
@@ -409,16 +407,6 @@ def ship_file(name: str | None) -> list[str]:
     from ..ships import BUILTIN_SHIPS
 
     return [] if name is None or name in BUILTIN_SHIPS else [name]
-
-
-def check_rudder(angle: float | None, ship, option: str) -> None:
-    """Refuse a rudder or check angle beyond the ship's rudder limit (``[servo] delta_max``)."""
-    limit = ship.servo.delta_max
-    if angle is not None and abs(angle) > limit:
-        raise SindyshipInputError(
-            f"{option} {angle:g} deg is beyond the rudder limit of {ship.name} ({limit:g} deg); "
-            f"give an angle of magnitude up to {limit:g} deg."
-        )
 
 
 def check_simulation_cost(ship, duration: float, dt: float | None = None) -> None:

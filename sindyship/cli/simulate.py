@@ -14,7 +14,6 @@ from ._common import (
     add_ship,
     bounded_float,
     check_inputs,
-    check_rudder,
     check_simulation_cost,
     progress,
     ship_file,
@@ -139,7 +138,7 @@ def _check_protocol_options(args) -> None:
 def run(args) -> int:
     from .._io import check_output
     from ..effects import parse_effects, simulate_with_effects
-    from ..manoeuvres import Manoeuvre
+    from ..manoeuvres import Manoeuvre, check_rudder_limit
     from ..measurements import write_csv
     from ._common import load_cli_ship
 
@@ -148,8 +147,8 @@ def run(args) -> int:
     check_inputs(ship_file(args.ship))
     _check_protocol_options(args)
     ship = load_cli_ship(args.ship, simulated=True)
-    check_rudder(args.rudder, ship, "--rudder")
-    check_rudder(args.check, ship, "--check")
+    check_rudder_limit(args.rudder, ship, "--rudder")
+    check_rudder_limit(args.check, ship, "--check")
     check_simulation_cost(ship, args.duration, args.dt)
     effects = parse_effects(args.effect + ([f"seed={args.seed}"] if args.seed else []))
     if args.pull_out_time is not None and args.manoeuvre != "pull-out":

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
@@ -23,6 +24,9 @@ from ..reports import SETS
 from ..ships import Ship
 from ..trajectory import Trajectory
 from ._flights import _fly_many
+
+if TYPE_CHECKING:
+    from .scoring import EffectScore
 
 
 # =============================================================================== before/after
@@ -236,6 +240,29 @@ def _change_rows(
 
 
 @one_blas_thread
+def confirm_by_flights(scores: Sequence[EffectScore], model: AbkowitzModel,
+                       fitted: Sequence[Trajectory], sets: list, flown: list, settings: Mapping,
+                       *, optimizer: str, n_jobs: int | None, progress: bool) -> None:
+    """Refit with each effect and fly the ``sets`` again: each score's ``confirmation``, its
+    flights against the ``model``'s (``flown``, one list per set), as :func:`diagnose
+    <sindyship.diagnose.diagnose>` confirms an effect."""
+    if not scores:
+        return
+    models = []
+    for score in scores:
+        lib = model.library.extended(score.effect)
+        models.append(_fit(fitted, model.ship, lib, design(fitted, model.ship, lib, **settings),
+                           optimizer=optimizer, **settings))
+    after = _fly_many([(m, recs) for m in models for _, recs in sets], n_jobs=n_jobs,
+                      progress=progress, what="flights")
+    n_sets = len(sets)
+    for j, (score, refit) in enumerate(zip(scores, models, strict=True)):
+        rows = _change_rows(sets, flown, after[j * n_sets:(j + 1) * n_sets], model.ship.L)
+        score.confirmation = BeforeAfter(model.library.name, refit.library.name,
+                                         (score.effect.name,), rows, model_before=model,
+                                         model_after=refit)
+
+
 def before_after(
     train: Sequence[Trajectory],
     ship: Ship,

@@ -20,7 +20,7 @@ from .._diagnosis_thresholds import (
 )
 from .._io import clean_json
 from ..errors import SindyshipInputError
-from ..identify import Design, design, resolve_library, resolve_rudder_signal
+from ..identify import Design, resolve_library, resolve_rudder_signal
 from ..library import (
     DOFS,
     Effect,
@@ -36,7 +36,7 @@ from ..targets import RESOLVED_STEP, sampling_steps, under_resolved
 from ..trajectory import Trajectory
 from ..uncertainty import library_conditioning
 from ._flights import _fly_many
-from .before_after import BeforeAfter, _change_rows, _fit
+from .before_after import confirm_by_flights
 from .compare import ManoeuvreComparison, compare
 from .discovery import Discovery, discover
 from .noise import channel_noise
@@ -241,8 +241,7 @@ class Diagnosis:
         """Why no catalogued effect is named, for the verdict: none is meaningful, or
         re-flying the training records refutes those that are; and the effects the flights
         alone favour, which a discovery out-flew on the manoeuvres left out."""
-        refuted = [s.effect.name for s in self.ranking if s.meaningful
-                   and s.confirmation is not None and s.confirmation.confirmed is False]
+        refuted = [s.effect.name for s in self.refuted]
         text = ("no catalogued effect is meaningful" if not refuted else
                 f"re-flying the training records refutes {', '.join(refuted)}, the catalogued "
                 f"effect{'s' if len(refuted) > 1 else ''} the force error singles out")
@@ -256,8 +255,20 @@ class Diagnosis:
 
     @property
     def meaningful_top(self) -> EffectScore | None:
-        """The best meaningful effect that re-flying does not refute, or None."""
+        """The meaningful effect to add, or None (:func:`_meaningful_top`)."""
         return _meaningful_top(self.ranking)
+
+    @property
+    def refuted(self) -> list[EffectScore]:
+        """The meaningful effects that re-flying the training records refutes."""
+        return [s for s in self.ranking if s.meaningful and s.confirmation is not None
+                and s.confirmation.confirmed is False]
+
+    @property
+    def first_unrefuted(self) -> EffectScore | None:
+        """The meaningful effect first by its share of the force error that re-flying does not
+        refute, or None."""
+        return next(iter(_unrefuted(self.ranking)), None)
 
     def score(self, name: str) -> EffectScore:
         """The score of one effect by name."""
@@ -332,12 +343,17 @@ def _finite_or_inf(value: float) -> float:
     return value if math.isfinite(value) else math.inf
 
 
+def _unrefuted(ranking: Sequence[EffectScore]) -> list[EffectScore]:
+    """The meaningful effects re-flying does not refute (not re-flown, or confirmed)."""
+    return [s for s in ranking if s.meaningful
+            and (s.confirmation is None or s.confirmation.confirmed is not False)]
+
+
 def _meaningful_top(ranking: Sequence[EffectScore]) -> EffectScore | None:
     """The best meaningful effect re-flying does not refute; among those it confirms, one whose
     training flights come :data:`FLIGHTS_PREFER_RATIO` times as close or closer than the best's
     is named instead (the closest)."""
-    kept = [s for s in ranking if s.meaningful
-            and (s.confirmation is None or s.confirmation.confirmed is not False)]
+    kept = _unrefuted(ranking)
     if not kept or kept[0].confirmation is None or kept[0].confirmation.confirmed is not True:
         return kept[0] if kept else None
     confirmed = [s for s in kept if s.confirmation is not None and s.confirmation.confirmed]
@@ -345,28 +361,6 @@ def _meaningful_top(ranking: Sequence[EffectScore]) -> EffectScore | None:
     best = kept[0].confirmation.ratio("training")  # NaN: it cures a divergence, and stays
     return closest if closest.confirmation.ratio("training") <= FLIGHTS_PREFER_RATIO * best \
         else kept[0]
-
-
-def confirm_by_flights(scores: Sequence[EffectScore], model: AbkowitzModel,
-                       fitted: Sequence[Trajectory], sets: list, flown: list, settings: Mapping,
-                       *, optimizer: str, n_jobs: int | None, progress: bool) -> None:
-    """Refit with each effect and fly the ``sets`` again: each score's ``confirmation``, its
-    flights against the ``model``'s (``flown``, one list per set)."""
-    if not scores:
-        return
-    models = []
-    for score in scores:
-        lib = model.library.extended(score.effect)
-        models.append(_fit(fitted, model.ship, lib, design(fitted, model.ship, lib, **settings),
-                           optimizer=optimizer, **settings))
-    after = _fly_many([(m, recs) for m in models for _, recs in sets], n_jobs=n_jobs,
-                      progress=progress, what="flights")
-    n_sets = len(sets)
-    for j, (score, refit) in enumerate(zip(scores, models, strict=True)):
-        rows = _change_rows(sets, flown, after[j * n_sets:(j + 1) * n_sets], model.ship.L)
-        score.confirmation = BeforeAfter(model.library.name, refit.library.name,
-                                         (score.effect.name,), rows, model_before=model,
-                                         model_after=refit)
 
 
 def flight_confirmed(score: EffectScore) -> bool:

@@ -15,8 +15,6 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from ..errors import SindyshipInputError
 from ..optimizers import RowFactor, merge_factors, pairwise_tree
 from ..ships import Ship
@@ -149,7 +147,7 @@ def reduce_record(path: str | os.PathLike, name: str, settings: StreamSettings) 
         envelope=training_envelope([record], ship),
         notes=[(source, note) for note in notes],
         cuts=[] if cut is None else [(source, *cut)],
-        fastest=[float(np.max(np.hypot(record["u"], record["v"])))],
+        fastest=[record.fastest],
         steps=[sampling_steps([record], ship)[record.name]],
     )
 
