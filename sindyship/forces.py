@@ -58,6 +58,7 @@ from .errors import SindyshipInputError
 from .identify import ENVELOPE_VARIABLES, training_envelope
 from .model import AbkowitzModel, coriolis_of_values
 from .ships import Ship
+from .targets import DOFS
 from .trajectory import Trajectory
 
 __all__ = [
@@ -269,12 +270,12 @@ def forces_report(result) -> str:
     if result.inside is not None:
         rows += [("inside envelope", result.inside), ("outside envelope", result.outside)]
     lines = [f"{'conditions':<18}" + "".join(f"{dof + ' corr  relRMS':>16}"
-                                             for dof in ("X", "Y", "N"))]
+                                             for dof in DOFS)]
     for name, stats in rows:
-        lines.append(f"{name:<18}" + "".join(f"  {cell(stats[dof])}" for dof in ("X", "Y", "N")))
+        lines.append(f"{name:<18}" + "".join(f"  {cell(stats[dof])}" for dof in DOFS))
     if astern:
         lines.append(f"{'astern (u <= 0)':<18}"
-                     + "".join(f"  {cell(astern[dof])}" for dof in ("X", "Y", "N")))
+                     + "".join(f"  {cell(astern[dof])}" for dof in DOFS))
         lines.append(f"{astern['X']['n']} condition(s) going astern are compared apart: the "
                      "model's forces are expanded about its design speed ahead.")
     return "\n".join(lines)
