@@ -328,6 +328,10 @@ def fly(dynamics, manoeuvres: Sequence[Manoeuvre], *, state0: np.ndarray | None 
     >>> round(float(run["u"][-1] / 12.348), 4)  # the straight-run equilibrium u' = 1.0001
     1.0001
     """
+    if isinstance(manoeuvres, Trajectory):
+        raise TypeError("manoeuvres must be a list of Manoeuvre, not a record; to fly a "
+                        "model the way a record was flown use sindyship.evaluate(model, "
+                        "[record]) or sindyship.flights.fly_like(model, [record]).")
     if isinstance(manoeuvres, Manoeuvre | str) or not all(
             isinstance(m, Manoeuvre) for m in manoeuvres):
         raise TypeError("manoeuvres must be a list of Manoeuvre, such as "

@@ -242,3 +242,7 @@ def test_fly_refuses_a_rudder_beyond_the_ships_limit_and_a_state_of_another_shap
         fly(MMGModel(kcs), [Manoeuvre("straight", duration=10)], state0=np.array([12.0, 0, 0]))
     (run,) = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=-35, duration=10)])
     assert run.name == "tc35_port"
+    with pytest.raises(TypeError, match=(
+            r"^manoeuvres must be a list of Manoeuvre, not a record; to fly a model the way a "
+            r"record was flown use sindyship\.evaluate")):
+        fly(MMGModel(kcs), run)  # had failed inside pandas with KeyError: 0
