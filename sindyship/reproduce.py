@@ -19,13 +19,13 @@ import pandas as pd
 
 from ._io import save_figure, write_text_atomic
 from .evaluation import distance_errors
+from .flight_reports import reproduce_report
 from .flights import fly_like_batch
 from .identify import RECOMMENDED_LIBRARIES, design, fit, resolve_library
 from .manoeuvres import fly, protocol_manoeuvres
 from .mmg import MMGModel
 from .model import paper_model
 from .paper import TABLE_10, ls_agreement, paper_coefficients
-from .reports import reproduce_report
 from .ships import load_ship
 
 METHODS = ("ls", "stlsq", "lasso", "svr", "prior")
@@ -300,5 +300,5 @@ def coefficient_table(models: dict, ship=None) -> pd.DataFrame:
 
 
 def format_report(output: dict) -> str:
-    """Plain-text report (:func:`sindyship.reports.reproduce_report`)."""
+    """Plain-text report (:func:`sindyship.flight_reports.reproduce_report`)."""
     return reproduce_report(output)

@@ -231,7 +231,7 @@ def test_usage_errors_are_one_line_that_names_the_verb():
 
 
 def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
-    from sindyship.reports import evaluation_report
+    from sindyship.flight_reports import evaluation_report
 
     errors = {"tc_35": {"mean_distance_L": 0.25, "max_distance_L": 1.5, "diverged_at_s": None,
                         "flown_as": "replay-commanded", "start_s": 214.2,
@@ -364,7 +364,7 @@ def test_reproduce_json_contract(tmp_path):
     # the physics-consistent fit runs on the library with v r, and the report says so
     prior = next(r for r in doc["results"] if r["method"] == "prior")
     assert prior["library"] == "abkowitz-vr"
-    from sindyship.reports import reproduce_report
+    from sindyship.flight_reports import reproduce_report
 
     assert "prior on abkowitz-vr " in reproduce_report(doc)
     # the default fit (the prior) with the first diagnosed effect, refined by its training

@@ -644,7 +644,7 @@ def test_a_zigzag_like_record_that_is_no_zigzag_says_why(protocol_runs):
     """Rows missing across a reversal, resampled: the heading changes at the reversals no
     longer share a check angle, the record is replayed open loop, and the flight start and
     the evaluation report say why (they had said only that nothing was recognised)."""
-    from sindyship.reports import evaluation_report
+    from sindyship.flight_reports import evaluation_report
 
     zigzag = next(r for r in protocol_runs["train"] if r.name == "zz20_20")
     reversal = int(np.flatnonzero(np.diff(np.sign(zigzag["delta_c"])) != 0)[2])

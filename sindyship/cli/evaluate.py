@@ -41,9 +41,9 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..evaluation import evaluate
+    from ..flight_reports import evaluation_report
     from ..model import AbkowitzModel
     from ..records import PARQUET_SUFFIXES, expand_paths
-    from ..reports import evaluation_report
     from ._common import load_cli_ship
 
     if Path(args.model).suffix.lower() in (".csv", *PARQUET_SUFFIXES):

@@ -22,7 +22,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from .._io import check_output, output_folder
-    from ..reports import reproduce_report
+    from ..flight_reports import reproduce_report
     from ..reproduce import run as run_experiment
 
     check_output(args.out, kind="folder", label=f"--out {args.out}", replaceable="results.json")
