@@ -18,9 +18,10 @@ def _flown_as_text(err: dict) -> str:
     if kind == "zigzag":
         how = (f"flown closed loop as a {err['amplitude_deg']:g}/{err['check_deg']:g} "
                "zig-zag")
-    if how and err.get("start_s") is not None:
-        how += f" from t = {err['start_s']:.6g} s"
     reason = err.get("start_reason") or ""
+    if how and err.get("start_s") is not None:  # a zig-zag is flown from its execute
+        at = "its execute at " if kind == "zigzag" or "execute" in reason else ""
+        how += f" from {at}t = {err['start_s']:.6g} s"
     if kind in ("replay-commanded", "replay-actual") and "(as a zig-zag: " in reason:
         how += "; " + reason.split(": flown from")[0]  # why a zig-zag-like record is none
     return how

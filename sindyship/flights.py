@@ -291,14 +291,17 @@ def flown_as(record: Trajectory) -> dict:
         ``start_reason``.
     """
     start = flight_start(record)
-    zigzag = start.zigzag
+    zigzag, reason = start.zigzag, start.reason
     if zigzag is None and start.kind != "zigzag":  # as command_for flies the part
         found = zigzag_to_fly(_part_from(record, start))
         zigzag = None if found is None else found[1]
+        if zigzag is not None:  # the part alone holds a zig-zag the whole record did not
+            reason += (f"; from there the record is a {zigzag['amplitude_deg']:g}/"
+                       f"{zigzag['check_deg']:g} zig-zag, flown closed loop")
     if zigzag is not None:
         out = {"flown_as": "zigzag", "amplitude_deg": zigzag["amplitude_deg"],
                "check_deg": zigzag["check_deg"]}
     else:
         out = {"flown_as": "replay-commanded" if record.has("delta_c") else "replay-actual"}
-    out.update(start_s=start.time, start_reason=start.reason)
+    out.update(start_s=start.time, start_reason=reason)
     return out

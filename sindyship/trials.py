@@ -380,6 +380,20 @@ def _recognise_rudder(t, psi, r, command, commanded: bool, switch_t, read: bool 
     if len(chain) < 3:
         return None, (), (f"the rudder holds no run of three or more alternating angles near "
                       f"+-{amplitude:.1f} deg (longest: {len(chain)})"), ()
+    # a helmsman may hold the zig-zag's angle before its execute (weather helm in a gusty
+    # wind): while the reversals from the first plateau share no check angle, the zig-zag is
+    # looked for from the next one, the plateaus before it the approach
+    first = None
+    for k in range(len(chain) - 2):
+        found = _zigzag_from(chain[k:], t, psi, r, command, raw, commanded, switch_t, read)
+        if found[0] is not None:
+            return found
+        first = first or found
+    return first
+
+
+def _zigzag_from(chain, t, psi, r, command, raw, commanded: bool, switch_t, read: bool):
+    """The zig-zag executed at ``chain``'s first plateau, or None and why not."""
     first_sign = int(np.sign(chain[0][2]))
     # a command steps from its approach value at the execute, flown from its first sample
     # after the step (a helmsman's wheel may wander more than half a degree before it); an

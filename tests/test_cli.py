@@ -165,7 +165,7 @@ def test_fit_then_evaluate_json(records, tmp_path):
     assert out.strip().splitlines()[-2] == (
         f"zz20: mean {errors['zz20']['mean_distance_L']:.4f} L, max "
         f"{errors['zz20']['max_distance_L']:.4f} L (flown closed loop as a 20/20 zig-zag "
-        f"from t = {errors['zz20']['start_s']:.6g} s)")
+        f"from its execute at t = {errors['zz20']['start_s']:.6g} s)")
     assert out.strip().splitlines()[-1].startswith("  zig-zag flown: first overshoot ")
 
 
@@ -235,6 +235,8 @@ def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
 
     errors = {"tc_35": {"mean_distance_L": 0.25, "max_distance_L": 1.5, "diverged_at_s": None,
                         "flown_as": "replay-commanded", "start_s": 214.2,
+                        "start_reason": "a turn with -35 deg rudder, flown from its execute at "
+                                        "t = 214.2 s",
                         "turn": {"flown": {"side": "port", "advance_L": 3.012,
                                            "tactical_diameter_L": 3.284, "speed_loss": 0.555},
                                  "recorded": {"side": "port", "advance_L": 3.02,
@@ -254,13 +256,13 @@ def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
                                                                "period_s": 98.6}}}}
     assert evaluation_report(errors).splitlines() == [
         "tc_35: mean 0.2500 L, max 1.5000 L (replaying its commanded rudder through the servo "
-        "from t = 214.2 s)",
+        "from its execute at t = 214.2 s)",
         "  turn to port flown: advance 3.01 L (recorded 3.02 L), tactical diameter 3.28 L "
         "(recorded n/a), speed loss 0.56 (recorded 0.64)",
         "tc_-35: mean 4.0000 L, max 8.0000 L (replaying its recorded rudder angle from t = 3 s)",
         "  turn flown to port, recorded to starboard: no figures to compare",
         "zz_20: FAILED: diverged at 401 s; before it mean 3.0000 L, max 9.0000 L (flown closed "
-        "loop as a 20/20 zig-zag from t = 7.04 s)",
+        "loop as a 20/20 zig-zag from its execute at t = 7.04 s)",
         "  zig-zag flown: first overshoot n/a (recorded 5.2 deg), second overshoot n/a (recorded "
         "n/a), period n/a (recorded 99 s)"]
 

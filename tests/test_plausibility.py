@@ -624,6 +624,30 @@ def test_a_helmsmans_held_wheel_before_the_execute_is_no_first_leg():
     assert abs(zigzag.start_time - recognise_zigzag(record).start_time) < 0.5
 
 
+@pytest.mark.parametrize("index", [0, 1])
+def test_a_zigzag_after_an_approach_holding_its_angle_is_recognised_at_its_execute(
+        monkeypatch, index):
+    """A helmsman holding 10 deg of weather helm for most of the approach before a 10/10
+    zig-zag: that hold was taken for the zig-zag's first leg, whose reversals then shared no
+    check angle, and the record was flown and scored as a 10 deg turn from t = 2.8 s, the
+    ship still almost at rest.  The zig-zag is looked for from the next plateau too."""
+    import sindyship.manoeuvres as manoeuvres
+    from sindyship.campaign import campaign_trials, fly_trials
+
+    monkeypatch.setitem(manoeuvres.HELMSMAN, "limit", 10.0)
+    monkeypatch.setitem(manoeuvres.HELMSMAN, "gain", 6.0)
+    trial = campaign_trials(7)["train"][index]
+    (record,) = fly_trials(load_ship("kvlcc2"), [trial])
+    approach = np.degrees(record["delta_c"][record.t < record.meta["execute_s"]])
+    assert np.mean(np.abs(np.abs(approach) - 10.0) < 0.5) > 0.8  # the helm held at 10 deg
+    zigzag, reason = explain_zigzag(record)
+    assert zigzag is not None, reason
+    assert zigzag[:3] == (10.0, 10.0, trial.first_sign)
+    assert 0.0 <= zigzag.start_time - record.meta["execute_s"] <= 0.2 + 1e-9
+    start = flight_start(record)
+    assert start.kind == "zigzag" and start.time == zigzag.start_time
+
+
 def test_a_campaign_zigzag_whose_helm_the_wind_overrides_is_warned():
     """Seed 3's held-out 15/15 zig-zag, in a 5 m/s wind seven times the model's speed, holds
     its first rudder to the end: the campaign says so instead of handing over a turn named
