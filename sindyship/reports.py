@@ -307,14 +307,42 @@ def _held_out_refutation(change) -> str:
     return error + diverged
 
 
+def _diagnosis_fit(diagnosis) -> str:
+    """The fit the report's confirmations re-fly: the diagnosis's own, on its library."""
+    optimizer = diagnosis.settings.get("optimizer", "ls")
+    what = {"ls": "least squares", "prior": "the prior fit, unrefined"}.get(optimizer, optimizer)
+    return f"{what} on {diagnosis.library.name}"
+
+
+def _command_flights(change) -> str:
+    """How the command's model flies the records with the effect, against without it."""
+    parts = []
+    for kind in SETS:
+        ratio = change.ratio(kind)
+        before, after = change.divergences(kind)
+        if not any(row["set"] == kind for row in change.rows):
+            continue
+        text = f"the {kind} records x {ratio:.2f}" if math.isfinite(ratio) else \
+            f"the {kind} records (no window to compare)"
+        parts.append(text + (f" (diverged flights {before} -> {after})" if before or after
+                             else ""))
+    return " and ".join(parts)
+
+
 def _other_fit(diagnosis) -> str:
-    """A note that the command fits another model than the one the ratios above describe:
-    a diagnosis by least squares names ``fit``'s recommended ``prior`` fit, refined."""
-    if diagnosis.settings.get("optimizer", "ls") != "ls":
-        return ""
-    return (f" (The flights above are least squares on {diagnosis.library.name}; the command "
-            "fits the recommended prior and refines it: judge that model with sindyship "
-            "evaluate on records it was not fitted on.)")
+    """What the command's model does with the effect, when the command fits another model than
+    the one the ratios above describe (a diagnosis by ``ls`` names ``fit``'s recommended
+    ``prior`` fit, refined; one by ``prior`` its refinement)."""
+    change = diagnosis.command
+    if change is None:
+        if diagnosis.settings.get("optimizer", "ls") != "ls":
+            return ""
+        return (f" (The flights above are {_diagnosis_fit(diagnosis)}; the command fits the "
+                "recommended prior and refines it: judge that model with sindyship evaluate on "
+                "records it was not fitted on.)")
+    return (f" (The flights above are {_diagnosis_fit(diagnosis)}; the command's model, the "
+            f"prior on {change.after} refined by its flights, flies "
+            f"{_command_flights(change)} as far off as without {', '.join(change.added)}.)")
 
 
 def _verdict_lines(diagnosis, ship_argument: str | None = None,
@@ -345,6 +373,21 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
         options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
         text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... {options}; then "
                 "diagnose again with the same --effects." + _other_fit(diagnosis))
+    elif verdict == "contested" and (diagnosis.top.confirmation is None
+                                     or diagnosis.top.confirmation.held_out_supports
+                                     is not False):  # the command's model contests it
+        top, command = diagnosis.top, diagnosis.command
+        given = diagnosis.library.effects if effect_arguments is None else effect_arguments
+        without = _fit_options(diagnosis, ship_argument, list(given))
+        options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
+        text = (f"Verdict: contested - re-flying the training records favours {top.effect.name} "
+                f"({_diagnosis_fit(diagnosis)}), but the model "
+                f"the command to add it fits, the prior on {command.after} refined by its "
+                f"flights, flies {_command_flights(command)} as far off as without it, so it "
+                "is not named to add.  "
+                f"Fit without it (sindyship fit DATA.csv... {without}), or, to see it anyway, "
+                f"sindyship fit DATA.csv... {options} and sindyship evaluate it on records it "
+                "was not fitted on.")
     elif verdict == "contested":
         top = diagnosis.top
         change = top.confirmation
@@ -436,8 +479,11 @@ def _why_added(diagnosis) -> str:
     return f" ({'; '.join(parts)})" if top is not diagnosis.ranking[0] and parts else ""
 
 
-def iteration_report(iterative) -> str:
-    """One paragraph per round, then the errors of every library."""
+def iteration_report(iterative, ship_argument: str | None = None,
+                     effect_arguments: list[str] | None = None) -> str:
+    """One paragraph per round, the mean distance of every flight with every library (a
+    diverged flight marked with the time it diverged) and the ``fit`` command of the library
+    the rounds end with (the arguments as :func:`diagnosis_report`'s)."""
     lines = []
     for k, rnd in enumerate(iterative.rounds, 1):
         d = rnd.diagnosis
@@ -449,8 +495,20 @@ def iteration_report(iterative) -> str:
     if not table.empty:
         lines.append("")
         lines.append("Mean distance [ship lengths] per manoeuvre and library:")
-        pivot = table.pivot_table(
-            index=["set", "manoeuvre"], columns="round", values="mean_distance_L", sort=False
-        )
-        lines.append(pivot.to_string(float_format=lambda x: f"{x:.3f}"))
+        table = table.assign(cell=[
+            f"{mean:.3f}" + ("" if diverged is None or math.isnan(diverged)
+                             else f" (diverged at {diverged:.0f} s)")
+            for mean, diverged in zip(table["mean_distance_L"], table["diverged_at_s"],
+                                      strict=True)])
+        pivot = table.pivot(index=["set", "manoeuvre"], columns="round", values="cell")
+        order = list(dict.fromkeys(zip(table["set"], table["manoeuvre"], strict=True)))
+        lines.append(pivot.reindex(order).fillna("-").to_string())
+    added = [rnd.diagnosis.top.effect for rnd in iterative.rounds if rnd.added]
+    if added:
+        first = iterative.rounds[0].diagnosis
+        given = first.library.effects if effect_arguments is None else effect_arguments
+        lines += ["", textwrap.fill(
+            f"The library the rounds end with: sindyship fit DATA.csv... "
+            f"{_fit_options(first, ship_argument, [*given, *added])}", width=96,
+            subsequent_indent="  ", break_long_words=False, break_on_hyphens=False)]
     return "\n".join(lines)

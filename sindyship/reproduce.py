@@ -81,8 +81,9 @@ def _diagnosis_rounds(train, test, ship, rounds, progress):
 
     progress("diagnosing missing effects, adding the best one, diagnosing again")
     t0 = time.perf_counter()
+    # the recommended row below fits and flies the command's model of the first effect
     iterative = diagnose_iteratively(train, ship, test=test, max_rounds=rounds,
-                                     search_beyond=False)
+                                     search_beyond=False, check_command=False)
     diagnosis = {"rounds": [], "stopped": iterative.stopped, "report": iterative.report()}
     results, models = [], {}
     for k, rnd in enumerate(iterative.rounds):

@@ -14,6 +14,8 @@ first read in means of consecutive samples (:func:`samples_per_reading`,
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["FRAGMENTED_HOLDS", "HOLD_RANGE", "HOLD_SAMPLES", "MIN_SAMPLES_PER_READING",
@@ -292,3 +294,16 @@ def read_in_blocks(command: np.ndarray,
         means = np.where(counts > 0, sums / np.maximum(counts, 1.0), np.nan)
     return first, centre, means
 
+
+#: Share of a record's samples with the rudder put to one side (half a degree or more) for
+#: the record to count as putting it to that side.
+SIDE_SHARE = 0.1
+
+
+def rudder_side(rudder: np.ndarray) -> int:
+    """The side a record's rudder angles [rad] put the rudder to: 1 starboard, -1 port, 2 both
+    (a zig-zag), 0 neither (a straight run): each side counts where a tenth of the samples or
+    more hold the rudder half a degree or more to it."""
+    starboard = float(np.mean(rudder > math.radians(0.5))) >= SIDE_SHARE
+    port = float(np.mean(rudder < -math.radians(0.5))) >= SIDE_SHARE
+    return 2 if starboard and port else 1 if starboard else -1 if port else 0

@@ -254,6 +254,14 @@ def test_kcs_rounds_continue_until_no_effect_is_meaningful(kcs_rounds):
     assert all(e["diverged_at_s"] is None for e in errors.values())
     assert max(e["mean_distance_L"] for e in errors.values()) < 0.1
     assert "Stopped: no effect" in kcs_rounds.report()
+    assert " ".join(kcs_rounds.report().split("\n\n")[-1].split()) == (
+        "The library the rounds end with: sindyship fit DATA.csv... --ship kcs --effects "
+        "asymmetry,higher_order")
+    # each round judges the default fit with its effect; the next takes it as its model without
+    first, second = (rnd.diagnosis.command for rnd in kcs_rounds.rounds[:2])
+    assert (first.before, first.after) == ("abkowitz-vr", "abkowitz-vr+asymmetry")
+    assert second.model_before is first.model_after
+    assert not first.training_refutes and first.held_out_supports is not False
 
 
 def test_the_verdicts_fit_command_repeats_the_diagnosis_settings(kcs_rounds, tmp_path):
@@ -624,15 +632,15 @@ def test_a_discovery_must_outfly_the_effects_the_flights_favour(tmp_path, capsys
 
 def test_the_side_a_record_puts_its_rudder_to(kcs):
     """A tenth of the samples with the rudder half a degree or more to a side counts."""
-    from sindyship.diagnose.diagnosis import rudder_side
+    from sindyship.rudder_holds import rudder_side
 
     runs = fly(MMGModel(kcs), [Manoeuvre("zigzag", rudder=10, check=10, duration=400),
                                Manoeuvre("turning-circle", rudder=20, duration=200),
                                Manoeuvre("turning-circle", rudder=-20, duration=200),
                                Manoeuvre("straight", duration=200)])
-    assert [rudder_side(run) for run in runs] == [2, 1, -1, 0]
+    assert [rudder_side(run.rudder) for run in runs] == [2, 1, -1, 0]
     small = runs[1].data.assign(delta=np.radians(0.4))  # under half a degree: no side
-    assert rudder_side(Trajectory(small, name="small")) == 0
+    assert rudder_side(Trajectory(small, name="small").rudder) == 0
 
 
 def test_held_out_flights_that_contradict_a_confirmed_effect_contest_it(kcs, kcs_rounds):

@@ -159,7 +159,8 @@ def run(args) -> int:
     text = result.report(ship_argument=args.ship, effect_arguments=split_names(args.effects))
     if iterative is not None:
         document.update(iterative.to_json())
-        text += "\n\n" + iterative.report()
+        text += "\n\n" + iterative.report(ship_argument=args.ship,
+                                           effect_arguments=split_names(args.effects))
     document["seconds"] = time.perf_counter() - start
     if args.out is not None:
         out = Path(args.out)

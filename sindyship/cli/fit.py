@@ -95,6 +95,9 @@ def _smoothing(args, records, ship, effects, params, speed):
 
     if args.smoothing != "auto":
         return SmoothingSetting.parse(args.smoothing)
+    progress(f"choosing the smoothing (--smoothing auto): up to {len(default_candidates(ship))} "
+             f"settings, each fitted {len(records)} times with one record left out and flown "
+             "on it; the table follows when they are done")
     setting, table = choose_smoothing(records, ship, optimizer=args.optimizer,
                                       library=resolve_library(args.library, (), speed),
                                       effects=effects, params=params,

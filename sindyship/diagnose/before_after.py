@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pandas as pd
@@ -12,11 +14,19 @@ import pandas as pd
 from .._diagnosis_thresholds import CONFIRMING_RATIO
 from .._io import clean_json
 from ..evaluation import compare_flights, error_summary
-from ..identify import Design, design, fit, resolve_library, resolve_rudder_signal
+from ..identify import (
+    Design,
+    design,
+    fit,
+    recommended_library,
+    resolve_library,
+    resolve_rudder_signal,
+)
 from ..library import (
     Effect,
     TermLibrary,
     load_effect,
+    load_library,
 )
 from ..model import AbkowitzModel
 from ..optimizers import one_blas_thread
@@ -140,6 +150,16 @@ class BeforeAfter:
         """
         return self._judged("held-out", 1.0, no_distance=None)
 
+    @property
+    def training_refutes(self) -> bool:
+        """Whether the training flights refute the effects: one diverges with them where it
+        did not without (or earlier), or, with no divergence cured, their geometric-mean
+        distance over the common windows grows by more than the confirming margin (above
+        1 / :data:`CONFIRMING_RATIO` times its value without them).  A model that flies them
+        no farther off does not refute them; it need not confirm them (:attr:`confirmed`)."""
+        margin = 1.0 / CONFIRMING_RATIO
+        return self._judged("training", margin, no_distance=True, cured_limit=margin) is False
+
     def _judged(self, kind: str, threshold: float, *, no_distance: bool | None,
                 cured_limit: float = math.inf) -> bool | None:
         """Whether the set's flights favour the effects: False when one diverges with them
@@ -261,6 +281,58 @@ def confirm_by_flights(scores: Sequence[EffectScore], model: AbkowitzModel,
         score.confirmation = BeforeAfter(model.library.name, refit.library.name,
                                          (score.effect.name,), rows, model_before=model,
                                          model_after=refit)
+
+
+#: The optimizers of a diagnosis whose verdict names a ``fit`` command that fits another model
+#: than the one re-flown: ``ls`` (``fit`` without ``--optimizer`` gives its recommended
+#: ``prior`` fit) and ``prior`` (which ``fit`` refines by its flights).
+COMMAND_REFITS = ("ls", "prior")
+
+#: The library a diagnosis takes by default, which its verdict's ``fit`` command leaves out.
+DIAGNOSED_LIBRARY = "abkowitz"
+
+
+def command_library(library: TermLibrary) -> TermLibrary:
+    """The library of the ``fit`` command a diagnosis of ``library`` names: where that is the
+    diagnosis's default (:data:`DIAGNOSED_LIBRARY`, extended or not), ``fit``'s recommended
+    library for its ``prior`` fit (:func:`sindyship.identify.recommended_library`) with the
+    terms ``library``'s effects add; else ``library`` itself."""
+    default = load_library(DIAGNOSED_LIBRARY)
+    if library.source is None or Path(library.source).resolve() != Path(default.source).resolve():
+        return library
+    recommended = load_library(recommended_library(library.speed))
+    return library.rebased(default, recommended)
+
+
+@one_blas_thread
+def judge_command(fitted: Sequence[Trajectory], library: TermLibrary, effect: Effect,
+                  sets: list, settings: Mapping, *, ship: Ship, n_jobs: int | None,
+                  progress: bool, before: AbkowitzModel | None = None) -> BeforeAfter:
+    """The models the verdict's ``fit`` command gives without and with ``effect``, flown like
+    the ``sets``' records: ``fit``'s recommended fit, the ``prior`` on
+    :func:`command_library`, refined by its flights with the defaults of ``fit``
+    (:func:`sindyship.refine.refine`: a refinement that does not carry over to records it was
+    not refined on is refused there, as ``fit`` refuses it).  ``fitted`` are the training
+    records as fitted (smoothed, when the diagnosis smooths them), as ``fit`` fits and
+    refines them.  ``before``, the command's model without the effect when it is already
+    fitted (the last round's with it, in :func:`sindyship.diagnose.diagnose_iteratively`), is
+    taken when its library has the terms and speed form of :func:`command_library`'s."""
+    from ..refine import refine
+
+    base = command_library(library)
+    if progress:
+        print(f"the command's fit: the prior on {base.name}, refined by its flights, without "
+              f"and with {effect.name}", file=sys.stderr)
+    kept = before is not None and before.library.terms == base.terms \
+        and before.library.speed == base.speed
+    models = [before if kept and lib is base else
+              refine(fit(fitted, ship, library=lib, optimizer="prior", **settings), fitted)
+              for lib in (base, base.extended(effect))]
+    flown = _fly_many([(m, recs) for m in models for _, recs in sets], n_jobs=n_jobs,
+                      progress=progress, what="flights of the command's fit")
+    rows = _change_rows(sets, flown[:len(sets)], flown[len(sets):], ship.L)
+    return BeforeAfter(base.name, models[1].library.name, (effect.name,), rows,
+                       model_before=models[0], model_after=models[1])
 
 
 def before_after(

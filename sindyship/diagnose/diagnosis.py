@@ -29,6 +29,7 @@ from ..library import (
 from ..model import AbkowitzModel
 from ..optimizers import one_blas_thread
 from ..reports import DOF_NAMES
+from ..rudder_holds import rudder_side
 from ..ships import Ship
 from ..smoothing import SmoothingSetting, resolve_smoothing, smooth_records
 from ..stability import Stability, straight_run_stability
@@ -36,7 +37,7 @@ from ..targets import RESOLVED_STEP, sampling_steps, under_resolved
 from ..trajectory import Trajectory
 from ..uncertainty import library_conditioning
 from ._flights import _fly_many
-from .before_after import confirm_by_flights
+from .before_after import COMMAND_REFITS, BeforeAfter, confirm_by_flights, judge_command
 from .compare import ManoeuvreComparison, compare
 from .discovery import Discovery, discover
 from .noise import channel_noise
@@ -81,7 +82,12 @@ class Diagnosis:
         The records' speed range and which speed form they need
         (:func:`sindyship.diagnose.speed.speed_forms`).
     sides : dict
-        Per training record, the side its rudder is put to (:func:`rudder_side`).
+        Per training record, the side its rudder is put to
+        (:func:`sindyship.rudder_holds.rudder_side`).
+    command : BeforeAfter or None
+        The model the verdict's ``fit`` command gives, without and with the effect named
+        (:func:`sindyship.diagnose.before_after.judge_command`), when it is another than the
+        one re-flown (a diagnosis by ``ls`` or ``prior``); its flights can contest the effect.
     sampling : dict
         Per training record, its sampling interval in ship-length times L/U0
         (:func:`sindyship.targets.sampling_steps`); above
@@ -109,6 +115,7 @@ class Diagnosis:
     speed: SpeedForms | None = None
     sides: dict[str, int] = field(default_factory=dict)
     sampling: dict[str, float] = field(default_factory=dict)
+    command: BeforeAfter | None = None
 
     @property
     def diverged(self) -> dict[str, float]:
@@ -134,7 +141,8 @@ class Diagnosis:
         """``"add-effect"`` (a meaningful effect is missing), ``"contested"`` (the effect
         :attr:`top` names is refuted by the held-out flights given: one diverges only with it,
         or they come out farther off; they never choose an effect, which would select the
-        model on its test, but they can stop one), ``"add-discovered"`` (no catalogued effect
+        model on its test, but they can stop one; or by the flights of the model the
+        verdict's command fits, :attr:`command`), ``"add-discovered"`` (no catalogued effect
         is meaningful but the search beyond the catalogue discovered one), ``"unstable"``
         (training flights diverged and no catalogued effect is meaningful), ``"unexplained"``
         (most of a force is unexplained and no catalogued effect is meaningful) or
@@ -142,6 +150,10 @@ class Diagnosis:
         if self.top is not None:
             change = self.top.confirmation
             if change is not None and change.held_out_supports is False:
+                return "contested"
+            command = self.command
+            if command is not None and (command.training_refutes
+                                        or command.held_out_supports is False):
                 return "contested"
             return "add-effect"
         if self.discovery is not None and self.discovery.accepted:
@@ -322,6 +334,7 @@ class Diagnosis:
                 "sampling": {"step_L_U0": self.sampling, "resolved_step_L_U0": RESOLVED_STEP},
                 "ranking": [score.to_json() for score in self.ranking],
                 "discovery": None if self.discovery is None else self.discovery.to_json(),
+                "command_check": None if self.command is None else self.command.to_json(),
                 "speed": None if self.speed is None else self.speed.to_json(),
                 "not_testable": [item.to_json() for item in self.not_testable],
                 "in_library": list(self.in_library),
@@ -416,6 +429,8 @@ def diagnose(
     n_jobs: int = 1,
     progress: bool = False,
     search_beyond: bool = True,
+    check_command: bool = True,
+    command_before: AbkowitzModel | None = None,
 ) -> Diagnosis:
     """Fit a library, show where it fails and rank the catalogued effects that are missing.
 
@@ -457,6 +472,12 @@ def diagnose(
         When no catalogued effect is meaningful and the model is visibly wrong, search beyond
         the catalogue (:func:`sindyship.diagnose.discover`, the report's "Not in the
         catalogue").
+    check_command : bool
+        Fly the model the verdict's ``fit`` command gives, without and with the effect named,
+        when it is another than the one re-flown (``optimizer`` ``ls`` or ``prior``: ``fit``
+        then fits the ``prior`` and refines it); its flights can contest the effect
+        (:attr:`Diagnosis.command`); ``command_before``: that model without the effect,
+        when already fitted (:func:`diagnose_iteratively` passes the last round's).
 
     Returns
     -------
@@ -534,26 +555,17 @@ def diagnose(
         seconds=time.perf_counter() - start,
     )
     result.speed = speed_forms(fitted, ship, base, settings, test)
-    result.sides = {record.name: rudder_side(record) for record in records}
+    result.sides = {record.name: rudder_side(record.rudder) for record in records}
+    top = result.top
+    if check_command and top is not None and optimizer in COMMAND_REFITS and sets and (
+            top.confirmation is None or top.confirmation.held_out_supports is not False):
+        result.command = judge_command(fitted, base, top.effect, sets, settings, ship=ship,
+                                       n_jobs=n_jobs, progress=progress,
+                                       before=command_before)
     if search_beyond:
         _search_beyond(result, fitted, settings, n_jobs)
-        result.seconds = time.perf_counter() - start
+    result.seconds = time.perf_counter() - start
     return result
-
-
-#: Share of a record's samples with the rudder put to one side (half a degree or more) for
-#: the record to count as putting it to that side.
-SIDE_SHARE = 0.1
-
-
-def rudder_side(record: Trajectory) -> int:
-    """The side a record puts its rudder to: 1 starboard, -1 port, 2 both (a zig-zag), 0
-    neither (a straight run): each side counts where a tenth of the samples or more hold the
-    rudder half a degree or more to it."""
-    rudder = record.rudder
-    starboard = float(np.mean(rudder > math.radians(0.5))) >= SIDE_SHARE
-    port = float(np.mean(rudder < -math.radians(0.5))) >= SIDE_SHARE
-    return 2 if starboard and port else 1 if starboard else -1 if port else 0
 
 
 def _check_arguments(records: Sequence[Trajectory], test: Sequence[Trajectory],

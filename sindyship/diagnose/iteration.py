@@ -93,12 +93,14 @@ class IterativeDiagnosis:
         return pd.DataFrame(rows)
 
 
-    def report(self) -> str:
-        """One paragraph per round, then the errors of every library
-        (:func:`sindyship.reports.iteration_report`)."""
+    def report(self, ship_argument: str | None = None,
+               effect_arguments: list[str] | None = None) -> str:
+        """One paragraph per round, the errors of every library and the ``fit`` command of the
+        library the rounds end with (:func:`sindyship.reports.iteration_report`; the arguments
+        as :meth:`Diagnosis.report`'s)."""
         from ..reports import iteration_report
 
-        return iteration_report(self)
+        return iteration_report(self, ship_argument, effect_arguments)
 
     def to_json(self) -> dict:
         return clean_json(
@@ -185,13 +187,19 @@ def diagnose_iteratively(
     rounds: list[Round] = []
     stopped = f"after {max_rounds} rounds"
     bar = tqdm(total=max_rounds, desc="rounds", file=sys.stderr, disable=not progress)
+    command_before = None  # the last round's command model with its effect: this one's without
     for _ in range(max_rounds):
-        result = diagnose(records, ship, library=lib, test=test, progress=progress, **options)
+        result = diagnose(records, ship, library=lib, test=test, progress=progress,
+                          command_before=command_before, **options)
+        command_before = None if result.command is None else result.command.model_after
         pick = result.top  # the diagnosis's own verdict: never one the flights refute
         if result.verdict == "contested":
             rounds.append(Round(result, None, None))
-            stopped = (f"the held-out flights refute {pick.effect.name}, the effect re-flying "
-                       "the training records favours")
+            by_held_out = pick.confirmation is not None and \
+                pick.confirmation.held_out_supports is False
+            stopped = ((f"the held-out flights refute {pick.effect.name}" if by_held_out else
+                        f"the flights of the model the command to add {pick.effect.name} fits "
+                        "refute it") + ", the effect re-flying the training records favours")
             break
         if pick is None:
             rounds.append(Round(result, None, None))

@@ -215,6 +215,32 @@ class TermLibrary:
             speed=self.speed,
         )
 
+    def rebased(self, original: TermLibrary, base: TermLibrary) -> TermLibrary:
+        """The terms and delays this library adds to ``original`` (the library it extends, such
+        as the file it was read from), added to ``base`` instead, in this library's speed form.
+
+        Examples
+        --------
+        >>> original = TermLibrary("toy", "prime-I", "", {"X": ["du"], "Y": ["v"], "N": ["r"]})
+        >>> drift = Effect("drift", "Drift", "A made-up effect.", ("psi",),
+        ...                {"Y": ["sin(psi)"], "N": ["cos(psi)"]})
+        >>> base = TermLibrary("big", "prime-I", "", {"X": ["du"], "Y": ["v", "r"], "N": ["r"]})
+        >>> moved = original.extended(drift).rebased(original, base)
+        >>> moved.name, [t.text for t in moved.terms["Y"]], moved.effects
+        ('big+drift', ['v', 'r', 'sin(psi)'], ('drift',))
+        """
+        terms = {}
+        for dof in DOFS:
+            present = {t.canonical(scale=False)
+                       for t in (*original.terms[dof], *base.terms[dof])}
+            terms[dof] = [*base.terms[dof],
+                          *(t for t in self.terms[dof] if t.canonical(scale=False) not in present)]
+        delays = {**base.delays, **{channel: delay for channel, delay in self.delays.items()
+                                    if original.delays.get(channel) != delay}}
+        return TermLibrary(name="+".join([base.name, *self.effects]), system=base.system,
+                           description=base.description, terms=terms, source=base.source,
+                           effects=self.effects, delays=delays, speed=self.speed)
+
     def with_speed(self, speed: str) -> TermLibrary:
         """The same terms made non-dimensional with another speed (:attr:`speed`).
 
