@@ -62,10 +62,18 @@ def _optimizer_of(data: Mapping, source: str) -> dict:
 def _ship_of(data: Mapping, source: str, ship: Ship | None) -> Ship:
     """The model's own ship (format 2), checked against ``ship`` when one is given."""
     definition = data.get("ship_definition")
+    if definition is None and data["format_version"] >= 2:
+        raise SindyshipInputError(
+            f"{source}: a model of format 2 carries its ship's definition, and this one lacks "
+            "'ship_definition'; the file was edited (refit the model rather than editing it).")
     if definition is not None:
         if not isinstance(definition, Mapping):
             raise SindyshipInputError(f"{source}: 'ship_definition' must be a JSON object.")
         own = ship_from_dict(dict(definition), source=f"{source} (its ship)")
+        if "ship_digest" not in data:
+            raise SindyshipInputError(
+                f"{source}: the saved model lacks 'ship_digest', which checks its ship's "
+                "definition; the file was edited (refit the model rather than editing it).")
         if data.get("ship_digest") != ship_digest(own) or data["ship"] != own.name:
             raise SindyshipInputError(
                 f"{source}: the ship definition does not match its digest; the file was edited "

@@ -659,8 +659,12 @@ def _edited(saved_model: str, edit) -> str:
     (lambda d: d.update(format_version=-1), "does not exist"),
     (lambda d: d.update(format_version="2"), 'must be a whole number such as 2, not "2"'),
     (lambda d: d["ship_definition"]["particulars"].update(L=231.0), "digest"),
+    # a format-2 model without its ship's definition had flown the built-in ship of its name
+    (lambda d: d.pop("ship_definition"), "a model of format 2 carries its ship's definition, "
+     "and this one lacks 'ship_definition'"),
+    (lambda d: d.pop("ship_digest"), "the saved model lacks 'ship_digest'"),
 ], ids=["huge-coefficient", "unknown-term", "missing-term", "version-0", "version-minus-1",
-        "version-text", "edited-ship"])
+        "version-text", "edited-ship", "no-ship-definition", "no-ship-digest"])
 def test_an_edited_model_is_refused(new_folder, good_csv, saved_model, edit, words):
     code, out, err, model = evaluate_model(new_folder(), good_csv, _edited(saved_model, edit))
     assert_one_line(code, out, err, 2, str(model), words)

@@ -662,6 +662,9 @@ def test_cmd_export_writes_latex_and_python(model, tmp_path, capsys):
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["eqs.tex", "sim.py"]
     sim = load_module(py.read_text(), py)
     assert sim.COEFFICIENTS["N_uv"] == model.coefficients["N"]["du v"]
+    # forces() reads the named constants: a change to COEFFICIENTS had been silently ignored
+    with pytest.raises(TypeError, match="does not support item assignment"):
+        sim.COEFFICIENTS["N_uv"] = 0.0
     assert export_verb.run(_args(str(saved))) == 0
     printed = capsys.readouterr().out.splitlines()
     assert [line for line in printed if line.startswith("X: ")][0].startswith(

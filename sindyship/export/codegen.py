@@ -243,16 +243,16 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
                     channels: Mapping[str, float] | None = None, compiled: bool = False) -> str:
     """Source of a standalone simulator module for a model (imports numpy only).
 
-    The module holds the coefficients as named constants and in ``COEFFICIENTS``
-    (identifier -> value, every library term), ``forces`` (eq. 15, Prime I, built with
-    sympy's common-subexpression elimination), ``rhs(t, state, delta_c)`` (eq. 14 with the
-    protocol's Coriolis terms, the rudder servo of eq. 12-13 and the kinematics; state
-    ``[u, v, r, x, y, psi, delta]`` SI, shape (7,) or (7, N)), ``simulate(t, delta_c,
-    state0)`` and ``zigzag(t, rudder_deg, check_deg, state0, first_sign=1)``.  The
-    integrator is the one of :mod:`sindyship.simulation` (fixed-step classical RK4 with
-    step ``min(0.1, 0.25 T'_R) L / U0``, cubic Hermite outputs, steps split at command
-    changes and at zig-zag check-angle crossings, the protocol's divergence rule), so the
-    module flies a model as sindyship does.
+    The module holds the coefficients as named constants and in ``COEFFICIENTS`` (identifier ->
+    value, every library term; read-only, as ``forces`` reads the constants), ``forces`` (eq.
+    15, Prime I, built with sympy's common-subexpression elimination), ``rhs(t, state,
+    delta_c)`` (eq. 14 with the protocol's Coriolis terms, the rudder servo of eq. 12-13 and the
+    kinematics; state ``[u, v, r, x, y, psi, delta]`` SI, shape (7,) or (7, N)), ``simulate(t,
+    delta_c, state0)`` and ``zigzag(t, rudder_deg, check_deg, state0, first_sign=1)``. The
+    integrator is the one of :mod:`sindyship.simulation` (fixed-step classical RK4 with step
+    ``min(0.1, 0.25 T'_R) L / U0``, cubic Hermite outputs, steps split at command changes and at
+    zig-zag check-angle crossings, the protocol's divergence rule), so the module flies a model
+    as sindyship does.
 
     With ``compiled=True`` the module also holds the right-hand side and the RK4 step as
     scalar loops over the batch, compiled by numba (``numba.njit``, cached beside the module
@@ -356,6 +356,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     lines = [*doc, "", "from __future__ import annotations", "", "import math",
              *(_compiled.STDLIB_IMPORTS if compiled else []),
              "from collections.abc import Callable, Mapping, Sequence",
+             "from types import MappingProxyType",
              "from typing import NamedTuple",
              "",
              "import numpy as np", *(_compiled.NUMBA_IMPORT if compiled else []), ""]
@@ -422,9 +423,11 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
             lines.append(f"{ident} = {_constant(model.coefficients[dof][term.text])}"
                          f"  # {dof}: {term.text}")
             entries.append((ident, dof, term.text))
-    lines += ["", "#: identifier -> value of every coefficient (Prime I)", "COEFFICIENTS = {"]
+    lines += ["", "#: identifier -> value of every coefficient (Prime I), read-only: forces()",
+              "#: reads the named constants above (change one of those to change the model)",
+              "COEFFICIENTS = MappingProxyType({"]
     lines += [f"    {_literal(ident)}: {ident}," for ident, _, _ in entries]
-    lines += ["}", "#: identifier -> (degree of freedom, term as written in the library)",
+    lines += ["})", "#: identifier -> (degree of freedom, term as written in the library)",
               "TERMS = {"]
     lines += [f"    {_literal(ident)}: ({_literal(dof)}, {_literal(text)}),"
               for ident, dof, text in entries]
