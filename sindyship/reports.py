@@ -134,17 +134,24 @@ def _fit_options(diagnosis, ship_argument: str | None, effects, *,
     return " ".join(options)
 
 
-def _confirmation_text(change) -> str:
+def _ratio_parts(change, label: str, missing: str) -> list[str]:
+    """Per set flown (training, held-out): its after/before ratio and divergences, named by
+    ``label`` (``{kind}`` the set), ``missing`` where no window compares them."""
     parts = []
     for kind in SETS:
-        ratio = change.ratio(kind)
-        before, after = change.divergences(kind)
         if not any(row["set"] == kind for row in change.rows):
             continue
-        text = f"{kind} error x {ratio:.2f}" if math.isfinite(ratio) else f"{kind} error n/a"
-        if before or after:
-            text += f" (diverged flights {before} -> {after})"
-        parts.append(text)
+        ratio = change.ratio(kind)
+        before, after = change.divergences(kind)
+        name = label.format(kind=kind)
+        text = f"{name} x {ratio:.2f}" if math.isfinite(ratio) else f"{name} {missing}"
+        parts.append(text + (f" (diverged flights {before} -> {after})" if before or after
+                             else ""))
+    return parts
+
+
+def _confirmation_text(change) -> str:
+    parts = _ratio_parts(change, "{kind} error", "n/a")
     verdict = {True: "confirmed", False: "not confirmed", None: "flown"}[change.confirmed]
     judged = "" if change.confirmed is None else " (judged on the training flights)"
     disagree = {True: "; the held-out flights agree", None: "",
@@ -316,17 +323,7 @@ def _diagnosis_fit(diagnosis) -> str:
 
 def _command_flights(change) -> str:
     """How the command's model flies the records with the effect, against without it."""
-    parts = []
-    for kind in SETS:
-        ratio = change.ratio(kind)
-        before, after = change.divergences(kind)
-        if not any(row["set"] == kind for row in change.rows):
-            continue
-        text = f"the {kind} records x {ratio:.2f}" if math.isfinite(ratio) else \
-            f"the {kind} records (no window to compare)"
-        parts.append(text + (f" (diverged flights {before} -> {after})" if before or after
-                             else ""))
-    return " and ".join(parts)
+    return " and ".join(_ratio_parts(change, "the {kind} records", "(no window to compare)"))
 
 
 def _other_fit(diagnosis) -> str:
