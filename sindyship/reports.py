@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ._diagnosis_thresholds import MEANINGFUL_SHARE
 from .errors import SindyshipInputError
-from .library import DOFS
+from .library import DOFS, PAPER_LIBRARY, read_from_builtin
 from .targets import is_under_resolved
 
 __all__ = ["DOF_NAMES", "SETS", "before_after_report", "diagnosis_report", "error_cell",
@@ -114,7 +114,7 @@ def _fit_options(diagnosis, ship_argument: str | None, effects, *,
     base = _file_or_name(library, builtin_library_dir())
     options = [f"--ship {shlex.quote(ship_argument or _ship_argument(diagnosis.ship))}",
                *settings.get("read_options", ())]  # resampling, checks skipped, time range
-    if base != "abkowitz":
+    if not read_from_builtin(library, PAPER_LIBRARY):
         options.append(f"--library {shlex.quote(base)}")
     if library.speed != diagnosis.ship.speed_reference:
         options.append(f"--speed {library.speed}")

@@ -16,9 +16,8 @@ import sys
 
 from .._io import clean_json, physical_memory
 from ..errors import SindyshipInputError
+from ..library import PAPER_LIBRARY
 
-#: Default term library of every verb that fits.
-DEFAULT_LIBRARY = "abkowitz"
 #: The names of :data:`sindyship.optimizers.OPTIMIZERS`, spelled out so that building the
 #: parser imports no scikit-learn (``sindyship --help``, ``simulate`` and a refused argument
 #: answer without it); a test keeps them equal.
@@ -235,11 +234,11 @@ def add_identification(p, *, optimizer: bool = True, recommended: bool = False) 
                        help=f"term library name or TOML file (default with --optimizer "
                        f"prior: {design}, or {instantaneous}, which adds "
                        "cross-flow drag, when the speed form (--speed, else the ship's "
-                       f"speed_reference) is instantaneous; the paper's {DEFAULT_LIBRARY} "
+                       f"speed_reference) is instantaneous; the paper's {PAPER_LIBRARY} "
                        "with the other optimizers)")
     else:
-        p.add_argument("--library", default=DEFAULT_LIBRARY, metavar="NAME|FILE",
-                       help=f"term library name or TOML file (default: {DEFAULT_LIBRARY})")
+        p.add_argument("--library", default=PAPER_LIBRARY, metavar="NAME|FILE",
+                       help=f"term library name or TOML file (default: {PAPER_LIBRARY})")
     p.add_argument("--effects", default="", metavar="NAME,...",
                    help="comma-separated catalogue effects (or effect TOML files) whose terms "
                    "are added to the library (default: none)")
@@ -276,7 +275,7 @@ def resolved_library(args, speed: str = "design") -> str:
         from ..identify import recommended_library
 
         return recommended_library(speed)
-    return DEFAULT_LIBRARY
+    return PAPER_LIBRARY
 
 
 def speed_form(args, ship) -> str:

@@ -6,7 +6,6 @@ import math
 import sys
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pandas as pd
@@ -23,10 +22,12 @@ from ..identify import (
     resolve_rudder_signal,
 )
 from ..library import (
+    PAPER_LIBRARY,
     Effect,
     TermLibrary,
     load_effect,
     load_library,
+    read_from_builtin,
 )
 from ..model import AbkowitzModel
 from ..optimizers import one_blas_thread
@@ -288,20 +289,16 @@ def confirm_by_flights(scores: Sequence[EffectScore], model: AbkowitzModel,
 #: ``prior`` fit) and ``prior`` (which ``fit`` refines by its flights).
 COMMAND_REFITS = ("ls", "prior")
 
-#: The library a diagnosis takes by default, which its verdict's ``fit`` command leaves out.
-DIAGNOSED_LIBRARY = "abkowitz"
-
-
 def command_library(library: TermLibrary) -> TermLibrary:
     """The library of the ``fit`` command a diagnosis of ``library`` names: where that is the
-    diagnosis's default (:data:`DIAGNOSED_LIBRARY`, extended or not), ``fit``'s recommended
+    diagnosis's default (:data:`sindyship.library.PAPER_LIBRARY`, extended or not: its
+    ``fit`` command leaves ``--library`` out), ``fit``'s recommended
     library for its ``prior`` fit (:func:`sindyship.identify.recommended_library`) with the
     terms ``library``'s effects add; else ``library`` itself."""
-    default = load_library(DIAGNOSED_LIBRARY)
-    if library.source is None or Path(library.source).resolve() != Path(default.source).resolve():
+    if not read_from_builtin(library, PAPER_LIBRARY):
         return library
     recommended = load_library(recommended_library(library.speed))
-    return library.rebased(default, recommended)
+    return library.rebased(load_library(PAPER_LIBRARY), recommended)
 
 
 @one_blas_thread

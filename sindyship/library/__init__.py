@@ -56,12 +56,14 @@ from __future__ import annotations
 
 from ._checks import DOFS
 from ._files import (
+    PAPER_LIBRARY,
     available_effects,
     available_libraries,
     builtin_library_dir,
     load_effect,
     load_library,
     names_a_file,
+    read_from_builtin,
 )
 from ._objects import Effect, TermLibrary
 from ._variables import (
@@ -90,6 +92,8 @@ __all__ = [
     "load_effect",
     "load_library",
     "names_a_file",
+    "read_from_builtin",
+    "PAPER_LIBRARY",
     "nondimensional_variables",
     "record_variables",
     "SPEED_FACTOR",

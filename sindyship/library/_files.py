@@ -60,6 +60,28 @@ def available_libraries() -> tuple[str, ...]:
     return _builtin_names(builtin_library_dir())
 
 
+#: The paper's library (eq. 15 / 17): the default of least squares and of ``diagnose``, which
+#: ``fit`` without ``--library`` replaces by its recommended one.
+PAPER_LIBRARY = "abkowitz"
+
+
+def read_from_builtin(library: TermLibrary, name: str = PAPER_LIBRARY) -> bool:
+    """Whether ``library`` was read from the built-in library file ``name`` (extended by
+    effects or not), the test by which a command names it by ``name`` rather than by a path.
+
+    Examples
+    --------
+    >>> read_from_builtin(load_library("abkowitz").extended(load_effect("wind")))
+    True
+    >>> read_from_builtin(load_library("abkowitz-vr"))
+    False
+    """
+    if library.source is None:
+        return False
+    builtin = Path(str(builtin_library_dir())) / f"{name}.toml"
+    return Path(library.source).resolve() == builtin.resolve()
+
+
 def available_effects() -> tuple[str, ...]:
     """Names of the built-in effects (``libraries/effects/*.toml``)."""
     return _builtin_names(builtin_library_dir() / "effects")
