@@ -36,7 +36,7 @@ from sindyship.export import (
     generate_python,
     model_equations,
 )
-from sindyship.flights import fly_like_batch
+from sindyship.flights import flown_part, fly_like_batch
 from sindyship.library import TermLibrary, load_library
 from sindyship.manoeuvres import Manoeuvre, fly, protocol_manoeuvres
 from sindyship.mmg import MMGModel
@@ -743,3 +743,45 @@ def test_a_long_equation_is_split_into_tables_that_fit_a_page(protocol_runs, kcs
     assert long and table.count("(1 of 2)") == len(long) == table.count("(2 of 2)")
     coriolis = equations_latex(model, 17, line_length=30)
     assert coriolis.count(r"}_{\text{Coriolis}}") > 2  # a brace a line when they do not fit
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_model_with_delayed_channels_flies_its_record_as_sindyship_flies_it(kcs, tmp_path,
+                                                                              compiled):
+    """A library that delays a channel (a lagging sensor, as ``discover`` finds) had its
+    delay left out of every export: the generated module read the revolutions and the
+    commanded rudder as given, and its text and LaTeX never said the forces read them later."""
+    if compiled and importlib.util.find_spec("numba") is None:
+        pytest.skip("numba is not installed: the compiled path does not run")
+    base = paper_model(kcs)
+    terms = {dof: [t.text for t in base.library.terms[dof]] for dof in DOFS}
+    terms["X"].append("n")
+    delays = {"n": 4.0, "delta_c": 1.5}
+    library = TermLibrary("paper-with-lagging-n", "prime-I", "", terms, delays=delays)
+    coefficients = {dof: dict(base.coefficients[dof]) for dof in DOFS}
+    coefficients["X"]["n"] = 1e-5
+    model = AbkowitzModel(kcs, library, coefficients, rudder_signal="commanded")
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("random", rudder=20, duration=300, seed=3)])
+    data = run.data.copy()
+    n = kcs.propeller.n_P
+    data["n"] = n * (1.0 + 0.3 * np.sin(run.t / 40.0))  # revolutions that change quickly
+    record = Trajectory(data, name=run.name)
+    sim = load_module(generate_python(model, compiled=compiled),
+                      tmp_path / f"sim_delay{int(compiled)}.py")
+    assert dict(sim.DELAYS) == delays and sim.DELAYED_ANGLES == ("delta_c",)
+    (ours,) = fly_like_batch(model, [record])
+    part = flown_part(record)  # the part sindyship flies, from its flight start
+    theirs = sim.simulate(part.t, part["delta_c"], part.state()[:, 0], {"n": part["n"]})
+    assert ours.meta["diverged_at"] is None and theirs.diverged_at is None
+    gap = np.hypot(ours["x"] - theirs.states[3], ours["y"] - theirs.states[4]) / kcs.L
+    assert np.max(gap) < 1e-9
+    # read as given (no delay), the same record flies measurably elsewhere
+    undelayed = AbkowitzModel(kcs, TermLibrary("paper-with-n", "prime-I", "", terms),
+                              coefficients, rudder_signal="commanded")
+    (plain,) = fly_like_batch(undelayed, [record])
+    assert np.max(np.hypot(ours["x"] - plain["x"], ours["y"] - plain["y"])) / kcs.L > 1e-3
+    # and every export says so
+    assert "Delayed channels (DELAYS): the recorded delta_c by 1.5 s, n by 4 s" in " ".join(
+        sim.__doc__.split())
+    assert "delta_c by 1.5 s, n by 4 s lag the physics" in equations_text(model, width=400)
+    assert r"the recorded delta\_c by 1.5 s, n by 4 s lag the physics" in equations_latex(model)

@@ -52,6 +52,23 @@ def _scaled(channels):
             for name, (factor, offset) in CHANNEL_SCALING.items()}
 
 
+def _read_late(t, channels):
+    \"\"\"Recorded channels over ``t`` as the forces read them: a channel the library delays
+    (``DELAYS``: it lags the physics by that many seconds) read that much later, held at its
+    last value beyond the end, angles unwrapped first (as sindyship's evaluate reads a
+    record).  Constants and channels not delayed are returned as given.\"\"\"
+    if channels is None or not DELAYS:
+        return channels
+    out = dict(channels)
+    for name, seconds in DELAYS.items():
+        if name in out and np.ndim(out[name]):
+            values = np.asarray(out[name], dtype=float)
+            angle = name in DELAYED_ANGLES and np.all(np.isfinite(values))
+            moved = np.interp(t + seconds, t, np.unwrap(values) if angle else values)
+            out[name] = np.mod(moved, 2.0 * math.pi) if name == "wind_dir" else moved
+    return out
+
+
 _SERVO = (T_SERVO, RATE_MAX, DELTA_MAX)
 
 
@@ -125,6 +142,8 @@ def _fly(command, t, state0, step, check_divergence, channels):
         if np.ndim(values) and np.shape(values) != t.shape:
             raise ValueError(f"channel {name!r} has shape {np.shape(values)}; give one value "
                              f"per output time {t.shape}, or a constant")
+    if DELAYS and scaled is not None:
+        scaled = _scaled(_read_late(t, channels))
     series = None if scaled is None else ChannelSeries(t, {
         name: np.broadcast_to(values, t.shape)[None, :] for name, values in scaled.items()})
     integ = _Integrator(_Model(series=series), [command], _SERVO)
@@ -141,14 +160,16 @@ def simulate(t, delta_c, state0=None, channels=None, *, step=None, check_diverge
         Increasing output times [s]; the first is the initial time.
     delta_c : float, array_like of shape (N,), or callable
         Commanded rudder angle [rad]: one value per output time, held until the next
-        sample where it changes (zero-order hold); a constant; or a function
+        sample where it changes (zero-order hold; read ``DELAYS["delta_c"]`` seconds later
+        where the library delays it, as recorded); a constant; or a function
         ``f(t, state) -> angle`` evaluated at the start of every integration step and held
         over it (feedback control).
     state0 : array_like, shape (7,), optional
         Initial ``[u, v, r, x, y, psi, delta]`` (SI); default straight ahead at U0.
     channels : mapping of str to array_like of shape (N,), optional
         The recorded channels the library uses, over ``t``, SI as in the measurement CSV,
-        interpolated at the integrator's stage times (default: the CHANNEL_ constants).
+        interpolated at the integrator's stage times (default: the CHANNEL_ constants); a
+        channel in ``DELAYS`` is read that many seconds later, as recorded.
     step : float, optional
         Runge-Kutta step [s]; default ``DEFAULT_STEP``.  States at output times inside a
         step come from its cubic Hermite interpolant; steps are split exactly where the
@@ -175,6 +196,7 @@ def simulate(t, delta_c, state0=None, channels=None, *, step=None, check_diverge
     if np.max(np.abs(angles), initial=0.0) > 0.5 * math.pi:
         raise ValueError(f"delta_c reaches {np.max(np.abs(angles)):g} rad, more than a quarter "
                          "turn: give the rudder angle in radians (np.radians(degrees))")
+    angles = _read_late(t, {"delta_c": angles})["delta_c"]
     return _fly(StepCommand(t, angles), t, state0, step, check_divergence, channels)
 
 

@@ -15,7 +15,7 @@ from sympy.printing.numpy import NumPyPrinter
 from .. import __version__
 from ..plausibility import MAX_REVOLUTION_RATIO
 from ..targets import DOFS, abkowitz_mass_matrix
-from ..terms import SPEED_FLOOR, channel_scaling, read_over_speed
+from ..terms import ANGLE_CHANNELS, SPEED_FLOOR, channel_scaling, read_over_speed
 from . import _compiled
 from ._runtime import RUNTIME
 from .symbolic import (
@@ -25,6 +25,7 @@ from .symbolic import (
     coefficient_symbol,
     force_expressions,
 )
+from .text import _delays_words
 
 if TYPE_CHECKING:
     from ..model import AbkowitzModel
@@ -342,6 +343,9 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
            "rates, OVER_SPEED) are taken over the instantaneous speed U = sqrt(u^2 + v^2), at",
            "least SPEED_FLOOR U0, and the forces of eq. 15 are multiplied by (U/U0)^2."]
           if instantaneous else []),
+        *(_wrap(_docstring_text(f"Delayed channels (DELAYS): {_delays_words(model.library.delays)}"
+                                "; simulate and zigzag read the channels given to them so."))
+          if model.library.delays else []),
         "",
         "The state is [u, v, r, x, y, psi, delta] in SI units: body-fixed surge and sway [m/s]",
         "(v positive to starboard), yaw rate [rad/s], earth-fixed x north and y east [m],",
@@ -375,6 +379,12 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         f"N_SHIP = {_constant(_revolutions(ship))}  # propeller revolutions [rps] (0: none given)",
         f"MAX_REVOLUTION_RATIO = {_constant(MAX_REVOLUTION_RATIO)}  # larger n is in another unit",
         f"SPEED_FORM = {_literal(model.library.speed)}  # the forces over U0 or over U",
+        "#: Recorded channel -> seconds it lags the physics: read that much later when flown",
+        "DELAYS = MappingProxyType({" + ", ".join(
+            f"{_literal(name)}: {_constant(seconds)}"
+            for name, seconds in sorted(model.library.delays.items())) + "})",
+        "DELAYED_ANGLES = (" + "".join(f"{_literal(name)}, " for name in ANGLE_CHANNELS
+                                       if name in model.library.delays) + ")",
         *([f"SPEED_FLOOR = {_constant(SPEED_FLOOR)}  # least U/U0 the forces are scaled with",
            "#: Channels read over the speed U (their scaling with U0 divided by U/U0)",
            "OVER_SPEED = (" + "".join(f"{_literal(name)}, " for name in over_speed) + ")"]

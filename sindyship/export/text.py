@@ -135,6 +135,13 @@ def _join(pieces: list[tuple[float, str]], first: bool = True) -> list[str]:
     return words
 
 
+def _delays_words(delays) -> str:
+    """Which time the forces read a delayed channel at (:attr:`TermLibrary.delays`)."""
+    listed = ", ".join(f"{name} by {seconds:g} s" for name, seconds in sorted(delays.items()))
+    return (f"the recorded {listed} lag the physics: the forces read each that much later "
+            "in the records")
+
+
 def _header(model: AbkowitzModel) -> str:
     """One line naming the model (names from files are flattened: no control characters)."""
     text = (f"Abkowitz model of {model.ship.name} (eq. 14-15, Prime I): library "
@@ -144,6 +151,8 @@ def _header(model: AbkowitzModel) -> str:
         text += ("; forces over the instantaneous speed U = sqrt(u^2 + v^2): v, r and the "
                  "channels' speeds and rates over U, every hydrodynamic term times (U/U0)^2, "
                  f"with U/U0 = |1 + du| / sqrt(1 - v^2) (from {SPEED_FLOOR:g} U0 up)")
+    if model.library.delays:
+        text += "; " + _delays_words(model.library.delays)
     return " ".join(text.split())
 
 
@@ -270,11 +279,17 @@ def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool =
                       for chunk in chunks]
         rows += [line + r" \nonumber \\" for line in lines[:-1]]
         rows.append(lines[-1] + r" \\")
+    notes = []  # unnumbered rows under the equations
     if model.library.speed == "instantaneous":  # what the variables are over
-        rows.append(r"&\frac{U}{U_0} = \frac{|1 + \Delta u'|}{\sqrt{1 - v'^2}}, \qquad "
-                    r"v' = \frac{v}{U}, \quad r' = \frac{r L}{U} \nonumber \\")
-        rows.append(r"&\qquad \text{(the channels' speeds and rates over } U \text{ too; "
-                    r"from } " f"{SPEED_FLOOR:g}" r"\,U_0 \text{ up)} \nonumber")
+        notes.append(r"&\frac{U}{U_0} = \frac{|1 + \Delta u'|}{\sqrt{1 - v'^2}}, \qquad "
+                     r"v' = \frac{v}{U}, \quad r' = \frac{r L}{U} \nonumber")
+        notes.append(r"&\qquad \text{(the channels' speeds and rates over } U \text{ too; "
+                     r"from } " f"{SPEED_FLOOR:g}" r"\,U_0 \text{ up)} \nonumber")
+    if model.library.delays:  # which time a delayed channel is read at
+        notes.append(r"&\text{(" + _latex_text(_delays_words(model.library.delays))
+                     + r")} \nonumber")
+    if notes:
+        rows += [note + r" \\" for note in notes[:-1]] + [notes[-1]]
     else:
         rows[-1] = rows[-1].removesuffix(r" \\")
     rows.append(r"\end{align}")

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from sindyship.errors import SindyshipInputError
-from sindyship.terms import CORE_VARIABLES, Term, is_variable_name, sources_of
+from sindyship.terms import ANGLE_CHANNELS, CORE_VARIABLES, Term, is_variable_name, sources_of
 
 from ._checks import (
     _LIBRARY_KEYS,
@@ -138,7 +138,7 @@ class TermLibrary:
             if shift == 0.0 or channel not in data.columns:
                 continue
             values = data[channel].to_numpy(dtype=float)
-            angle = channel in ("delta", "delta_c", "wind_dir", "phi")
+            angle = channel in ANGLE_CHANNELS
             base = np.unwrap(values) if angle and np.all(np.isfinite(values)) else values
             moved = np.interp(t + shift, t, base)
             data[channel] = np.mod(moved, 2 * np.pi) if channel == "wind_dir" else moved

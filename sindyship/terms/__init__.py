@@ -48,6 +48,7 @@ from ._shapes import (
 )
 from ._term import Term, evaluate_factor, parse_term
 from ._variables import (
+    ANGLE_CHANNELS,
     CORE_VARIABLES,
     DERIVED_SOURCES,
     FUNCTIONS,
@@ -79,6 +80,7 @@ __all__ = [
     "Term",
     "VARIABLES",
     "Variable",
+    "ANGLE_CHANNELS",
     "channel_scaling",
     "describe_shape",
     "describe_variable",

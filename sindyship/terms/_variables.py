@@ -187,6 +187,11 @@ def read_over_speed(name: str) -> bool:
     return describe_variable(name).scaling in ("speed", "rate")
 
 
+#: Recorded channels that are angles: a delay reads them unwrapped
+#: (:meth:`sindyship.library.TermLibrary.aligned`).
+ANGLE_CHANNELS = ("delta", "delta_c", "wind_dir", "phi")
+
+
 def channel_scaling(name: str, L: float, U0: float) -> tuple[float, float]:
     """``(factor, offset)`` that turn a channel in SI into the library's scaling,
     ``value * factor + offset`` (the scalings of :func:`nondimensional_variables`).
