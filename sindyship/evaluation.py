@@ -154,6 +154,7 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
         raise TypeError(f"model must be an AbkowitzModel or a saved model's path, not "
                         f"{type(model).__name__}.")
     records = check_records(as_records(records), model.ship)
+    check_recorded_channels(model, records)
     cut = [flown_part(record) for record in records]
     flown = fly_like_batch(model, cut, step=step)
     out = {}
@@ -164,6 +165,39 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
         elif out[rec.name]["flown_as"] == "zigzag":
             out[rec.name]["zigzag"] = zigzag_overshoots(f, short)
     return out
+
+
+def check_recorded_channels(model, records: Sequence[Trajectory]) -> None:
+    """Every record must hold every channel a flight of ``model`` reads from it
+    (:attr:`sindyship.model.AbkowitzModel.recorded_channels`).
+
+    Raises
+    ------
+    SindyshipInputError
+        Naming every record that lacks one and the channels it lacks (up to
+        :data:`LISTED_RECORDS` records), before anything is flown.
+    """
+    from .errors import SindyshipInputError
+
+    lacking = {record.name: [c for c in model.recorded_channels if not record.has(c)]
+               for record in records}
+    lacking = {name: columns for name, columns in lacking.items() if columns}
+    if not lacking:
+        return
+    listed = "; ".join(f'"{name}" has no {", ".join(repr(c) for c in columns)}'
+                       for name, columns in list(lacking.items())[:LISTED_RECORDS])
+    more = len(lacking) - LISTED_RECORDS
+    used = ", ".join(repr(c) for c in model.recorded_channels)
+    raise SindyshipInputError(
+        f"the model's library reads {used} from every record it flies, and {len(lacking)} of "
+        f"{len(records)} records lack some ({listed}{f'; and {more} more' if more > 0 else ''})"
+        "; add the columns to the records, or fly them with a model fitted without the terms "
+        "that use them."
+    )
+
+
+#: Most records a refusal of :func:`check_recorded_channels` names.
+LISTED_RECORDS = 5
 
 
 #: The figures of a turning circle :func:`evaluate` reports (IMO MSC.137(76) and speed loss).

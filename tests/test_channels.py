@@ -188,3 +188,31 @@ def test_an_effect_whose_channel_a_record_lacks_is_refused_by_name(protocol_runs
     with pytest.raises(SindyshipInputError, match='library "mine": the Y term "depth" uses the '
                        'channel "depth", which record'):
         check_channels(own, records)
+
+
+def test_evaluate_names_every_record_and_channel_it_lacks_before_flying(kcs, protocol_runs):
+    """``evaluate`` stopped inside the first flight of a record lacking a channel and named
+    one channel of it; a user with many records learnt of the others one run at a time."""
+    from sindyship.errors import SindyshipInputError
+    from sindyship.identify import resolve_library
+
+    library = resolve_library("abkowitz", ["wind"])
+    paper = paper_model(kcs).coefficients
+    coefficients = {dof: {t.text: paper[dof].get(t.text, 0.0) for t in library.terms[dof]}
+                    for dof in ("X", "Y", "N")}
+    model = AbkowitzModel(kcs, library, coefficients)
+    first, second, third = protocol_runs["test"][:3]
+    data = first.data.copy()
+    data["wind_speed"], data["wind_dir"] = 5.0, 1.0
+    full = Trajectory(data, name="full")
+    data = second.data.copy()
+    data["wind_speed"] = 5.0
+    half = Trajectory(data, name="half")
+    with pytest.raises(SindyshipInputError) as caught:
+        evaluate(model, [full, half, third])
+    assert str(caught.value) == (
+        "the model's library reads 'wind_dir', 'wind_speed' from every record it flies, and "
+        f"2 of 3 records lack some (\"half\" has no 'wind_dir'; \"{third.name}\" has no "
+        "'wind_dir', 'wind_speed'); add the columns to the records, or fly them with a model "
+        "fitted without the terms that use them.")
+    assert set(evaluate(model, [full])) == {"full"}
