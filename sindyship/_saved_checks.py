@@ -51,8 +51,8 @@ def _check_format(data: Mapping, source: str) -> None:
 
 def _optimizer_of(data: Mapping, source: str) -> dict:
     optimizer = dict(data.get("optimizer", {"name": "given", "params": {}}))
-    if not isinstance(optimizer.get("name", "given"), str) or not isinstance(
-            optimizer.get("params", {}), Mapping):
+    if not isinstance(optimizer.get("name"), str) or not isinstance(
+            optimizer.get("params"), Mapping):
         raise SindyshipInputError(
             f"{source}: 'optimizer' needs a text 'name' and an object 'params'."
         )
@@ -103,10 +103,11 @@ def _ship_of(data: Mapping, source: str, ship: Ship | None) -> Ship:
 
 
 def _check_nondim(nondim, ship: Ship, source: str) -> None:
-    try:
-        L, U0 = float(nondim["L"]), float(nondim["U0"])
-    except (KeyError, TypeError, ValueError):
-        raise SindyshipInputError(f"{source}: 'nondim' needs numbers L and U0.") from None
+    numbers = [nondim.get(key) if isinstance(nondim, Mapping) else None for key in ("L", "U0")]
+    if not all(isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
+               for x in numbers):
+        raise SindyshipInputError(f"{source}: 'nondim' needs numbers L and U0.")
+    L, U0 = map(float, numbers)
     if not (math.isclose(L, ship.L) and math.isclose(U0, ship.U0)):
         raise SindyshipInputError(
             f"{source}: the model was made for L = {L} m, U0 = {U0} m/s but ship "

@@ -663,8 +663,14 @@ def _edited(saved_model: str, edit) -> str:
     (lambda d: d.pop("ship_definition"), "a model of format 2 carries its ship's definition, "
      "and this one lacks 'ship_definition'"),
     (lambda d: d.pop("ship_digest"), "the saved model lacks 'ship_digest'"),
+    # saved-models.md asks for these; they had been read anyway
+    (lambda d: d["optimizer"].pop("name"), "'optimizer' needs a text 'name' and an object"),
+    (lambda d: d["optimizer"].pop("params"), "'optimizer' needs a text 'name' and an object"),
+    (lambda d: d["nondim"].update(U0=str(d["nondim"]["U0"])), "'nondim' needs numbers L and"),
+    (lambda d: d["nondim"].update(L=True), "'nondim' needs numbers L and U0"),
 ], ids=["huge-coefficient", "unknown-term", "missing-term", "version-0", "version-minus-1",
-        "version-text", "edited-ship", "no-ship-definition", "no-ship-digest"])
+        "version-text", "edited-ship", "no-ship-definition", "no-ship-digest",
+        "optimizer-without-name", "optimizer-without-params", "nondim-text", "nondim-bool"])
 def test_an_edited_model_is_refused(new_folder, good_csv, saved_model, edit, words):
     code, out, err, model = evaluate_model(new_folder(), good_csv, _edited(saved_model, edit))
     assert_one_line(code, out, err, 2, str(model), words)
