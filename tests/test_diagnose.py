@@ -752,15 +752,18 @@ def test_the_speed_form_advice_says_when_the_held_out_records_leave_its_speed_ra
     from sindyship.diagnose.speed import SpeedForms
 
     kept = SpeedForms("design", 0.69, 1.03, {"design": 1.0, "instantaneous": 0.99}, "design")
-    assert kept.text().endswith("manoeuvres left out: keep it.")
+    # whose error is how many times whose: the sentence had read "leaves 0.99 times its error"
+    assert kept.text().endswith("and on manoeuvres left out the instantaneous form's force "
+                                "error is 0.99 times the design form's (a change needs at "
+                                "most 0.9): keep the design form.")
     assert kept.to_json()["held_out_range"] is None
     inside = replace(kept, held_out=(0.70, 1.05))
     assert inside.text() == kept.text() and not inside.held_out_outside
     outside = replace(kept, held_out=(0.35, 1.01))
     assert outside.held_out_outside and outside.to_json()["held_out_range"] == [0.35, 1.01]
-    assert ("keep it. But the held-out records span U/U0 0.35 to 1.01, outside the range this "
-            "was judged on: the design form reaches speeds its records never saw through its "
-            "du terms") in outside.text()
+    assert ("keep the design form. But the held-out records span U/U0 0.35 to 1.01, outside "
+            "the range this was judged on: the design form reaches speeds its records never "
+            "saw through its du terms") in outside.text()
     switch = replace(outside, recommended="instantaneous")
     assert switch.text().endswith("outside the range this was judged on: judge the fit on the "
                                   "held-out records.")

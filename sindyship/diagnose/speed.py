@@ -73,12 +73,13 @@ class SpeedForms:
         span = f"the records span U/U0 {self.low:.2f} to {self.high:.2f}"
         if self.recommended == self.form:
             text = (f"Speed form: {self.form} (the forces over {_speed(self.form)}); {span}, "
-                    f"and the {other} form leaves {ratio:.2f} times its force error on "
-                    "manoeuvres left out: keep it.")
+                    f"and on manoeuvres left out the {other} form's force error is "
+                    f"{ratio:.2f} times the {self.form} form's (a change needs at most "
+                    f"{SPEED_FORM_GAIN:g}): keep the {self.form} form.")
         else:
-            text = (f"Speed form: {self.form}; {span}, and the {other} form (forces over "
-                    f"{_speed(other)}) leaves {ratio:.2f} times its force error on manoeuvres "
-                    f"left out: fit with --speed {other}.")
+            text = (f"Speed form: {self.form}; {span}, and on manoeuvres left out the {other} "
+                    f"form's force error (forces over {_speed(other)}) is {ratio:.2f} times "
+                    f"the {self.form} form's: fit with --speed {other}.")
         if self.held_out_outside:
             low, high = self.held_out
             text += (f" But the held-out records span U/U0 {low:.2f} to {high:.2f}, outside "
