@@ -24,7 +24,7 @@ __all__ = ["as_records", "as_ship", "check_distinct_names", "check_motion", "che
 #: Channels a record needs finite in every sample to be fitted or flown against.
 MOTION_CHANNELS = ("t", "u", "v", "r", "x", "y", "psi")
 #: A record whose speed peaks above this many design speeds belongs to another ship (or scale).
-MAX_SPEED_RATIO = 3.0
+OTHER_SHIP_SPEED_RATIO = 3.0
 #: Training records none of which goes faster than this share of U0 are refused: the fit,
 #: the automatic time range and the sampling notes all scale with U0 (a U0 in knots read as
 #: m/s leaves the records at 0.51 of it; trials at another approach speed give that as U0).
@@ -181,7 +181,7 @@ def check_scale(records, ship: Ship, name: str = "records") -> None:
         if not (record.has("u") and record.has("v")) or record.n_samples == 0:
             continue
         top = record.fastest
-        if top > MAX_SPEED_RATIO * ship.U0:
+        if top > OTHER_SHIP_SPEED_RATIO * ship.U0:
             raise SindyshipInputError(
                 f"{name}: {record.name or 'a record'} reaches {top:.4g} m/s, "
                 f"{top / ship.U0:.3g} times the design speed U0 = {ship.U0:.4g} m/s of ship "

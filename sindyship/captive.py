@@ -177,16 +177,16 @@ def _sweep(test: str, points: int, beta_max: float, delta_max: float, r_max: flo
 MAX_POINTS = 201
 #: Fastest carriage, as a multiple of the design speed: tests run faster are of another ship
 #: or scale (the KCS's tests given a coaster whose U0 is 6.5 m/s run at 1.9 times it).
-MAX_SPEED_RATIO = 1.6
+MAX_CARRIAGE_SPEED_RATIO = 1.6
 #: Slowest carriage: the design speed divided by this (tests at half speed are common).
 SPEED_SCALE_FACTOR = 3.0
 
 
 def _carriage_speed_of(ship: Ship, speed: float) -> bool:
     """Whether captive tests of ``ship`` may run at ``speed`` [m/s] (more than U0 divided by
-    :data:`SPEED_SCALE_FACTOR`, at most :data:`MAX_SPEED_RATIO` times U0)."""
+    :data:`SPEED_SCALE_FACTOR`, at most :data:`MAX_CARRIAGE_SPEED_RATIO` times U0)."""
     return bool(np.isfinite(speed) and ship.U0 / SPEED_SCALE_FACTOR < speed
-                <= MAX_SPEED_RATIO * ship.U0)
+                <= MAX_CARRIAGE_SPEED_RATIO * ship.U0)
 
 
 def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: float | None = None,
@@ -248,8 +248,8 @@ def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: flo
     if not _carriage_speed_of(ship, U):
         raise SindyshipInputError(
             f"the carriage speed must be more than a third of the ship's design speed and at "
-            f"most {MAX_SPEED_RATIO:g} times it ({ship.U0 / SPEED_SCALE_FACTOR:.4g} to "
-            f"{MAX_SPEED_RATIO * ship.U0:.4g} m/s), not {speed!r} m/s."
+            f"most {MAX_CARRIAGE_SPEED_RATIO:g} times it ({ship.U0 / SPEED_SCALE_FACTOR:.4g} to "
+            f"{MAX_CARRIAGE_SPEED_RATIO * ship.U0:.4g} m/s), not {speed!r} m/s."
         )
     beta, r_nd, delta = _sweep(test, int(points), beta_max, delta_max, r_max)
     u = U * np.cos(beta)
