@@ -104,10 +104,13 @@ def _ship_of(data: Mapping, source: str, ship: Ship | None) -> Ship:
 
 def _check_nondim(nondim, ship: Ship, source: str) -> None:
     numbers = [nondim.get(key) if isinstance(nondim, Mapping) else None for key in ("L", "U0")]
-    if not all(isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
-               for x in numbers):
+    try:
+        L, U0 = (float(x) if isinstance(x, int | float) and not isinstance(x, bool) else math.nan
+                 for x in numbers)
+    except OverflowError:  # an integer of hundreds of digits
+        L = U0 = math.nan
+    if not (math.isfinite(L) and math.isfinite(U0)):
         raise SindyshipInputError(f"{source}: 'nondim' needs numbers L and U0.")
-    L, U0 = map(float, numbers)
     if not (math.isclose(L, ship.L) and math.isclose(U0, ship.U0)):
         raise SindyshipInputError(
             f"{source}: the model was made for L = {L} m, U0 = {U0} m/s but ship "

@@ -145,7 +145,7 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
     zig-zag flown closed loop ``zigzag``: its overshoots and period flown and recorded
     (:func:`zigzag_overshoots`).
     """
-    from .arguments import as_records, check_records
+    from .arguments import as_records, check_distinct_names, check_records
     from .model import AbkowitzModel
 
     if isinstance(model, str | os.PathLike):
@@ -154,6 +154,7 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
         raise TypeError(f"model must be an AbkowitzModel or a saved model's path, not "
                         f"{type(model).__name__}.")
     records = check_records(as_records(records), model.ship)
+    check_distinct_names(records)  # the errors are keyed by name
     check_recorded_channels(model, records)
     cut = [flown_part(record) for record in records]
     flown = fly_like_batch(model, cut, step=step)
@@ -179,20 +180,21 @@ def check_recorded_channels(model, records: Sequence[Trajectory]) -> None:
     """
     from .errors import SindyshipInputError
 
-    lacking = {record.name: [c for c in model.recorded_channels if not record.has(c)]
-               for record in records}
-    lacking = {name: columns for name, columns in lacking.items() if columns}
+    lacking = [(f'"{record.name}"' if record.name else f"record {k + 1}",
+                [c for c in model.recorded_channels if not record.has(c)])
+               for k, record in enumerate(records)]
+    lacking = [(label, columns) for label, columns in lacking if columns]
     if not lacking:
         return
-    listed = "; ".join(f'"{name}" has no {", ".join(repr(c) for c in columns)}'
-                       for name, columns in list(lacking.items())[:LISTED_RECORDS])
+    listed = "; ".join(f"{label} has no {', '.join(repr(c) for c in columns)}"
+                       for label, columns in lacking[:LISTED_RECORDS])
     more = len(lacking) - LISTED_RECORDS
     used = ", ".join(repr(c) for c in model.recorded_channels)
     raise SindyshipInputError(
         f"the model's library reads {used} from every record it flies, and {len(lacking)} of "
-        f"{len(records)} records lack some ({listed}{f'; and {more} more' if more > 0 else ''})"
-        "; add the columns to the records, or fly them with a model fitted without the terms "
-        "that use them."
+        f"{len(records)} records {'lacks' if len(lacking) == 1 else 'lack'} some ({listed}"
+        f"{f'; and {more} more' if more > 0 else ''}); add the columns to the records, or fly "
+        "them with a model fitted without the terms that use them."
     )
 
 

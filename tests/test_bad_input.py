@@ -668,9 +668,11 @@ def _edited(saved_model: str, edit) -> str:
     (lambda d: d["optimizer"].pop("params"), "'optimizer' needs a text 'name' and an object"),
     (lambda d: d["nondim"].update(U0=str(d["nondim"]["U0"])), "'nondim' needs numbers L and"),
     (lambda d: d["nondim"].update(L=True), "'nondim' needs numbers L and U0"),
+    (lambda d: d["nondim"].update(U0=10**400), "'nondim' needs numbers L and U0"),
 ], ids=["huge-coefficient", "unknown-term", "missing-term", "version-0", "version-minus-1",
         "version-text", "edited-ship", "no-ship-definition", "no-ship-digest",
-        "optimizer-without-name", "optimizer-without-params", "nondim-text", "nondim-bool"])
+        "optimizer-without-name", "optimizer-without-params", "nondim-text", "nondim-bool",
+        "nondim-huge"])
 def test_an_edited_model_is_refused(new_folder, good_csv, saved_model, edit, words):
     code, out, err, model = evaluate_model(new_folder(), good_csv, _edited(saved_model, edit))
     assert_one_line(code, out, err, 2, str(model), words)

@@ -215,4 +215,11 @@ def test_evaluate_names_every_record_and_channel_it_lacks_before_flying(kcs, pro
         f"2 of 3 records lack some (\"half\" has no 'wind_dir'; \"{third.name}\" has no "
         "'wind_dir', 'wind_speed'); add the columns to the records, or fly them with a model "
         "fitted without the terms that use them.")
+    unnamed = Trajectory(third.data, name="")
+    with pytest.raises(SindyshipInputError, match=r"1 of 2 records lacks some \(record 2 has no "
+                       r"'wind_dir', 'wind_speed'\)"):
+        evaluate(model, [full, unnamed])
+    # two records of one name had been flown and reported as one
+    with pytest.raises(SindyshipInputError, match="two records share a name"):
+        evaluate(model, [full, full])
     assert set(evaluate(model, [full])) == {"full"}

@@ -755,8 +755,10 @@ def test_the_speed_form_advice_says_when_the_held_out_records_leave_its_speed_ra
     kept = SpeedForms("design", 0.69, 1.03, {"design": 1.0, "instantaneous": 0.99}, "design")
     # whose error is how many times whose: the sentence had read "leaves 0.99 times its error"
     assert kept.text().endswith("and on manoeuvres left out the instantaneous form's force "
-                                "error is 0.99 times the design form's (a change needs at "
-                                "most 0.9): keep the design form.")
+                                "error is 0.99 times the design form's (a change needs 0.9 "
+                                "or less): keep the design form.")
+    close = replace(kept, errors={"design": 1.0, "instantaneous": 0.9004})
+    assert "is 0.9004 times the design form's (a change needs 0.9 or less)" in close.text()
     assert kept.to_json()["held_out_range"] is None
     inside = replace(kept, held_out=(0.70, 1.05))
     assert inside.text() == kept.text() and not inside.held_out_outside

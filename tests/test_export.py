@@ -781,7 +781,44 @@ def test_a_model_with_delayed_channels_flies_its_record_as_sindyship_flies_it(kc
     (plain,) = fly_like_batch(undelayed, [record])
     assert np.max(np.hypot(ours["x"] - plain["x"], ours["y"] - plain["y"])) / kcs.L > 1e-3
     # and every export says so
-    assert "Delayed channels (DELAYS): the recorded delta_c by 1.5 s, n by 4 s" in " ".join(
-        sim.__doc__.split())
-    assert "delta_c by 1.5 s, n by 4 s lag the physics" in equations_text(model, width=400)
-    assert r"the recorded delta\_c by 1.5 s, n by 4 s lag the physics" in equations_latex(model)
+    said = ("the recorded delta_c lags the physics by 1.5 s (read 1.5 s later); the recorded "
+            "n lags the physics by 4 s (read 4 s later)")
+    doc = " ".join(sim.__doc__.split())
+    assert f"Delayed channels (DELAYS): {said}." in doc
+    assert "For a record without delta, give state0's rudder angle as its delta_c 1.5 s" in doc
+    assert said in " ".join(equations_text(model).split())
+    latex = equations_latex(model)
+    assert r"\text{(the recorded delta\_c lags the physics by 1.5 s (read 1.5 s later))}" in latex
+    assert r"\text{(the recorded n lags the physics by 4 s (read 4 s later))}" in latex
+
+
+def test_a_delayed_rudder_flies_as_sindyship_flies_it_from_the_state_its_docstring_asks(
+        kcs, tmp_path):
+    """A lagging rudder sensor (the delay discover searches with the actual rudder), and a
+    lagging delta_c in a record without delta: the module flies the record as sindyship does
+    from the state0 its docstring asks for (the rudder as recorded DELAYS later)."""
+    base = paper_model(kcs)
+    terms = {dof: [t.text for t in base.library.terms[dof]] for dof in DOFS}
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("random", rudder=20, duration=300, seed=3)])
+    commanded_only = Trajectory(run.data.drop(columns="delta"), name=run.name)
+    for delays, signal, record in (({"delta": 3.0}, "actual", run),
+                                   ({"delta_c": 2.0}, "commanded", commanded_only)):
+        library = TermLibrary("paper-late-rudder", "prime-I", "", terms, delays=delays)
+        model = AbkowitzModel(kcs, library, base.coefficients, rudder_signal=signal)
+        sim = load_module(generate_python(model), tmp_path / f"sim_{signal}.py")
+        (ours,) = fly_like_batch(model, [record])
+        part = flown_part(record)
+        (name, seconds), = delays.items()
+        state0 = part.state()[:, 0]
+        assert abs(np.interp(part.t[0] + seconds, part.t, part[name]) - state0[6]) > 1e-3
+        state0[6] = np.interp(part.t[0] + seconds, part.t, part[name])  # as the doc asks
+        theirs = sim.simulate(part.t, part["delta_c"], state0)
+        gap = np.hypot(ours["x"] - theirs.states[3], ours["y"] - theirs.states[4]) / kcs.L
+        assert np.max(gap) < 1e-9, delays
+        doc = " ".join(sim.__doc__.split())
+        whose = "the record's" if name == "delta" else "its"
+        assert f"give state0's rudder angle as {whose} {name} {seconds:g} s after t[0]" in (
+            doc.lower())
+    leading = TermLibrary("paper-early-n", "prime-I", "", terms, delays={"delta_c": -2.0})
+    text = equations_text(AbkowitzModel(kcs, leading, base.coefficients), width=400)
+    assert "the recorded delta_c leads the physics by 2 s (read 2 s earlier)" in text

@@ -74,11 +74,11 @@ class SpeedForms:
         if self.recommended == self.form:
             text = (f"Speed form: {self.form} (the forces over {_speed(self.form)}); {span}, "
                     f"and on manoeuvres left out the {other} form's force error is "
-                    f"{ratio:.2f} times the {self.form} form's (a change needs at most "
-                    f"{SPEED_FORM_GAIN:g}): keep the {self.form} form.")
+                    f"{_times(ratio)} times the {self.form} form's (a change needs "
+                    f"{SPEED_FORM_GAIN:g} or less): keep the {self.form} form.")
         else:
             text = (f"Speed form: {self.form}; {span}, and on manoeuvres left out the {other} "
-                    f"form's force error (forces over {_speed(other)}) is {ratio:.2f} times "
+                    f"form's force error (forces over {_speed(other)}) is {_times(ratio)} times "
                     f"the {self.form} form's: fit with --speed {other}.")
         if self.held_out_outside:
             low, high = self.held_out
@@ -90,6 +90,16 @@ class SpeedForms:
                          if self.recommended == "design" else
                          "judge the fit on the held-out records."))
         return text
+
+
+def _times(ratio: float) -> str:
+    """A ratio of force errors to two decimals, or to as many as tell it from
+    :data:`SPEED_FORM_GAIN` (0.9004 is not printed as a 0.90 that the gain would accept)."""
+    for digits in range(2, 7):
+        text = f"{ratio:.{digits}f}"
+        if (float(text) <= SPEED_FORM_GAIN) == (ratio <= SPEED_FORM_GAIN):
+            return text
+    return f"{ratio:.6f}"
 
 
 def _speed(form: str) -> str:

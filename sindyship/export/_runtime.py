@@ -54,9 +54,10 @@ def _scaled(channels):
 
 def _read_late(t, channels):
     \"\"\"Recorded channels over ``t`` as the forces read them: a channel the library delays
-    (``DELAYS``: it lags the physics by that many seconds) read that much later, held at its
-    last value beyond the end, angles unwrapped first (as sindyship's evaluate reads a
-    record).  Constants and channels not delayed are returned as given.\"\"\"
+    (``DELAYS``: it lags the physics by that many seconds; a negative delay leads it) read
+    that much later, held at its first or last value beyond the record's ends, angles
+    unwrapped first (as sindyship's evaluate reads a record).  Constants and channels not
+    delayed are returned as given.\"\"\"
     if channels is None or not DELAYS:
         return channels
     out = dict(channels)
@@ -106,7 +107,8 @@ def rhs(t, state, delta_c, channels=None):
         Commanded rudder angle [rad].
     channels : mapping of str to float or ndarray of shape (N,), optional
         The recorded channels the library uses, SI as in the measurement CSV (default: the
-        CHANNEL_ constants).
+        CHANNEL_ constants), at the physics' time: a channel in ``DELAYS`` as recorded that
+        many seconds after ``t``.
 
     Returns
     -------

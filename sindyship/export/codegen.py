@@ -240,6 +240,21 @@ def _provenance(model: AbkowitzModel) -> list[str]:
     return lines
 
 
+def _delays_note(delays) -> str:
+    """The module docstring's note on the channels a library delays: what ``simulate`` and
+    ``zigzag`` do with them, and, for a delayed rudder, which angle ``state0`` takes."""
+    note = (f"Delayed channels (DELAYS): {_delays_words(delays)}.  simulate and zigzag read "
+            "each channel given to them (and simulate a delta_c array) so; rhs takes the "
+            "channels' values at the physics' time.")
+    if "delta" in delays:  # sindyship starts a flight from the record's state, read so
+        note += (f"  Give state0's rudder angle as the record's delta {delays['delta']:g} s "
+                 "after t[0].")
+    if "delta_c" in delays:
+        note += ("  For a record without delta, give state0's rudder angle as its delta_c "
+                 f"{delays['delta_c']:g} s after t[0].")
+    return note
+
+
 def generate_python(model: AbkowitzModel, *, source_note: str = "",
                     channels: Mapping[str, float] | None = None, compiled: bool = False) -> str:
     """Source of a standalone simulator module for a model (imports numpy only).
@@ -343,8 +358,7 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
            "rates, OVER_SPEED) are taken over the instantaneous speed U = sqrt(u^2 + v^2), at",
            "least SPEED_FLOOR U0, and the forces of eq. 15 are multiplied by (U/U0)^2."]
           if instantaneous else []),
-        *(_wrap(_docstring_text(f"Delayed channels (DELAYS): {_delays_words(model.library.delays)}"
-                                "; simulate and zigzag read the channels given to them so."))
+        *(_wrap(_docstring_text(_delays_note(model.library.delays)))
           if model.library.delays else []),
         "",
         "The state is [u, v, r, x, y, psi, delta] in SI units: body-fixed surge and sway [m/s]",

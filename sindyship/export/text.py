@@ -135,11 +135,17 @@ def _join(pieces: list[tuple[float, str]], first: bool = True) -> list[str]:
     return words
 
 
+def _delay_words(name: str, seconds: float) -> str:
+    """How one recorded channel is out of step with the physics (:attr:`TermLibrary.delays`:
+    a positive delay lags it, a negative one leads it)."""
+    if seconds > 0:
+        return f"the recorded {name} lags the physics by {seconds:g} s (read {seconds:g} s later)"
+    return f"the recorded {name} leads the physics by {-seconds:g} s (read {-seconds:g} s earlier)"
+
+
 def _delays_words(delays) -> str:
-    """Which time the forces read a delayed channel at (:attr:`TermLibrary.delays`)."""
-    listed = ", ".join(f"{name} by {seconds:g} s" for name, seconds in sorted(delays.items()))
-    return (f"the recorded {listed} lag the physics: the forces read each that much later "
-            "in the records")
+    """Which time the forces read each delayed channel of a record at."""
+    return "; ".join(_delay_words(name, seconds) for name, seconds in sorted(delays.items()))
 
 
 def _header(model: AbkowitzModel) -> str:
@@ -286,8 +292,8 @@ def equations_latex(model: AbkowitzModel, precision: int = 4, *, numeric: bool =
         notes.append(r"&\qquad \text{(the channels' speeds and rates over } U \text{ too; "
                      r"from } " f"{SPEED_FLOOR:g}" r"\,U_0 \text{ up)} \nonumber")
     if model.library.delays:  # which time a delayed channel is read at
-        notes.append(r"&\text{(" + _latex_text(_delays_words(model.library.delays))
-                     + r")} \nonumber")
+        notes += [r"&\text{(" + _latex_text(_delay_words(name, seconds)) + r")} \nonumber"
+                  for name, seconds in sorted(model.library.delays.items())]
     if notes:
         rows += [note + r" \\" for note in notes[:-1]] + [notes[-1]]
     else:
