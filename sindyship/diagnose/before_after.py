@@ -289,6 +289,7 @@ def confirm_by_flights(scores: Sequence[EffectScore], model: AbkowitzModel,
 #: ``prior`` fit) and ``prior`` (which ``fit`` refines by its flights).
 COMMAND_REFITS = ("ls", "prior")
 
+
 def command_library(library: TermLibrary) -> TermLibrary:
     """The library of the ``fit`` command a diagnosis of ``library`` names: where that is the
     diagnosis's default (:data:`sindyship.library.PAPER_LIBRARY`, extended or not: its
