@@ -476,17 +476,21 @@ def _why_added(diagnosis) -> str:
     return f" ({'; '.join(parts)})" if top is not diagnosis.ranking[0] and parts else ""
 
 
+def round_line(k: int, rnd) -> str:
+    """One line on round ``k`` of an iterative diagnosis: its library, the shares its first
+    four effects explain, and the effect it adds (and why, when not the first)."""
+    d = rnd.diagnosis
+    top = ", ".join(f"{s.effect.name} {100 * s.explained:.1f} %" for s in d.ranking[:4])
+    return (f"Round {k}: library {d.library.name}: {top or 'no testable effect'}"
+            + (f" -> add {rnd.added}{_why_added(d)}" if rnd.added else ""))
+
+
 def iteration_report(iterative, ship_argument: str | None = None,
                      effect_arguments: list[str] | None = None) -> str:
     """One paragraph per round, the mean distance of every flight with every library (a
     diverged flight marked with the time it diverged) and the ``fit`` command of the library
     the rounds end with (the arguments as :func:`diagnosis_report`'s)."""
-    lines = []
-    for k, rnd in enumerate(iterative.rounds, 1):
-        d = rnd.diagnosis
-        top = ", ".join(f"{s.effect.name} {100 * s.explained:.1f} %" for s in d.ranking[:4])
-        lines.append(f"Round {k}: library {d.library.name}: {top or 'no testable effect'}"
-                     + (f" -> add {rnd.added}{_why_added(d)}" if rnd.added else ""))
+    lines = [round_line(k, rnd) for k, rnd in enumerate(iterative.rounds, 1)]
     lines.append(f"Stopped: {iterative.stopped}")
     table = iterative.table
     if not table.empty:

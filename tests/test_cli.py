@@ -467,6 +467,21 @@ def test_fit_refine_flies_the_records_and_says_what_it_did(records, tmp_path, ca
     assert "--segment sets the refinement, which is off" in capsys.readouterr().err
 
 
+def test_diagnose_rounds_log_a_line_each_where_no_bar_is_drawn(records, capsys):
+    """Written to a log (stderr no terminal), diagnose --rounds had printed its first line and
+    then nothing for minutes; each round now ends with its summary line and the time."""
+    import re
+
+    paths = [str(records[name]) for name in ("tc35", "tc-35", "zz20")]
+    assert main(["diagnose", *paths, "--rounds", "3", "--threshold", "0.95", "--confirm",
+                 "0"]) == 0
+    captured = capsys.readouterr()
+    logged = [line for line in captured.err.splitlines() if line.startswith("Round ")]
+    assert len(logged) == 1 and re.fullmatch(r"Round 1: library abkowitz: .+ \(\d+ s\)",
+                                              logged[0])
+    assert logged[0].rsplit(" (", 1)[0] in captured.out  # the report's own line
+
+
 def test_fit_says_when_n_jobs_is_not_used(records, tmp_path, capsys):
     """--n-jobs sets the workers of --smoothing auto and --stream; elsewhere it had been
     ignored without a word (the refinement flies on numba's threads already)."""

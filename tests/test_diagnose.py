@@ -203,6 +203,10 @@ def test_data_from_an_abkowitz_model_is_diagnosed_complete(kcs):
 
 
 # ------------------------------------------------------------------------ (1) KCS asymmetry
+#: The rounds of :func:`kcs_rounds` as ``on_round`` was called with them.
+ROUNDS_ENDED = []
+
+
 @pytest.fixture(scope="module")
 def kcs_rounds(kcs, protocol_runs):
     """Iterative diagnosis of the paper's data (protocol training set, held-out flown)."""
@@ -213,7 +217,15 @@ def kcs_rounds(kcs, protocol_runs):
         fly_training=False,
         confirm=1,
         max_rounds=4,
+        on_round=lambda k, rnd: ROUNDS_ENDED.append((k, rnd)),
     )
+
+
+def test_each_round_is_handed_on_as_it_ends(kcs_rounds):
+    """``on_round`` (the command line's log lines) sees every round once, in order."""
+    assert [k for k, _ in ROUNDS_ENDED] == list(range(1, len(kcs_rounds.rounds) + 1))
+    assert all(rnd is kept for (_, rnd), kept in zip(ROUNDS_ENDED, kcs_rounds.rounds,
+                                                    strict=True))
 
 
 def test_kcs_asymmetric_rudder_is_found_first(kcs_rounds):

@@ -70,6 +70,17 @@ def add_parser(sub) -> None:
                    "one is re-flown too")
 
 
+def _log_round(start: float):
+    """A line on stderr as each round ends, for a run whose stderr is no terminal (a log),
+    where no progress bar is drawn: the round's summary and the time since ``start``."""
+    from ..reports import round_line
+
+    def log(k, rnd) -> None:
+        progress(f"{round_line(k, rnd)} ({time.perf_counter() - start:.0f} s)")
+
+    return log
+
+
 def _write_folder(out: Path, result, iterative, text: str, document: dict, progress_bar: bool
                   ) -> None:
     from .._io import save_figure, write_text_atomic
@@ -148,7 +159,9 @@ def run(args) -> int:
         options["n_jobs"] = n_jobs
         if args.rounds > 1:
             iterative = diagnose_iteratively(records, ship, library=library, test=test,
-                                             max_rounds=args.rounds, progress=bar, **options)
+                                             max_rounds=args.rounds, progress=bar,
+                                             on_round=None if bar else _log_round(start),
+                                             **options)
             result = iterative.rounds[0].diagnosis
         else:
             result = diagnose(records, ship, library=library, test=test, progress=bar,

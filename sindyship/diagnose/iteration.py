@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import pandas as pd
@@ -141,6 +141,7 @@ def diagnose_iteratively(
     test: Sequence[Trajectory] = (),
     max_rounds: int = 4,
     progress: bool = False,
+    on_round: Callable[[int, Round], None] | None = None,
     **options,
 ) -> IterativeDiagnosis:
     """Diagnose, add the best effect, diagnose again, until the library is complete.
@@ -159,6 +160,9 @@ def diagnose_iteratively(
         Most effects to add.
     progress : bool
         Progress bar over the rounds on stderr.
+    on_round : callable, optional
+        Called as ``on_round(k, round)`` as each round ``k`` (from 1) ends: a log line for a
+        run whose stderr is no terminal, where the bar is not drawn.
     **options
         Passed to :func:`diagnose` (``effects``, ``threshold``, ``confirm``, ``fly_training``,
         ``optimizer``, ``n_jobs``, ...).
@@ -185,6 +189,12 @@ def diagnose_iteratively(
                                       **chosen_with)
         options["smoothing"] = setting
     rounds: list[Round] = []
+
+    def ended(rnd: Round) -> None:
+        rounds.append(rnd)
+        if on_round is not None:
+            on_round(len(rounds), rnd)
+
     stopped = f"after {max_rounds} rounds"
     bar = tqdm(total=max_rounds, desc="rounds", file=sys.stderr, disable=not progress)
     command_before = None  # the last round's command model with its effect: this one's without
@@ -194,7 +204,7 @@ def diagnose_iteratively(
         command_before = None if result.command is None else result.command.model_after
         pick = result.top  # the diagnosis's own verdict: never one the flights refute
         if result.verdict == "contested":
-            rounds.append(Round(result, None, None))
+            ended(Round(result, None, None))
             by_held_out = pick.confirmation is not None and \
                 pick.confirmation.held_out_supports is False
             stopped = ((f"the held-out flights refute {pick.effect.name}" if by_held_out else
@@ -202,7 +212,7 @@ def diagnose_iteratively(
                         "refute it") + ", the effect re-flying the training records favours")
             break
         if pick is None:
-            rounds.append(Round(result, None, None))
+            ended(Round(result, None, None))
             meaningful = any(s.meaningful for s in result.ranking)
             stopped = ("an effect beyond the catalogue was discovered (the verdict says how to "
                        "add it)" if result.verdict == "add-discovered" else
@@ -227,7 +237,7 @@ def diagnose_iteratively(
                     if k in options
                 },
             )
-        rounds.append(Round(result, pick.effect.name, change))
+        ended(Round(result, pick.effect.name, change))
         lib = lib.extended(pick.effect)
         bar.update()
     bar.close()
