@@ -135,3 +135,23 @@ def test_the_rounds_table_marks_the_flights_that_diverged():
     assert "0.064 (diverged at 186 s)" in row and "6.723" in row
     assert "diverged" not in next(line for line in lines if "tc25_port" in line)
     assert lines.index(row) < lines.index(next(line for line in lines if "tc25_port" in line))
+
+
+def test_the_commands_prior_fits_leave_their_coverage_note_to_fit(kcs):
+    """A least-squares diagnosis of abkowitz-noconst warned twice that a library has no 'v r'
+    for the prior's estimate: true of the command's fits, which the user did not ask for here
+    (``fit`` gives the note when the command is run)."""
+    import warnings
+
+    from sindyship.diagnose import diagnose
+    from sindyship.errors import PriorCoverageNote
+
+    runs = fly(MMGModel(kcs), [Manoeuvre("turning-circle", rudder=35, duration=800),
+                               Manoeuvre("turning-circle", rudder=-35, duration=800),
+                               Manoeuvre("zigzag", rudder=20, check=20, duration=800),
+                               Manoeuvre("zigzag", rudder=10, check=10, duration=800)])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = diagnose(runs[:3], kcs, library="abkowitz-noconst", test=runs[3:])
+    assert result.command is not None  # the command's prior fits were made
+    assert not [w for w in caught if issubclass(w.category, PriorCoverageNote)]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -12,6 +13,7 @@ import pandas as pd
 
 from .._diagnosis_thresholds import CONFIRMING_RATIO
 from .._io import clean_json
+from ..errors import PriorCoverageNote
 from ..evaluation import compare_flights, error_summary
 from ..identify import (
     Design,
@@ -323,9 +325,11 @@ def judge_command(fitted: Sequence[Trajectory], library: TermLibrary, effect: Ef
               f"and with {effect.name}", file=sys.stderr)
     kept = before is not None and before.library.terms == base.terms \
         and before.library.speed == base.speed
-    models = [before if kept and lib is base else
-              refine(fit(fitted, ship, library=lib, optimizer="prior", **settings), fitted)
-              for lib in (base, base.extended(effect))]
+    with warnings.catch_warnings():  # the note is the command's, and fit gives it there
+        warnings.simplefilter("ignore", PriorCoverageNote)
+        models = [before if kept and lib is base else
+                  refine(fit(fitted, ship, library=lib, optimizer="prior", **settings), fitted)
+                  for lib in (base, base.extended(effect))]
     flown = _fly_many([(m, recs) for m in models for _, recs in sets], n_jobs=n_jobs,
                       progress=progress, what="flights of the command's fit")
     rows = _change_rows(sets, flown[:len(sets)], flown[len(sets):], ship.L)
