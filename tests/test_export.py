@@ -819,6 +819,6 @@ def test_a_delayed_rudder_flies_as_sindyship_flies_it_from_the_state_its_docstri
         whose = "the record's" if name == "delta" else "its"
         assert f"give state0's rudder angle as {whose} {name} {seconds:g} s after t[0]" in (
             doc.lower())
-    leading = TermLibrary("paper-early-n", "prime-I", "", terms, delays={"delta_c": -2.0})
+    leading = TermLibrary("paper-early-rudder", "prime-I", "", terms, delays={"delta_c": -2.0})
     text = equations_text(AbkowitzModel(kcs, leading, base.coefficients), width=400)
     assert "the recorded delta_c leads the physics by 2 s (read 2 s earlier)" in text
