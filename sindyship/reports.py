@@ -342,11 +342,18 @@ def _other_fit(diagnosis) -> str:
             f"{_command_flights(change)} as far off as without {', '.join(change.added)}.)")
 
 
+def _given_effects(diagnosis, effect_arguments: list[str] | None) -> list:
+    """The effects a ``fit`` command repeats: as given on the command line
+    (``effect_arguments``), else the diagnosed library's."""
+    return list(diagnosis.library.effects if effect_arguments is None else effect_arguments)
+
+
 def _verdict_lines(diagnosis, ship_argument: str | None = None,
                    effect_arguments: list[str] | None = None) -> list[str]:
     lines = [textwrap.fill(f"Caution: {warning}.", width=96, subsequent_indent="  ")
              for warning in diagnosis.warnings]
     verdict = diagnosis.verdict
+    given = _given_effects(diagnosis, effect_arguments)
     if verdict == "complete":
         flown = [s.effect.name for s in diagnosis.ranking if s.confirmation is not None]
         checked = (f", re-flying the training records with {', '.join(flown)} brings them no "
@@ -366,16 +373,13 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
             why = (f" (rather than {first.effect.name}, which explains more of the force error: "
                    f"re-flying the training records with {top.effect.name} {_closer(top)}, "
                    f"with {first.effect.name} {_closer(first).removeprefix('brings them ')})")
-        given = diagnosis.library.effects if effect_arguments is None else effect_arguments
         options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
         text = (f"Verdict: add {top.effect.name}{why}: sindyship fit DATA.csv... {options}; then "
                 "diagnose again with the same --effects." + _other_fit(diagnosis))
-    elif verdict == "contested" and (diagnosis.top.confirmation is None
-                                     or diagnosis.top.confirmation.held_out_supports
-                                     is not False):  # the command's model contests it
+    elif verdict == "contested" and not diagnosis.top.refuted_by_held_out:
+        # the command's model contests it
         top, command = diagnosis.top, diagnosis.command
-        given = diagnosis.library.effects if effect_arguments is None else effect_arguments
-        without = _fit_options(diagnosis, ship_argument, list(given))
+        without = _fit_options(diagnosis, ship_argument, given)
         options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
         text = (f"Verdict: contested - re-flying the training records favours {top.effect.name} "
                 f"({_diagnosis_fit(diagnosis)}), but the model "
@@ -388,7 +392,6 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
     elif verdict == "contested":
         top = diagnosis.top
         change = top.confirmation
-        given = diagnosis.library.effects if effect_arguments is None else effect_arguments
         options = _fit_options(diagnosis, ship_argument, [*given, top.effect])
         ratio = change.ratio("training")
         training = (f"training error x {ratio:.2f}" if math.isfinite(ratio) else
@@ -404,7 +407,6 @@ def _verdict_lines(diagnosis, ship_argument: str | None = None,
                 "held-out records.")
     elif verdict == "add-discovered":
         found = " and ".join(f.family for f in diagnosis.discovery.accepted)
-        given = list(diagnosis.library.effects if effect_arguments is None else effect_arguments)
         options = _fit_options(diagnosis, ship_argument, given, optimizer=False)
         if diagnosis.threshold != MEANINGFUL_SHARE:  # the search the diagnosis ran
             options += f" --threshold {diagnosis.threshold:g}"
@@ -507,7 +509,7 @@ def iteration_report(iterative, ship_argument: str | None = None,
     added = [rnd.diagnosis.top.effect for rnd in iterative.rounds if rnd.added]
     if added:
         first = iterative.rounds[0].diagnosis
-        given = first.library.effects if effect_arguments is None else effect_arguments
+        given = _given_effects(first, effect_arguments)
         lines += ["", textwrap.fill(
             f"The library the rounds end with: sindyship fit DATA.csv... "
             f"{_fit_options(first, ship_argument, [*given, *added])}", width=96,

@@ -148,8 +148,7 @@ class Diagnosis:
         (most of a force is unexplained and no catalogued effect is meaningful) or
         ``"complete"``."""
         if self.top is not None:
-            change = self.top.confirmation
-            if change is not None and change.held_out_supports is False:
+            if self.top.refuted_by_held_out:
                 return "contested"
             command = self.command
             if command is not None and (command.training_refutes
@@ -557,8 +556,8 @@ def diagnose(
     result.speed = speed_forms(fitted, ship, base, settings, test)
     result.sides = {record.name: rudder_side(record.rudder) for record in records}
     top = result.top
-    if check_command and top is not None and optimizer in COMMAND_REFITS and sets and (
-            top.confirmation is None or top.confirmation.held_out_supports is not False):
+    if check_command and top is not None and optimizer in COMMAND_REFITS and sets \
+            and not top.refuted_by_held_out:
         result.command = judge_command(fitted, base, top.effect, sets, settings, ship=ship,
                                        n_jobs=n_jobs, progress=progress,
                                        before=command_before)

@@ -205,9 +205,8 @@ def diagnose_iteratively(
         pick = result.top  # the diagnosis's own verdict: never one the flights refute
         if result.verdict == "contested":
             ended(Round(result, None, None))
-            by_held_out = pick.confirmation is not None and \
-                pick.confirmation.held_out_supports is False
-            stopped = ((f"the held-out flights refute {pick.effect.name}" if by_held_out else
+            stopped = ((f"the held-out flights refute {pick.effect.name}"
+                        if pick.refuted_by_held_out else
                         f"the flights of the model the command to add {pick.effect.name} fits "
                         "refute it") + ", the effect re-flying the training records favours")
             break

@@ -151,6 +151,12 @@ class EffectScore:
     explained_signal: float = 0.0
     significant: dict[str, bool] = field(default_factory=dict)
 
+    @property
+    def refuted_by_held_out(self) -> bool:
+        """Whether the held-out flights of :attr:`confirmation` refute the effect
+        (:attr:`BeforeAfter.held_out_supports` is False)."""
+        return self.confirmation is not None and self.confirmation.held_out_supports is False
+
     def to_json(self) -> dict:
         return clean_json(
             {
