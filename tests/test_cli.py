@@ -482,6 +482,22 @@ def test_diagnose_rounds_log_a_line_each_where_no_bar_is_drawn(records, capsys):
     assert logged[0].rsplit(" (", 1)[0] in captured.out  # the report's own line
 
 
+def test_a_single_diagnosis_logs_each_long_step_where_no_bar_is_drawn(records, capsys):
+    """Written to a log, a diagnosis without --rounds had printed its header and then nothing
+    until its report; each long step now writes what ended and the seconds so far."""
+    import re
+
+    paths = [str(records[name]) for name in ("tc35", "tc-35", "zz20")]
+    assert main(["diagnose", *paths, "--confirm", "1"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    steps = [line for line in err if re.fullmatch(r".+ \(\d+ s\)", line)]
+    assert steps[0].startswith("fitted abkowitz and scored ")
+    assert steps[1].startswith("flew the model on 3 records ")
+    assert steps[2].startswith("re-flew the model with ")
+    seconds = [int(re.search(r"\((\d+) s\)$", line).group(1)) for line in steps]
+    assert seconds == sorted(seconds)
+
+
 def test_fit_says_when_n_jobs_is_not_used(records, tmp_path, capsys):
     """--n-jobs sets the workers of --smoothing auto and --stream; elsewhere it had been
     ignored without a word (the refinement flies on numba's threads already)."""

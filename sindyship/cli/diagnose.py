@@ -70,15 +70,21 @@ def add_parser(sub) -> None:
                    "one is re-flown too")
 
 
-def _log_round(start: float):
-    """A line on stderr as each round ends, for a run whose stderr is no terminal (a log),
-    where no progress bar is drawn: the round's summary and the time since ``start``."""
-    from ..reports import round_line
-
-    def log(k, rnd) -> None:
-        progress(f"{round_line(k, rnd)} ({time.perf_counter() - start:.0f} s)")
+def _log_line(start: float):
+    """A line on stderr with the seconds since ``start``, for a run whose stderr is no
+    terminal (a log), where no progress bar is drawn."""
+    def log(line: str) -> None:
+        progress(f"{line} ({time.perf_counter() - start:.0f} s)")
 
     return log
+
+
+def _log_round(start: float):
+    """A line on stderr as each round ends (:func:`_log_line`): the round's summary."""
+    from ..reports import round_line
+
+    log = _log_line(start)
+    return lambda k, rnd: log(round_line(k, rnd))
 
 
 def _write_folder(out: Path, result, iterative, text: str, document: dict, progress_bar: bool
@@ -157,6 +163,7 @@ def run(args) -> int:
         progress(f"sindyship diagnose: {len(records)} training and {len(test)} held-out "
                  f"records, library {library.name}")
         options["n_jobs"] = n_jobs
+        options["on_stage"] = None if bar else _log_line(start)
         if args.rounds > 1:
             iterative = diagnose_iteratively(records, ship, library=library, test=test,
                                              max_rounds=args.rounds, progress=bar,

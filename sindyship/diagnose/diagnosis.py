@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -15,7 +15,6 @@ from .._diagnosis_thresholds import (
     FLIGHTS_PREFER_RATIO,
     MEANINGFUL_SHARE,
     NOISE_CAP,
-    NOISE_VISIBLE,
     UNEXPLAINED_SHARE,
 )
 from .._io import clean_json
@@ -39,7 +38,7 @@ from ..uncertainty import library_conditioning
 from ._flights import _fly_many
 from .before_after import COMMAND_REFITS, BeforeAfter, confirm_by_flights, judge_command
 from .compare import ManoeuvreComparison, compare
-from .discovery import Discovery, discover
+from .discovery import Discovery, search_beyond_catalogue
 from .noise import channel_noise
 from .ranking import rank_effects
 from .residuals import Residuals
@@ -236,16 +235,16 @@ class Diagnosis:
             return meaningful
         if self.discovery is not None and self.discovery.accepted:
             return None
-        return min(self.flight_favoured,
-                   key=lambda score: _finite_or_inf(score.confirmation.ratio("training")),
-                   default=None)
+        return next(iter(self.flight_favoured), None)
 
     @property
     def flight_favoured(self) -> list[EffectScore]:
         """The effects that are not meaningful by their share of the force error but whose
-        re-flown training flights come clearly closer (:func:`flight_confirmed`)."""
-        return [score for score in self.ranking if not score.meaningful
-                and flight_confirmed(score)]
+        re-flown training flights come clearly closer (:func:`flight_confirmed`), the
+        closest first."""
+        return sorted((score for score in self.ranking if not score.meaningful
+                       and flight_confirmed(score)),
+                      key=lambda score: _finite_or_inf(score.confirmation.ratio("training")))
 
     @property
     def no_catalogued_effect(self) -> str:
@@ -430,6 +429,7 @@ def diagnose(
     search_beyond: bool = True,
     check_command: bool = True,
     command_before: AbkowitzModel | None = None,
+    on_stage: Callable[[str], None] | None = None,
 ) -> Diagnosis:
     """Fit a library, show where it fails and rank the catalogued effects that are missing.
 
@@ -477,6 +477,10 @@ def diagnose(
         then fits the ``prior`` and refines it); its flights can contest the effect
         (:attr:`Diagnosis.command`); ``command_before``: that model without the effect,
         when already fitted (:func:`diagnose_iteratively` passes the last round's).
+    on_stage : callable, optional
+        Called with a line saying what ended as each long step ends (the fit and scoring,
+        the flights, the re-flights, the command's flights, the search beyond the
+        catalogue): a log for a run whose stderr is no terminal, where no bar is drawn.
 
     Returns
     -------
@@ -506,6 +510,8 @@ def diagnose(
     ranked = rank_effects(fitted, records, ship, base, effects, settings, optimizer=optimizer,
                           threshold=threshold, n_jobs=n_jobs)
     model, ranking = ranked.model, ranked.ranking
+    stage = on_stage or (lambda line: None)
+    stage(f"fitted {base.name} and scored {len(ranking)} candidate effects on the forces")
 
     sets = ([("training", records)] if fly_training else []) + [("held-out", test)]
     sets = [(kind, recs) for kind, recs in sets if recs]
@@ -519,12 +525,16 @@ def diagnose(
     comparisons = []
     for k, (kind, recs) in enumerate(sets):
         comparisons += compare(model, recs, kind=kind, flights=flown[k])
+    if sets:
+        stage(f"flew the model on {sum(len(recs) for _, recs in sets)} records")
     confirm_by_flights(chosen, model, fitted, sets, flown, settings, optimizer=optimizer,
                        n_jobs=n_jobs, progress=progress)
     while chosen and (top := _meaningful_top(ranking)) is not None and top.confirmation is None:
         # an effect is named only once re-flown: down the ranking while those are refuted
         confirm_by_flights([top], model, fitted, sets, flown, settings, optimizer=optimizer,
                            n_jobs=n_jobs, progress=progress)
+    if refitted := [s.effect.name for s in ranking if s.confirmation is not None]:
+        stage(f"re-flew the model with {', '.join(refitted)}")
     result = Diagnosis(
         ship=ship,
         library=base,
@@ -561,8 +571,10 @@ def diagnose(
         result.command = judge_command(fitted, base, top.effect, sets, settings, ship=ship,
                                        n_jobs=n_jobs, progress=progress,
                                        before=command_before)
-    if search_beyond:
-        _search_beyond(result, fitted, settings, n_jobs)
+        stage(f"fitted, refined and flew the model of the verdict's fit command without "
+              f"and with {top.effect.name}")
+    if search_beyond and search_beyond_catalogue(result, fitted, settings, n_jobs):
+        stage("searched beyond the catalogue")
     result.seconds = time.perf_counter() - start
     return result
 
@@ -577,23 +589,4 @@ def _check_arguments(records: Sequence[Trajectory], test: Sequence[Trajectory],
     if not 0.0 < threshold < 1.0:
         raise SindyshipInputError(f"the threshold must lie between 0 and 1, not {threshold}.")
     check_distinct_names([*records, *test])
-
-
-def _search_beyond(result: Diagnosis, fitted: Sequence[Trajectory], settings: Mapping,
-                   n_jobs: int | None) -> None:
-    """Run :func:`discover` into ``result.discovery`` when no catalogued effect is meaningful
-    and the model is visibly wrong (a training flight diverged, or an equation's error stands
-    clearly above its noise floor).  The effects the flights alone favour do not stop the
-    search, but a finding must fly the manoeuvres left out better than each of them to be
-    discovered (:func:`sindyship.diagnose.contest.flight_contest`)."""
-    floor = result.noise_floor
-    visibly_wrong = bool(result.diverged) or any(floor[dof] < NOISE_VISIBLE for dof in DOFS)
-    if result.meaningful_top is None and visibly_wrong:
-        favoured = sorted(result.flight_favoured,
-                          key=lambda score: _finite_or_inf(score.confirmation.ratio("training")))
-        result.discovery = discover(fitted, result.ship, library=result.library,
-                                    threshold=result.threshold, check_catalogue=False,
-                                    rivals=[score.effect for score in favoured],
-                                    n_jobs=n_jobs, **settings)
-
 

@@ -40,12 +40,12 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._diagnosis_thresholds import MEANINGFUL_SHARE
+from .._diagnosis_thresholds import MEANINGFUL_SHARE, NOISE_VISIBLE
 from .._io import clean_json
 from ..identify import design, resolve_library, resolve_rudder_signal
 from ..library import DOFS, Effect, TermLibrary
@@ -503,6 +503,25 @@ def _search(records, ship, library, settings, threshold, n_jobs=1
     findings.sort(key=lambda f: (-f.explained_signal, -f.explained, f.family))
     floor = {dof: min(noise[dof] / max(float(e0[dof] @ e0[dof]), 1e-300), 1.0) for dof in DOFS}
     return findings, floor
+
+
+def search_beyond_catalogue(result, fitted: Sequence[Trajectory], settings: Mapping,
+                  n_jobs: int | None) -> bool:
+    """Search beyond the catalogue for a diagnosis (:func:`sindyship.diagnose.diagnose`),
+    into ``result.discovery``, when no catalogued effect is meaningful and the model is
+    visibly wrong (a training flight diverged, or an equation's error stands clearly above
+    its noise floor); whether it searched.  The effects the flights alone favour do not stop
+    the search, but a finding must fly the manoeuvres left out better than each of them to
+    be discovered (:func:`sindyship.diagnose.contest.flight_contest`)."""
+    floor = result.noise_floor
+    visibly_wrong = bool(result.diverged) or any(floor[dof] < NOISE_VISIBLE for dof in DOFS)
+    if result.meaningful_top is not None or not visibly_wrong:
+        return False
+    result.discovery = discover(fitted, result.ship, library=result.library,
+                                threshold=result.threshold, check_catalogue=False,
+                                rivals=[score.effect for score in result.flight_favoured],
+                                n_jobs=n_jobs, **settings)
+    return True
 
 
 def _channels(variables, delays) -> tuple[str, ...]:
