@@ -235,35 +235,63 @@ class Manoeuvre:
         return StepCommand(times, np.radians(angles))
 
 
-def protocol_manoeuvres(duration: float = 3200.0) -> dict[str, list[Manoeuvre]]:
+def protocol_manoeuvres(duration: float = 3200.0, *, ship=None) -> dict[str, list[Manoeuvre]]:
     """The reproduction protocol's training and held-out manoeuvres (paper section 3.1).
 
     Parameters
     ----------
     duration : float
-        Record length [s]; the protocol's is 3200 s (shorter runs make quick examples).
+        Record length [s] of the KCS's plan; the protocol's is 3200 s at 1 Hz (shorter runs
+        make quick examples).
+    ship : Ship, optional
+        Another ship flies the same plan in its own time scale L/U0: the length and the
+        sampling step scaled by its L/U0 over the KCS's (18.63 s), the step rounded to three
+        digits, the same number of samples.  The KVLCC2 model (5.94 s) records 3200 samples
+        every 0.319 s: flown at 1 Hz, as the KCS is, its records are too coarse for finite
+        differences to resolve its accelerations.
 
     Returns
     -------
     dict
         ``{"train": [8 manoeuvres], "test": [tc15_port, tc15_stbd, zz10_10]}``.
+
+    Examples
+    --------
+    >>> from sindyship.ships import load_ship
+    >>> plan = protocol_manoeuvres(ship=load_ship("kvlcc2"))
+    >>> plan["train"][0].dt, plan["train"][0].duration
+    (0.319, 1020.8)
+    >>> protocol_manoeuvres(ship=load_ship("kcs"))["train"][0].dt
+    1.0
     """
+    dt = PROTOCOL_STEP
+    if ship is not None:
+        from .ships import load_ship
+
+        factor = ship.time_scale / load_ship("kcs").time_scale
+        if not math.isclose(factor, 1.0, rel_tol=1e-9):
+            dt = float(f"{PROTOCOL_STEP * factor:.3g}")
+            duration = round(duration / PROTOCOL_STEP * dt, 9)
     train = [
-        Manoeuvre("straight", duration=duration),
-        Manoeuvre("turning-circle", rudder=35, duration=duration),
-        Manoeuvre("turning-circle", rudder=-35, duration=duration),
-        Manoeuvre("zigzag", rudder=35, check=10, duration=duration),
-        Manoeuvre("zigzag", rudder=20, check=20, duration=duration),
-        Manoeuvre("zigzag", rudder=15, check=15, duration=duration),
-        Manoeuvre("spiral", rudder=35, first_sign=1, duration=duration),
-        Manoeuvre("spiral", rudder=35, first_sign=-1, duration=duration),
+        Manoeuvre("straight", duration=duration, dt=dt),
+        Manoeuvre("turning-circle", rudder=35, duration=duration, dt=dt),
+        Manoeuvre("turning-circle", rudder=-35, duration=duration, dt=dt),
+        Manoeuvre("zigzag", rudder=35, check=10, duration=duration, dt=dt),
+        Manoeuvre("zigzag", rudder=20, check=20, duration=duration, dt=dt),
+        Manoeuvre("zigzag", rudder=15, check=15, duration=duration, dt=dt),
+        Manoeuvre("spiral", rudder=35, first_sign=1, duration=duration, dt=dt),
+        Manoeuvre("spiral", rudder=35, first_sign=-1, duration=duration, dt=dt),
     ]
     test = [
-        Manoeuvre("turning-circle", rudder=-15, duration=duration),
-        Manoeuvre("turning-circle", rudder=15, duration=duration),
-        Manoeuvre("zigzag", rudder=10, check=10, duration=duration),
+        Manoeuvre("turning-circle", rudder=-15, duration=duration, dt=dt),
+        Manoeuvre("turning-circle", rudder=15, duration=duration, dt=dt),
+        Manoeuvre("zigzag", rudder=10, check=10, duration=duration, dt=dt),
     ]
     return {"train": train, "test": test}
+
+
+#: The sampling step [s] of the reproduction protocol's KCS records (paper section 3.1).
+PROTOCOL_STEP = 1.0
 
 
 def initial_state(ship, u0: float | None = None) -> np.ndarray:

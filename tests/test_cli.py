@@ -351,6 +351,32 @@ def test_manoeuvre_options_are_refused_with_the_protocol(tmp_path, option):
     assert len(err.strip().splitlines()) == 1 and not (tmp_path / "p").exists()
 
 
+def test_the_protocol_of_another_ship_is_sampled_in_its_own_time_scale(tmp_path):
+    """The KVLCC2 model (L/U0 5.94 s) had flown the KCS's 3200 s at 1 Hz: records its own fit
+    called too coarse to resolve the accelerations (0.168 L/U0), and a fit on them flew its
+    held-out zig-zag 7.9 L off.  Scaled by L/U0, 3200 samples every 0.319 s."""
+    from sindyship.records import read_record
+    from sindyship.ships import load_ship
+    from sindyship.targets import sampling_steps, under_resolved
+
+    code, _, err = run_sindyship("simulate", "--protocol", "--ship", "kvlcc2", "--out",
+                                 tmp_path / "p")
+    assert code == 0, err
+    assert "sampled every 0.319 s" in err
+    ship = load_ship("kvlcc2")
+    paths = sorted((tmp_path / "p").rglob("*.csv"))
+    assert len(paths) == 11
+    assert {len(path.read_text().splitlines()) for path in paths} == {3201}  # and a header
+    records = [read_record(path, ship=ship)[0] for path in paths]
+    steps = sampling_steps(records, ship)
+    assert max(steps.values()) == pytest.approx(0.319 / ship.time_scale)
+    assert under_resolved(steps, ship) == ""
+    code, _, err = run_sindyship("simulate", "--protocol", "--out", tmp_path / "kcs")
+    assert code == 0 and "sampled every" not in err, err  # the KCS's plan as the paper's
+    kcs = (tmp_path / "kcs" / "test" / "zz10_10.csv").read_text().splitlines()
+    assert len(kcs) == 3201 and kcs[2].startswith("1.0,")
+
+
 def test_reproduce_json_contract(tmp_path):
     code, out, err = run_sindyship("reproduce", "--out", tmp_path / "rep", "--json")
     assert code == 0, err

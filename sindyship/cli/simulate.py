@@ -105,13 +105,17 @@ def _protocol(args, ship, effects) -> int:
     from ..measurements import write_csv
 
     out = Path(args.out)
-    for kind, plan in protocol_manoeuvres().items():
+    for kind, plan in protocol_manoeuvres(ship=ship).items():
         (out / kind).mkdir(parents=True, exist_ok=True)
         for record in simulate_with_effects(ship, plan, effects):
             _check_flown(record)
             write_csv(record, out / kind / f"{record.name}.csv")
         progress(f"wrote {len(plan)} {kind}ing records to {out / kind}/" if kind == "train"
                  else f"wrote {len(plan)} held-out records to {out / kind}/")
+    step = plan[0].dt
+    if step != MANOEUVRE_DEFAULTS["dt"]:
+        progress(f"the records are {plan[0].duration:g} s long, sampled every {step:g} s: "
+                 "the protocol's 3200 samples at 1 Hz of the KCS in this ship's time scale L/U0")
     return 0
 
 
@@ -128,8 +132,8 @@ def _check_protocol_options(args) -> None:
         option = "--" + given[0].replace("_", "-")
         raise SindyshipInputError(
             f"{option} does not apply to --protocol, which flies the paper's fixed plan (3200 s "
-            "at 1 Hz, docs/protocol.md); leave it out, or fly single manoeuvres with "
-            "--manoeuvre.")
+            "at 1 Hz for the KCS, scaled by L/U0 for another ship, docs/protocol.md); leave it "
+            "out, or fly single manoeuvres with --manoeuvre.")
     for name, default in MANOEUVRE_DEFAULTS.items():
         if getattr(args, name) is None:
             setattr(args, name, default)
