@@ -506,7 +506,7 @@ def _search(records, ship, library, settings, threshold, n_jobs=1
 
 
 def search_beyond_catalogue(result, fitted: Sequence[Trajectory], settings: Mapping,
-                  n_jobs: int | None) -> bool:
+                            n_jobs: int | None) -> bool:
     """Search beyond the catalogue for a diagnosis (:func:`sindyship.diagnose.diagnose`),
     into ``result.discovery``, when no catalogued effect is meaningful and the model is
     visibly wrong (a training flight diverged, or an equation's error stands clearly above
