@@ -10,9 +10,12 @@ The loop reads them as tuples, by position:
   a recorded zig-zag's leg angles in ``[level_start[m], level_start[m + 1])``;
 - models (:func:`model_tables`): ``(extra_start, extra_kind, extra_source, extra_value,
   base_start, base_variable, base_function, factor_start, factor_base, factor_power,
-  term_start, slots, weights, inertia, inverse_mass, U0, L)``: model p's variables beyond the
-  state's, factor bases, factors and terms in ``[x_start[p], x_start[p + 1])``, as
-  :func:`sindyship._forces_compiled.tables` gives them for one model;
+  term_start, slots, weights, inertia, inverse_mass, U0, L, instantaneous, extra_over_speed,
+  speed_floor)``: model p's variables beyond the state's, factor bases, factors and terms in
+  ``[x_start[p], x_start[p + 1])``, as :func:`sindyship._forces_compiled.tables` gives them
+  for one model; whether model p is in the instantaneous-speed form, and whether it reads
+  each variable beyond the state's over the speed (:func:`sindyship.terms.read_over_speed`);
+  the least speed ratio U/U0 of that form (:data:`sindyship.library.SPEED_FLOOR`);
 - channels: ``(times, values)``, the recorded channels' rows (name, member, sample).
 """
 
@@ -21,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._forces_compiled import N_STATE_VARIABLES
+from .library import SPEED_FLOOR
 from .simulation import (
     ConstantCommand,
     PrescribedRudder,
@@ -28,6 +32,7 @@ from .simulation import (
     StepCommand,
     ZigZagCommand,
 )
+from .terms import read_over_speed
 
 #: Rudder commands the loop flies (any other kind is flown by the kernel).
 CONSTANT, STEP, ZIGZAG, PRESCRIBED = range(4)
@@ -75,12 +80,15 @@ def model_tables(parts, integ, n_members, L, U0):
     factor_base, factor_power, factor_start = [], [], [0]
     slot_tables, weights, term_start = [], [], [0]
     inertia, minv, rows, series_times = [], [], {}, None
+    instantaneous, extra_over_speed = [], []
     for dynamics, start, stop in parts:
         model = getattr(dynamics, "model", None)
         if not getattr(model, "_compiled_flights", False) or model.ship.L != L \
                 or model.ship.U0 != U0:
             return None
         names, (b_variable, b_function, f_base, f_power, term_slots) = model._compiled
+        over_speed = model.library.speed == "instantaneous"
+        instantaneous.append(over_speed)
         series = dynamics.series
         if series is not None:
             if series_times is not None and not np.array_equal(series.times, series_times):
@@ -98,6 +106,7 @@ def model_tables(parts, integ, n_members, L, U0):
             extra_kind.append(kind)
             extra_source.append(list(rows).index(name) if kind == SERIES else 0)
             extra_value.append(value)
+            extra_over_speed.append(over_speed and read_over_speed(name))
         extra_start.append(len(extra_kind))
         base_variable.extend(b_variable), base_function.extend(b_function)
         base_start.append(len(base_variable))
@@ -127,7 +136,9 @@ def model_tables(parts, integ, n_members, L, U0):
               np.asarray(factor_start, dtype=np.int64), np.asarray(factor_base, dtype=np.int64),
               np.asarray(factor_power, dtype=np.int64), np.asarray(term_start, dtype=np.int64),
               slots, np.ascontiguousarray(np.concatenate(weights, axis=1), dtype=float),
-              np.array(inertia, dtype=float), np.array(minv, dtype=float), float(U0), float(L))
+              np.array(inertia, dtype=float), np.array(minv, dtype=float), float(U0), float(L),
+              np.asarray(instantaneous, dtype=np.int64),
+              np.asarray(extra_over_speed + [False], dtype=np.int64), float(SPEED_FLOOR))
     channels = (np.zeros(1) if series_times is None else np.array(series_times, dtype=float),
                 values)
     n_variables = N_STATE_VARIABLES + max(np.diff(extra_start), default=0)

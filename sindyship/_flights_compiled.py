@@ -3,19 +3,19 @@
 
 The kernel (:mod:`sindyship.simulation.kernels`) is the reference and can fly every model;
 it flies whatever :func:`fly` leaves to it.  For the dynamics of identified models in the
-design form (:class:`sindyship.model.AbkowitzDynamics`, alone or several side by side) this
-module repeats its steps with the same operations in the same order: classical RK4, the first stage
-taken from the last one's end, steps split at scheduled command changes and at a zig-zag's
-check angle (regula falsi on the step's cubic Hermite interpolant), cubic Hermite outputs and
-the protocol's divergence test at the output times.  The forces are those of
-:func:`sindyship._forces_compiled.accelerations`.  A flight thus gives the kernel's numbers (to
-the rounding of the library functions sin and cos) while a step costs microseconds instead of
-a millisecond of Python.
+design or instantaneous-speed form (:class:`sindyship.model.AbkowitzDynamics`, alone or
+several side by side) this module repeats its steps with the same operations in the same
+order: classical RK4, the first stage taken from the last one's end, steps split at scheduled
+command changes and at a zig-zag's check angle (regula falsi on the step's cubic Hermite
+interpolant), cubic Hermite outputs and the protocol's divergence test at the output times.
+The forces are those of :func:`sindyship._forces_compiled.accelerations`.  A flight thus gives
+the kernel's numbers (to the rounding of the library functions sin and cos) while a step costs
+microseconds instead of a millisecond of Python.
 
 :func:`fly` returns None, and the kernel flies, where numba is missing or switched off
-(``SINDYSHIP_NO_COMPILE=1``), for dynamics with a switching function, a model in the
-instantaneous-speed form or with a variable the loop does not make (a shape, the apparent wind,
-a factor of a number: :attr:`sindyship.model.AbkowitzModel._compiled_flights`), recorded
+(``SINDYSHIP_NO_COMPILE=1``), for dynamics with a switching function, a model with a
+variable the loop does not make (a shape, the apparent wind, a factor of a number:
+:attr:`sindyship.model.AbkowitzModel._compiled_flights`), recorded
 channels on different grids, and commands it does not know (feedback, subclasses, empty steps,
 replays of fewer than two samples).
 """
@@ -135,12 +135,13 @@ def _series_at(row, m, t, series_times, series_values):
     return (1.0 - w) * series_values[row, m, k] + w * series_values[row, m, k + 1]
 
 
-def _extra_variables(p, x, y, rate, m, t, models, channels, variables):
+def _extra_variables(p, x, y, rate, m, t, models, channels, variables, ratio):
     """The model's variables beyond the state's into ``variables[5:]`` (the library's
-    scaling, as :func:`sindyship._forces_compiled.run_accelerations` forms them)."""
+    scaling, as :func:`sindyship._forces_compiled.run_accelerations` forms them; those the
+    instantaneous form reads over the speed divided by ``ratio``, U/U0)."""
     extra_start, extra_kind, extra_source, extra_value = models[0], models[1], models[2], \
         models[3]
-    U0, L = models[15], models[16]
+    U0, L, over_speed = models[15], models[16], models[18]
     for k in range(extra_start[p], extra_start[p + 1]):
         kind = extra_kind[k]
         value = 0.0
@@ -154,6 +155,8 @@ def _extra_variables(p, x, y, rate, m, t, models, channels, variables):
             value = y
         elif kind == RUDDER_RATE:
             value = rate * L / U0
+        if over_speed[k]:
+            value = value / ratio
         variables[5 + k - extra_start[p]] = value
 
 
@@ -193,11 +196,20 @@ def _accelerations(p, z, rudder, rate, m, t, models, channels, work, a):
     U0, L = models[15], models[16]
     variables, base, factor = work[0], work[1], work[2]
     variables[0] = z[0] / U0 - 1.0
-    variables[1] = z[1] / U0
-    variables[2] = z[2] * L / U0
+    speed2 = 1.0  # the instantaneous form's (U/U0)^2, and its square root as the kernel's
+    ratio = 1.0
+    if models[17][p]:  # v and r over the instantaneous speed U (motion_variables)
+        ratio = max(math.hypot(z[0], z[1]) / U0, models[19])
+        speed2 = ratio * ratio
+        variables[1] = z[1] / (U0 * ratio)
+        variables[2] = z[2] * L / (U0 * ratio)
+        ratio = math.sqrt(speed2)
+    else:
+        variables[1] = z[1] / U0
+        variables[2] = z[2] * L / U0
     variables[3] = rudder
     variables[4] = z[5]
-    _extra_variables(p, z[3], z[4], rate, m, t, models, channels, variables)
+    _extra_variables(p, z[3], z[4], rate, m, t, models, channels, variables, ratio)
     _factors(p, variables, models, base, factor)
     X = 0.0
     Y = 0.0
@@ -209,9 +221,13 @@ def _accelerations(p, z, rudder, rate, m, t, models, channels, work, a):
         X += weights[0, j] * column
         Y += weights[1, j] * column
         N += weights[2, j] * column
+    if models[17][p]:  # the forces scale with U^2; the Coriolis terms take the motion over U0
+        X *= speed2
+        Y *= speed2
+        N *= speed2
     un = variables[0] + 1.0
-    vn = variables[1]
-    rn = variables[2]
+    vn = variables[1] * ratio if models[17][p] else variables[1]
+    rn = variables[2] * ratio if models[17][p] else variables[2]
     X = X + (inertia[p, 0] * vn * rn + inertia[p, 1] * rn * rn)
     Y = Y + (-inertia[p, 2] * un * rn)
     N = N + (-inertia[p, 1] * un * rn - inertia[p, 3] * un * vn)

@@ -118,7 +118,7 @@ class AbkowitzDynamics:
         flight's ``position`` (x, y) [m] and ``rudder_rate`` [rad/s] when terms use them
         (the origin and a still rudder when not given, as for a stability analysis)."""
         model = self.model
-        if model._compiled_flights:
+        if model._compiled_accelerations:
             a = model._run_compiled(self, u, v, r, delta, psi, t, members, position,
                                     rudder_rate)
             if a is not None:
@@ -259,9 +259,11 @@ class AbkowitzModel:
                               for term in self.library.terms[dof]
                               if self.coefficients[dof][term.text] != 0.0}
         self._compiled = _compiled_tables(self._bases, factors, slots)
-        # the compiled flights make the design form's variables from the state themselves
-        self._compiled_flights = self._compiled is not None and self.library.speed == "design" \
+        # the compiled flights make the motion's variables from the state themselves, in
+        # either speed form; the compiled accelerations of states make the design form's
+        self._compiled_flights = self._compiled is not None \
             and not (set(DERIVED_SOURCES) & set(self.library.variables))
+        self._compiled_accelerations = self._compiled_flights and self.library.speed == "design"
         self._uses_position = bool({"x", "y"} & self.library.sources)
         if self._compiled is not None:
             from ._forces_compiled import run_accelerations

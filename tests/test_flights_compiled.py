@@ -117,15 +117,22 @@ def random_run(kcs):
     return run
 
 
-@pytest.mark.parametrize("signal", ["actual", "commanded"])
-def test_every_command_flies_as_the_kernel_flies_it(kcs, random_run, signal):
-    model = _model(kcs, extras=True, signal=signal)
+@pytest.mark.parametrize(("signal", "speed"), [("actual", "design"), ("commanded", "design"),
+                                               ("actual", "instantaneous")])
+def test_every_command_flies_as_the_kernel_flies_it(kcs, random_run, signal, speed):
+    """Also in the instantaneous-speed form (its forces over U^2, v and r and the channels
+    read over the speed U, the Coriolis terms over U0), which the kernel alone had flown."""
+    model = _model(kcs, extras=True, signal=signal, speed=speed)
     dynamics = model.dynamics({"depth": 30.0, "gust": 0.2})
     commands = _commands(random_run)
     t = np.arange(0.0, 400.5, 0.5)  # outputs inside steps: the Hermite interpolant
     state0 = random_run.state()[:, 0]
     reference, compiled = _both(dynamics, commands, t, state0)
     _assert_same(reference, compiled, kcs.L)
+    if speed == "instantaneous":  # the flights leave U0: the speed factor is exercised
+        speeds = [np.hypot(*out.states[:2]) / kcs.U0 for out in compiled]
+        assert min(float(np.min(s)) for s in speeds) < 0.8
+        return
     # the zig-zags reversed several times, the replay kept its record's rudder
     assert np.sum(np.diff(np.sign(compiled[2].delta_c)) != 0) >= 3
     assert np.ptp(compiled[4].states[6]) > math.radians(5.0)
@@ -149,7 +156,7 @@ def test_recorded_channels_and_stacked_models_fly_as_the_kernel_flies_them(kcs, 
     records = _records(random_run)
     first = _model(kcs, extras=True).dynamics(records=records)
     linear = _model(kcs, extras=False, linear=True).dynamics(records=records[::-1])
-    unstable = _model(kcs, extras=False, scale_n_r=-2.0).dynamics()
+    unstable = _model(kcs, extras=False, scale_n_r=-2.0, speed="instantaneous").dynamics()
     stacked = _Stacked(((first, 0, 2), (linear, 2, 4), (unstable, 4, 5)))
     commands = [PrescribedRudder(random_run.t, random_run["delta"]),
                 ZigZagCommand(math.radians(15.0), math.radians(5.0), 1),
@@ -197,11 +204,9 @@ def test_what_the_loop_cannot_fly_is_left_to_the_kernel(kcs, random_run):
     t = np.arange(0.0, 100.0, 1.0)
     state0 = np.array([kcs.U0, 0.0, 0.0, 0.0, 0.0, 0.3, 0.0])
     design = _model(kcs, extras=False).dynamics()
-    instantaneous = _model(kcs, extras=False, speed="instantaneous").dynamics()
     feedback = [FeedbackCommand(lambda t, state: -0.5 * state[5])]
     one_sample = [PrescribedRudder(np.array([0.0]), np.array([0.1]))]
-    for dynamics, commands in ((design, feedback), (design, one_sample),
-                               (instantaneous, [ConstantCommand(0.1)])):
+    for dynamics, commands in ((design, feedback), (design, one_sample)):
         assert dynamics.fly_compiled(integrator_for(dynamics, commands), commands, t, state0,
                                      1.0, True, None) is None
     (flown,) = simulate_batch(design, feedback, t, state0)
