@@ -430,13 +430,15 @@ def test_reproduce_json_contract(tmp_path):
     assert module.zigzag(np.arange(0.0, 60.0), 10, 10).diverged_at is None
 
 
-def test_fit_with_smoothing_records_the_setting(records, tmp_path):
+def test_fit_with_smoothing_records_the_setting(records, tmp_path, capsys):
     model = tmp_path / "smoothed.json"
     train = [records[k] for k in ("tc35", "tc-35", "zz20", "spiral")]
     assert main(["fit", *map(str, train), "--ship", "kcs", "--smoothing", "savgol:21",
                  "--refine", "0", "--out", str(model)]) == 0
     info = json.loads(model.read_text())["info"]
     assert info["smoothing"] == {"method": "savgol", "window_s": 21.0, "order": 3}
+    # said in words, not as the Python dictionary it is saved as
+    assert "smoothing the records before differencing: savgol 21 s\n" in capsys.readouterr().err
     with pytest.raises(SystemExit) as stop:  # refused as the command line is read
         main(["fit", str(train[0]), "--ship", "kcs", "--smoothing", "bogus:x", "--out",
               str(tmp_path / "x.json")])

@@ -108,8 +108,8 @@ def test_the_first_hour_runs_as_written(tmp_path, monkeypatch):
     assert min(forces["by_test"][t]["Y"]["correlation"] for t in forces["by_test"]
                if t != "straight" and forces["by_test"][t]["Y"]["correlation"] is not None) > 0.9
     assert len(list((tmp_path / "diagnosis").glob("*.png"))) > 10
-    # five pure-yaw conditions beside the records: least squares' pure-yaw forces right, its
-    # static drift (which they do not hold) as wrong as without them
+    # a pure-yaw test at five yaw rates beside the records: least squares' pure-yaw forces
+    # right, its static drift (which they do not hold) as wrong as without them
     hybrid = json.loads((tmp_path / "forces-yaw" / "forces.json").read_text())["by_test"]
     assert min(hybrid["pure-yaw"][f]["correlation"] for f in "YN") > 0.99
     assert hybrid["static-drift"]["N"]["correlation"] < -0.5

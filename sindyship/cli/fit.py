@@ -226,7 +226,7 @@ def run(args) -> int:
     if smoothing is not None:
         from ..smoothing import smooth_records
 
-        progress(f"smoothing: {smoothing.as_dict()}")
+        progress(f"smoothing the records before differencing: {smoothing.label}")
         records = smooth_records(records, smoothing)
     settings = {"library": library, "optimizer": args.optimizer, "params": params,
                 "rudder_signal": args.rudder_signal, "derivative": args.derivative,
