@@ -246,9 +246,9 @@ def protocol_manoeuvres(duration: float = 3200.0, *, ship=None) -> dict[str, lis
     ship : Ship, optional
         Another ship flies the same plan in its own time scale L/U0: the length and the
         sampling step scaled by its L/U0 over the KCS's (18.63 s), the step rounded to three
-        digits, the same number of samples.  The KVLCC2 model (5.94 s) records 3200 samples
-        every 0.319 s: flown at 1 Hz, as the KCS is, its records are too coarse for finite
-        differences to resolve its accelerations.
+        significant digits, the same number of samples.  The KVLCC2 model (5.94 s) records
+        3200 samples every 0.319 s: flown at 1 Hz, as the KCS is, its records are too coarse
+        for finite differences to resolve its accelerations.
 
     Returns
     -------

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -265,3 +266,8 @@ def test_fit_says_which_automatic_windows_it_left_out(kcs, tmp_path, capsys):
     err = " ".join(capsys.readouterr().err.split())
     assert ("--smoothing auto left out savgol 81 s: a window longer than a record, or holding "
             "too few of its samples") in err
+    chosen = json.loads((tmp_path / "m.json").read_text())["info"]["smoothing"]
+    said = ("not smoothing the records: --smoothing auto chose them as they are"
+            if chosen["method"] == "none" else
+            f"smoothing the records before differencing: {chosen['method']} ")
+    assert said in err

@@ -226,7 +226,9 @@ def run(args) -> int:
     if smoothing is not None:
         from ..smoothing import smooth_records
 
-        progress(f"smoothing the records before differencing: {smoothing.label}")
+        progress(f"smoothing the records before differencing: {smoothing.label}"
+                 if smoothing.method != "none" else
+                 "not smoothing the records: --smoothing auto chose them as they are")
         records = smooth_records(records, smoothing)
     settings = {"library": library, "optimizer": args.optimizer, "params": params,
                 "rudder_signal": args.rudder_signal, "derivative": args.derivative,

@@ -37,7 +37,9 @@ def add_parser(sub) -> None:
     what.add_argument("--manoeuvre", choices=MANOEUVRES, help="the manoeuvre to fly")
     what.add_argument("--protocol", action="store_true",
                       help="fly the paper's 8 training and 3 held-out manoeuvres (3200 s at "
-                      "1 Hz) and write them to OUT/train/ and OUT/test/ (--out is then a folder)")
+                      "1 Hz for the KCS; another ship's 3200 samples in its own time scale "
+                      "L/U0) and write them to OUT/train/ and OUT/test/ (--out is then a "
+                      "folder)")
     angle = bounded_float(0, MAX_RUDDER, "degrees", symmetric=True)
     p.add_argument("--rudder", type=angle, default=None, metavar="DEG",
                    help="rudder angle [deg]: of the turn, the zig-zag, the largest spiral step, "

@@ -571,8 +571,8 @@ def diagnose(
         result.command = judge_command(fitted, base, top.effect, sets, settings, ship=ship,
                                        n_jobs=n_jobs, progress=progress,
                                        before=command_before)
-        stage(f"fitted, refined and flew the model of the verdict's fit command without "
-              f"and with {top.effect.name}")
+        stage(f"flew the model of the verdict's fit command without and with "
+              f"{top.effect.name}")
     if search_beyond and search_beyond_catalogue(result, fitted, settings, n_jobs):
         stage("searched beyond the catalogue")
     result.seconds = time.perf_counter() - start
