@@ -221,13 +221,14 @@ def _accelerations(p, z, rudder, rate, m, t, models, channels, work, a):
         X += weights[0, j] * column
         Y += weights[1, j] * column
         N += weights[2, j] * column
-    if models[17][p]:  # the forces scale with U^2; the Coriolis terms take the motion over U0
-        X *= speed2
-        Y *= speed2
-        N *= speed2
+    # the forces scale with U^2, the Coriolis terms take the motion over U0 (both factors 1,
+    # exactly, in the design form)
+    X *= speed2
+    Y *= speed2
+    N *= speed2
     un = variables[0] + 1.0
-    vn = variables[1] * ratio if models[17][p] else variables[1]
-    rn = variables[2] * ratio if models[17][p] else variables[2]
+    vn = variables[1] * ratio
+    rn = variables[2] * ratio
     X = X + (inertia[p, 0] * vn * rn + inertia[p, 1] * rn * rn)
     Y = Y + (-inertia[p, 2] * un * rn)
     N = N + (-inertia[p, 1] * un * rn - inertia[p, 3] * un * vn)

@@ -107,16 +107,17 @@ def _protocol(args, ship, effects) -> int:
     from ..measurements import write_csv
 
     out = Path(args.out)
-    for kind, plan in protocol_manoeuvres(ship=ship).items():
+    plans = protocol_manoeuvres(ship=ship)
+    for kind, plan in plans.items():
         (out / kind).mkdir(parents=True, exist_ok=True)
         for record in simulate_with_effects(ship, plan, effects):
             _check_flown(record)
             write_csv(record, out / kind / f"{record.name}.csv")
         progress(f"wrote {len(plan)} {kind}ing records to {out / kind}/" if kind == "train"
                  else f"wrote {len(plan)} held-out records to {out / kind}/")
-    step = plan[0].dt
-    if step != MANOEUVRE_DEFAULTS["dt"]:
-        progress(f"the records are {plan[0].duration:g} s long, sampled every {step:g} s: "
+    first = plans["train"][0]
+    if first.dt != MANOEUVRE_DEFAULTS["dt"]:
+        progress(f"the records are {first.duration:g} s long, sampled every {first.dt:g} s: "
                  "the protocol's 3200 samples at 1 Hz of the KCS in this ship's time scale L/U0")
     return 0
 
