@@ -8,7 +8,15 @@ The steps, each timed in a fresh process of the checkout (``PYTHONPATH``), best 
     MMG model, after one warm-up flight in the same process (target below 0.3 s).
 ``diagnose_protocol``
     ``diagnose`` on the 8 training manoeuvres with its default settings (one process, no
-    figures), after a warm-up diagnosis (target below 4 s).
+    figures), after a warm-up diagnosis.  It checks its verdict by making the ``fit`` command
+    it names, the default fit refined by its flights, without and with the effect named
+    (:attr:`sindyship.diagnose.Diagnosis.command`): target below 15 s, the diagnosis's own
+    4 s (below) and two default fits, of which the one with the effect refines on (about 3
+    and 8 s on two cores).
+``diagnose_protocol_unchecked``
+    The same without that check (``check_command=False``; the checkout compared with, which
+    has no such check, runs its default): the diagnosis's own flights and fits, target below
+    4 s.
 ``diagnose_10hz``
     ``diagnose`` on the six MARIN KVLCC2 free-running trials resampled at 10 Hz (about 65,700
     samples; the model-scale servo makes the integration step 1 s and every replayed rudder
@@ -34,8 +42,9 @@ The exported simulator's right-hand side is timed against the library's by
 ``benchmarks/bench_export.py`` (the plain module, which is what ``export`` wrote before
 ``--compile``, and the compiled one in the same run).
 
-Prints and saves ``benchmarks/results/speed.json``.  These machines are noisy: compare the two
-checkouts' figures of one run, not figures of different runs.
+Prints and saves ``benchmarks/results/speed.json``; ``--steps`` times the steps named and keeps
+the others' saved figures.  These machines are noisy: compare the two checkouts' figures of one
+step, which are always timed in one run, not figures of different runs.
 
     git worktree add /tmp/sindyship-before COMMIT     # the version to compare with
     python benchmarks/bench_speed.py --against /tmp/sindyship-before [--repeat 3]
@@ -58,9 +67,10 @@ sys.path.insert(0, str(ROOT))
 from sindyship.marin import default_marin_dir  # noqa: E402
 
 OUT = Path(__file__).parent / "results" / "speed.json"
-TARGETS = {"protocol_flights": 0.3, "protocol_solve_ivp": None, "diagnose_protocol": 4.0,
-           "diagnose_10hz": 30.0, "fit_protocol": None, "fit_refine10_protocol": None,
-           "fit_marin": None, "fit_refine10_marin": None, "reproduce": 15.0}
+TARGETS = {"protocol_flights": 0.3, "protocol_solve_ivp": None, "diagnose_protocol": 15.0,
+           "diagnose_protocol_unchecked": 4.0, "diagnose_10hz": 30.0, "fit_protocol": None,
+           "fit_refine10_protocol": None, "fit_marin": None, "fit_refine10_marin": None,
+           "reproduce": 15.0}
 #: The ``fit`` steps: which records, and the options after them.
 FIT_STEPS = {"fit_protocol": ("protocol", []), "fit_refine10_protocol": ("protocol",
                                                                           ["--refine", "10"]),
@@ -114,6 +124,19 @@ ship = load_ship("kcs")
 train = fly(MMGModel(ship), protocol_manoeuvres()["train"])
 print(json.dumps({"times": best(lambda: diagnose(train, ship), int(sys.argv[1])),
                   "samples": sum(r.n_samples for r in train)}))
+""",
+    "diagnose_protocol_unchecked": _BEST_OF + """
+import inspect
+from sindyship.diagnose import diagnose
+from sindyship.manoeuvres import fly, protocol_manoeuvres
+from sindyship.mmg import MMGModel
+from sindyship.ships import load_ship
+ship = load_ship("kcs")
+train = fly(MMGModel(ship), protocol_manoeuvres()["train"])
+options = {"check_command": False} if "check_command" in inspect.signature(diagnose).parameters \
+    else {}
+print(json.dumps({"times": best(lambda: diagnose(train, ship, **options), int(sys.argv[1])),
+                  "samples": sum(r.n_samples for r in train), "options": options}))
 """,
     "diagnose_10hz": _BEST_OF + """
 from sindyship.diagnose import diagnose

@@ -193,7 +193,8 @@ def _saved_captive_bench() -> dict | None:
 
 
 def _saved_speed() -> dict | None:
-    """The timings of benchmarks/results/speed.json (one run, two checkouts)."""
+    """The timings of benchmarks/results/speed.json (each step of both checkouts timed in one
+    run)."""
     path = RESULTS / "speed.json"
     if not path.exists():
         return None
