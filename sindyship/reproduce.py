@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from ._compile_notice import compiles_first
 from ._io import save_figure, write_text_atomic
 from .evaluation import distance_errors
 from .flight_reports import reproduce_report
@@ -202,6 +203,9 @@ def run(out_dir: str | Path | None = "reproduce-output", *, methods=METHODS,
     start = time.perf_counter()
     ship = load_ship("kcs")
     plan = protocol_manoeuvres()
+    if compiles_first():
+        progress("numba compiles the flight loops in this first run after an installation "
+                 "(about a minute more on two cores; later runs reuse them)")
     progress("simulating the 8 training and 3 held-out KCS manoeuvres (MMG)")
     mmg = MMGModel(ship)
     flown = fly(mmg, plan["train"] + plan["test"])  # one batch: every manoeuvre is 3200 s
