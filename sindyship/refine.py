@@ -366,6 +366,7 @@ def _search_stages(model, records, stages, penalty, max_evaluations, prior_weigh
         start_rms = problem.flight_rms
         entry_cost = cost(problem.residuals(p))
         entry_rms = problem.flight_rms
+        problem.reported_cost = entry_cost
         allowed = budget if final else min(budget, early)
         search = levenberg_marquardt(problem.residuals, problem.normal, p,
                                      max_evaluations=max(allowed, 1),

@@ -60,6 +60,7 @@ class ShootingProblem:
         self.penalty = penalty
         self.n_jobs = n_jobs
         self.flight_rms = math.nan
+        self.reported_cost = None  # the cost the last progress line reported (report)
         self._last = None  # (p, flights) of the last flight without sensitivities
         # both parts relative to their values at the fitted coefficients: the flights' mean
         # squared error, and the fit's own objective, each 1 there
@@ -152,10 +153,15 @@ class ShootingProblem:
         return gram + jac.T @ jac, gradient + jac.T @ penalty
 
     def report(self, step: int, cost: float, label: str) -> None:
-        """One line on stderr per accepted step of the search, beginning with ``label``."""
+        """One line on stderr per accepted step of the search, beginning with ``label``: the
+        cost, how much lower than the last step's (or the cost the search started from, set
+        in ``reported_cost``) and the flights' error (the rms of their non-dimensional states'
+        differences: u and v over U0, r over U0/L, x and y over L, psi in radians)."""
         stage = "whole flights" if self.segment_s is None else f"{self.segment_s:.4g} s segments"
-        print(f"{label} ({stage}): step {step}, cost {cost:.6g}, flight error (rms) "
-              f"{self.flight_rms:.4g}", file=sys.stderr, flush=True)
+        last, self.reported_cost = self.reported_cost, cost
+        fall = "" if not last else f" ({100.0 * (last - cost) / last:.2g} % lower)"
+        print(f"{label} ({stage}): step {step}, cost {cost:.6g}{fall}, flight error "
+              f"{self.flight_rms:.4g} (rms, non-dimensional)", file=sys.stderr, flush=True)
 
 
 def fly_batches(model, batches, weights, slots, sensitivities, n_jobs):

@@ -449,6 +449,11 @@ def test_a_refinement_that_does_not_carry_over_keeps_the_fit(four, kcs, monkeypa
     steps = capsys.readouterr().err
     assert re.search(r"checking on every other record \([\d.]+ s segments\): step 1,", steps)
     assert "refining by flights" not in steps
+    # each line says how far the cost fell (from the stage's start here: one step a stage)
+    costs = [float(c) for c in re.findall(r"cost ([-+.\de]+) \(", steps)]
+    falls = [float(f) for f in re.findall(r"\(([-+.\de]+) % lower\)", steps)]
+    assert len(falls) == len(costs) >= 2 and steps.count("(rms, non-dimensional)") == len(costs)
+    assert all(0 < fall < 100 for fall in falls)
     report = kept.info["refined"]
     assert report["refused_validation"] and not report["validation"]["accepted"]
     assert kept.coefficients == prior.coefficients and report["largest_change"] is None
@@ -596,3 +601,17 @@ def test_a_refusal_for_a_divergence_names_it_before_the_distances():
     assert _refused_validation(farther) == (
         "refined on half of the records, the model flew the other half 1.898 times as far off "
         "as fitted (no closer); the fitted coefficients are kept")
+
+
+def test_a_progress_line_says_how_far_the_cost_fell_since_the_last(capsys):
+    from types import SimpleNamespace
+
+    from sindyship.refine_problem import ShootingProblem
+
+    stage = SimpleNamespace(segment_s=93.13, reported_cost=0.5, flight_rms=0.0123)
+    ShootingProblem.report(stage, 1, 0.4, "refining by flights")
+    ShootingProblem.report(stage, 2, 0.3, "refining by flights")
+    first, second = capsys.readouterr().err.splitlines()
+    assert first == ("refining by flights (93.13 s segments): step 1, cost 0.4 (20 % lower), "
+                     "flight error 0.0123 (rms, non-dimensional)")
+    assert "step 2, cost 0.3 (25 % lower)" in second and stage.reported_cost == 0.3
