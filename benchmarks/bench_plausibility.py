@@ -6,7 +6,8 @@ Prints and saves ``benchmarks/results/plausibility.json``:
     Records that must load: the 11 protocol manoeuvres of the KCS (with ``ship="kcs"``, so
     every check runs) over seeds x noise levels (noise level k: k % Gaussian noise of each
     channel's RMS on u, v, r, and k x 0.1 deg on psi and delta, k x 0.5 m on x, y), the same
-    with a 1 m/s current from four directions, the protocol of the KVLCC2 model (7 m, 600 s),
+    with a 1 m/s current from four directions, the protocol of the KVLCC2 model (7 m, flown in
+    its own time scale as ``simulate --protocol --ship kvlcc2`` flies it),
     and the six MARIN records when the shared folder is present.  For each group: the count of
     records, of false refusals (by check), and the worst heading gain deviation |g - 1| and
     frame misfit (thresholds 0.25 and 0.1).
@@ -134,7 +135,7 @@ def main() -> None:
                     simulate_with_effects(kcs, plan["train"] + plan["test"], effects)]
     good["kcs_current_1m_s"] = summarise("kcs_current_1m_s", current, kcs)
     kvlcc2 = load_ship("kvlcc2")
-    model_plan = protocol_manoeuvres(duration=600.0)
+    model_plan = protocol_manoeuvres(ship=kvlcc2)
     model = fly(MMGModel(kvlcc2), model_plan["train"] + model_plan["test"])
     good["kvlcc2_model"] = summarise("kvlcc2_model", model, kvlcc2)
     folder = default_marin_dir()

@@ -336,7 +336,7 @@ def test_records_in_a_current_load(kcs):
 
 def test_kvlcc2_model_records_load():
     ship = load_ship("kvlcc2")
-    plan = protocol_manoeuvres(duration=600.0)
+    plan = protocol_manoeuvres(ship=ship)  # as simulate --protocol --ship kvlcc2 flies it
     for record in fly(MMGModel(ship), plan["train"] + plan["test"]):
         loads(record, ship=ship)
 
