@@ -28,8 +28,30 @@ def _flown_as_text(err: dict) -> str:
 
 
 def evaluation_report(errors: dict) -> str:
-    """One line per record: how it was flown, mean and maximum distance, and whether the
-    flight completed (a diverged flight has failed; its mean covers the time before)."""
+    """The text ``sindyship evaluate`` prints: one line per record with how it was flown (from
+    where, and why there), its mean and maximum distance in ship lengths (a diverged flight
+    has FAILED; its mean covers the time before), and a line of a turn's or zig-zag's figures,
+    flown against recorded.
+
+    Parameters
+    ----------
+    errors : dict
+        What :func:`sindyship.evaluation.evaluate` returns.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import sindyship as ss
+    >>> ship = ss.load_ship("kcs")
+    >>> runs = ss.fly(ss.MMGModel(ship), [ss.Manoeuvre("zigzag", rudder=20, check=20,
+    ...                                                duration=600)])
+    >>> report = ss.evaluation_report(ss.evaluate(ss.fit(runs, ship), runs))
+    >>> report.splitlines()[0].startswith("zz20_20: mean ")
+    True
+    """
     lines = []
     for name, err in errors.items():
         how = _flown_as_text(err)

@@ -140,6 +140,8 @@ def test_the_python_example_runs(tmp_path, monkeypatch):
     with contextlib.redirect_stdout(out):
         exec(compile(code, "README.md", "exec"), {"__name__": "__main__"})
     assert "Verdict: add asymmetry" in out.getvalue()
+    assert re.search(r"^zz10_10: mean [\d.]+ L, max [\d.]+ L \(flown closed loop", out.getvalue(),
+                     re.M)
 
 
 def test_the_python_recipe_of_the_recommended_model_is_the_default_fit(kcs, protocol_runs,
