@@ -228,6 +228,16 @@ def test_usage_errors_are_one_line_that_names_the_verb():
     code, _, err = run_sindyship("fit", "d.csv", "--optimizer", "foo", "--out", "m.json")
     assert code == 2 and err.startswith("sindyship fit: error: argument --optimizer: invalid "
                                         "choice: 'foo'") and err.count("\n") == 1
+    assert "did you mean" not in err  # nothing is close to foo
+    # a misspelt option, choice or verb: the close one is named
+    _, _, err = run_sindyship("fit", "d.csv", "--out", "m.json", "--optimiser", "prior")
+    assert err.endswith("unrecognized arguments: --optimiser prior; did you mean --optimizer? "
+                        "(see sindyship fit --help)\n")
+    _, _, err = run_sindyship("fit", "d.csv", "--optimizer", "priors", "--out", "m.json")
+    assert re.search(r"(did you mean|maybe you meant) '?prior'?\?", err)  # argparse's own
+    code, _, err = run_sindyship("fitt", "d.csv")                        # in newer Pythons
+    assert code == 2 and re.search(r"(did you mean|maybe you meant) '?fit'?\?", err)
+    assert err.count("\n") == 1 and err.endswith("(see sindyship --help)\n")
 
 
 def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():

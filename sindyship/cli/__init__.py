@@ -55,7 +55,30 @@ class OneLineParser(argparse.ArgumentParser):
 
     def error(self, message: str):
         message = " ".join(message.split())
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"{self.prog}: error: {message}{self._did_you_mean(message)} "
+                     f"(see {self.prog} --help)\n")
+
+    def _did_you_mean(self, message: str) -> str:
+        """``"; did you mean X?"`` for an unknown option or choice close to one of this
+        parser's (a misspelt ``--optimiser``, verb ``fitt``), else nothing."""
+        import difflib
+        import re
+
+        if message.startswith("unrecognized arguments:"):
+            known = [option for option in self._option_string_actions if option.startswith("--")]
+            for word in message.split(":", 1)[1].split():
+                close = difflib.get_close_matches(word.split("=")[0], known, n=1, cutoff=0.75) \
+                    if word.startswith("--") else []
+                if close:
+                    return f"; did you mean {close[0]}?"
+        # (a Python whose argparse suggests a choice itself says "maybe you meant" instead)
+        found = re.search(r"invalid choice: '?([^'\s]+)'? \(choose from (.*)\)$", message)
+        if found:
+            choices = [choice.strip(" '") for choice in found.group(2).split(",")]
+            close = difflib.get_close_matches(found.group(1), choices, n=1, cutoff=0.6)
+            if close:
+                return f"; did you mean {close[0]}?"
+        return ""
 
 
 def _terminate(signum, frame):
