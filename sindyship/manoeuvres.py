@@ -470,17 +470,26 @@ def turning_figures(traj: Trajectory, L: float, *, execute: int | None = None) -
     }
 
 
+#: How far [deg] the heading must have turned back from its peak after a zig-zag's last
+#: rudder reversal for that overshoot to count (:func:`zigzag_events`): well above a gyro's
+#: noise.
+OVERSHOOT_TURN_BACK_DEG = 0.5
+
+
 def zigzag_events(traj: Trajectory) -> dict:
     """Rudder reversals, heading peaks and overshoots of a zig-zag record.
 
     The overshoot is the heading excursion beyond the heading at each rudder reversal (the
-    check angle), up to the next reversal.
+    check angle), up to the next reversal; after the last reversal, up to the end of the
+    record once the heading has turned back from its peak there (by
+    :data:`OVERSHOOT_TURN_BACK_DEG` and a tenth of the excursion: a trial that ends the
+    zig-zag with the rudder held, as the MARIN 10/10 zig-zags do, keeps its second overshoot).
 
     Returns
     -------
     dict
-        ``reversals`` and ``peaks`` (sample indices), ``overshoots_deg`` (one per leg between
-        reversals) and ``heading_deg`` (heading change from the first sample).
+        ``reversals`` and ``peaks`` (sample indices), ``overshoots_deg`` (one per leg whose
+        peak is passed) and ``heading_deg`` (heading change from the first sample).
     """
     from .trials import zigzag_command
 
@@ -491,14 +500,16 @@ def zigzag_events(traj: Trajectory) -> dict:
     reversals = np.flatnonzero(np.diff(sign) != 0) + 1
     reversals = reversals[sign[reversals - 1] != 0]
     overshoots, peaks = [], []
-    for a, b in zip(reversals[:-1], reversals[1:], strict=False):
-        seg = psi[a:b]
-        if sign[a - 1] > 0:
-            peaks.append(a + int(np.argmax(seg)))
-            overshoots.append(float(seg.max() - psi[a]))
-        else:
-            peaks.append(a + int(np.argmin(seg)))
-            overshoots.append(float(psi[a] - seg.min()))
+    ends = [*reversals[1:], len(psi)] if len(reversals) else []
+    for a, b in zip(reversals, ends, strict=True):
+        turning = psi[a:b] if sign[a - 1] > 0 else -psi[a:b]  # the overshoot's way up
+        peak = int(np.argmax(turning))
+        excursion = float(turning[peak] - turning[0])
+        if b == len(psi) and turning[peak] - turning[-1] < max(OVERSHOOT_TURN_BACK_DEG,
+                                                                0.1 * excursion):
+            break  # the record ends before the heading turns back: no overshoot yet
+        peaks.append(a + peak)
+        overshoots.append(excursion)
     return {"reversals": reversals, "peaks": np.array(peaks, dtype=int),
             "overshoots_deg": overshoots, "heading_deg": psi}
 

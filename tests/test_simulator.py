@@ -63,6 +63,32 @@ def test_standard_figures_match_golden(protocol_runs, kcs):
             assert got[key] == pytest.approx(value, rel=tol), (name, key)
 
 
+def test_a_zigzag_ended_with_the_rudder_held_keeps_its_last_overshoot(protocol_runs):
+    """A trial that stops reversing after its second reversal (the MARIN 10/10 zig-zags)
+    keeps the second overshoot once the heading has turned back, not before."""
+    from sindyship.manoeuvres import zigzag_events
+    from sindyship.trajectory import Trajectory
+
+    run = by_name(protocol_runs)["zz10_10"]
+    events = zigzag_events(run)
+    third, second_peak = events["reversals"][2], events["peaks"][1]
+    full = zigzag_figures(run)["second_overshoot_deg"]
+    for stop, kept in ((third, True), (second_peak + 2, False)):
+        # cut before the third reversal: the rudder is held from the second to the end
+        figures = zigzag_figures(Trajectory(run.data.iloc[:stop].copy(), name="held"))
+        assert figures["first_overshoot_deg"] == pytest.approx(
+            zigzag_figures(run)["first_overshoot_deg"], rel=1e-12)
+        if kept:
+            assert figures["second_overshoot_deg"] == pytest.approx(full, rel=1e-12)
+        else:  # the heading has hardly turned back from its peak when the record ends
+            assert math.isnan(figures["second_overshoot_deg"])
+
+
+def test_a_record_without_a_rudder_reversal_has_no_overshoot(protocol_runs):
+    figures = zigzag_figures(by_name(protocol_runs)["tc35_stbd"])
+    assert all(math.isnan(value) for value in figures.values())
+
+
 def test_zigzag_reverses_rudder_at_check_angle(protocol_runs):
     run = by_name(protocol_runs)["zz20_20"]
     cmd = np.sign(run["delta_c"])
