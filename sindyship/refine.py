@@ -155,6 +155,10 @@ def _check_arguments(model, records, max_evaluations, segment_s, prior_weight) -
 def _refused_validation(check: dict) -> str:
     """Why the refinement was refused: a divergence first (the mean distances of a diverged
     flight cover only the time before it, and can read as closer), else the distances."""
+    if check.get("half_refused"):
+        return (f"refined on every other record ({', '.join(check['refined_on'])}), the "
+                f"refinement was refused there ({check['half_refused']}), so it cannot be shown "
+                "to carry over to the others; the fitted coefficients are kept")
     if check["diverged"]:
         return ("refined on half of the records, the model diverged on "
                 f"{', '.join(check['diverged'])} of the other half, which the fit flies longer "

@@ -102,11 +102,18 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
     :func:`sindyship.evaluation.evaluate` flies them, on the refinement's grid:
     :func:`flown_whole`) closer than its fit on them alone does (geometric mean of the mean
     distances over the windows both cover below :data:`VALIDATION_RATIO`, and no new
-    divergence)."""
+    divergence).  Where the refinement on every other record is itself refused or moves
+    nothing (``half_refused`` says why), it cannot be shown to carry over: not accepted."""
     ordered = sorted(records, key=lambda record: record.name)
     fitted_on, flown = ordered[0::2], ordered[1::2]
     half_fit = fitted_again(model, fitted_on)
     half = refined_on(half_fit, fitted_on)
+    names = {"refined_on": [r.name for r in fitted_on], "flown": [r.name for r in flown]}
+    done = half.info.get("refined", {})
+    if done.get("largest_change", True) is None:  # it kept the fitted coefficients
+        reason = str(done.get("stopped", "")).removesuffix("; the fitted coefficients are kept")
+        return {**names, "ratio": 1.0, "accepted": False, "why": "not refined there",
+                "diverged": [], "half_refused": reason}
     ratios, worse = [], []
     for (b, record), (a, _) in zip(*flown_whole([half_fit, half], flown), strict=True):
         if b is None:  # fewer than two samples from its flight start: nothing to compare
@@ -120,8 +127,8 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
     accepted = not worse and ratio < VALIDATION_RATIO
     why = (f"{', '.join(worse)} diverged" if worse else
            "no closer" if not accepted else "closer")
-    return {"refined_on": [r.name for r in fitted_on], "flown": [r.name for r in flown],
-            "ratio": ratio, "accepted": accepted, "why": why, "diverged": worse}
+    return {**names, "ratio": ratio, "accepted": accepted, "why": why, "diverged": worse,
+            "half_refused": None}
 
 
 def flown_whole(models: Sequence[AbkowitzModel], records) -> list[list[tuple]]:

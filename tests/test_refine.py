@@ -425,6 +425,23 @@ def four(kcs):
                                Manoeuvre("turning-circle", rudder=25, duration=400)])
 
 
+def test_a_refinement_refused_on_half_the_records_is_said_to_be_so(four, kcs, monkeypatch):
+    """Where the refinement on every other record is itself refused (here: it would lose a
+    hard-over turn), the check says so instead of comparing the fit with itself."""
+    refining = importlib.import_module("sindyship.refine")  # the module, not the function
+    monkeypatch.setattr(refining, "turns_kept",
+                        lambda fitted, refined, records: "diverges in a hard-over turn to port")
+    prior = fit(four, kcs, library="abkowitz-vr", optimizer="prior")
+    report = refine(prior, four, max_evaluations=4).info["refined"]
+    check = report["validation"]
+    assert check["half_refused"] == "the refined model diverges in a hard-over turn to port"
+    assert not check["accepted"] and report["refused_validation"]
+    assert report["stopped"] == (
+        "refined on every other record (tc25_port, zz10_10), the refinement was refused there "
+        "(the refined model diverges in a hard-over turn to port), so it cannot be shown to "
+        "carry over to the others; the fitted coefficients are kept")
+
+
 def test_a_refinement_that_does_not_carry_over_keeps_the_fit(four, kcs, monkeypatch, capsys):
     """Fitted and refined on every other record in the order of their names, the model flies
     the others, whatever order the records come in; a refinement that does not fly them

@@ -330,6 +330,8 @@ def _refined(model, records, args, n_jobs=1):
     done = refined.info["refined"]
     if done["refused_unstable"]:
         progress(f"not refined: {done['stopped']} (the prior fit's stability requirement).")
+    elif done.get("refused_validation") and done["validation"].get("half_refused"):
+        progress(f"not refined: {done['stopped']}.")
     elif done.get("refused_validation"):
         progress(f"not refined: {done['stopped']}: the records' flights would be matched by "
                  "terms they do not pin down.")
