@@ -608,3 +608,29 @@ def test_fit_flies_its_training_records_and_names_those_it_misses(tmp_path, reco
             evaluated[name]["mean_distance_L"], rel=1e-9, nan_ok=True)
     code, _, err = run_sindyship("fit", *data, "--ship", "kcs", "--out", tmp_path / "p.json")
     assert code == 0 and "note: the model diverges on" not in err, err  # the prior flies them
+
+
+def test_an_unstable_refined_prior_fit_is_not_told_to_refine_a_prior_fit(monkeypatch, capsys):
+    """A prior fit that its prior could not make stable in straight running (a course-unstable
+    ship) and whose refinement is kept: the warning says it started unstable, and does not
+    send the user to the prior fit it already is."""
+    import importlib
+    from types import SimpleNamespace
+
+    from sindyship.cli.fit import _refined
+
+    done = {"refused_unstable": False, "refused_validation": False, "refused_turning": None,
+            "cost_before": 1.0, "cost_after": 0.5, "flight_rms_before": 0.2,
+            "flight_rms_after": 0.1, "evaluations": 9, "jacobians": 8, "converged": True,
+            "stopped": "the cost stopped falling", "straight_run_stable": False,
+            "largest_change": {"coefficient": "N[r]", "relative": 0.1},
+            "force_change": {"X": 0.01, "Y": 0.02, "N": 0.03}, "validation": {}}
+    args = SimpleNamespace(refine=10, segment=None, refine_weight=None)
+    refining = importlib.import_module("sindyship.refine")
+    for info, says in (({"refined": done, "straight_run": {"stable": False}}, "as the prior fit"),
+                       ({"refined": done}, "refine a --optimizer prior fit")):
+        monkeypatch.setattr(refining, "refine", lambda *a, info=info, **k: SimpleNamespace(
+            info=info))
+        _refined(None, [], args)
+        warning = capsys.readouterr().err.splitlines()[-1]
+        assert warning.startswith("warning: the refined model is unstable") and says in warning
