@@ -413,6 +413,9 @@ def _check_required(columns: list[Column], frame: pd.DataFrame, source: str) -> 
             "a measured trajectory; give a trajectory record here, and captive tests where a "
             "command takes them (sindyship forces MODEL CAPTIVE.csv)."
         )
+    if str(source).lower().endswith(".dat"):  # the MARIN files' own layout
+        hint = (" (a MARIN .dat file is made into measurement CSVs by python3 -m "
+                "sindyship.marin OUT --data FOLDER)")
     noun = "column" if len(missing) == 1 else "columns"
     raise SindyshipInputError(
         f"{source}: missing {noun} {', '.join(missing)}{hint}; a measurement needs the "

@@ -596,3 +596,12 @@ def test_frame_is_not_modified():
     before = frame.copy()
     trajectory_from_frame(frame)
     pd.testing.assert_frame_equal(frame, before)
+
+
+def test_a_marin_dat_file_given_as_a_record_is_pointed_to_its_converter(tmp_path):
+    raw = tmp_path / "MARIN_FREE_KVLCC2_zz_10_m.dat"
+    raw.write_text("time,heading\n0,1\n1,2\n", encoding="utf-8")
+    with pytest.raises(SindyshipInputError, match=r"missing columns .*\(a MARIN \.dat file is "
+                                                  r"made into measurement CSVs by python3 -m "
+                                                  r"sindyship\.marin OUT --data FOLDER\)"):
+        read_csv(raw)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from cli_in_process import run_sindyship
@@ -261,3 +263,17 @@ def test_an_identification_ship_scales_and_round_trips_through_its_file(own_ship
         path = tmp_path / f"{each.name}.toml"
         path.write_text(ship_to_toml(each), encoding="utf-8")
         assert load_ship(path) == each
+
+
+def test_a_ship_file_named_without_its_suffix_is_pointed_at(tmp_path, monkeypatch):
+    import sindyship
+
+    builtin = Path(sindyship.__file__).parent / "ships" / "kcs.toml"
+    (tmp_path / "mine.toml").write_text(builtin.read_text(encoding="utf-8"), encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SindyshipInputError, match=r"^mine: no such ship file; did you mean "
+                                                  r"mine\.toml\?$"):
+        load_ship("mine")
+    with pytest.raises(SindyshipInputError, match="use a built-in ship"):
+        load_ship("other")  # nothing close: the general advice
+    assert load_ship("mine.toml").L == load_ship("kcs").L
