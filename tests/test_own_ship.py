@@ -277,3 +277,17 @@ def test_a_ship_file_named_without_its_suffix_is_pointed_at(tmp_path, monkeypatc
     with pytest.raises(SindyshipInputError, match="use a built-in ship"):
         load_ship("other")  # nothing close: the general advice
     assert load_ship("mine.toml").L == load_ship("kcs").L
+
+
+def test_a_misspelt_key_in_mass_is_named_not_read_as_a_missing_one(tmp_path):
+    """A misspelt k_zz in [mass] was refused as '[mass] needs I_zz or k_zz'."""
+    import sindyship
+
+    builtin = Path(sindyship.__file__).parent / "ships" / "kvlcc2.toml"
+    text = builtin.read_text(encoding="utf-8")
+    assert "\nk_zz = 0.25" in text
+    path = tmp_path / "typo.toml"
+    path.write_text(text.replace("\nk_zz = 0.25", "\nkzz = 0.25"), encoding="utf-8")
+    with pytest.raises(SindyshipInputError, match=r"unknown key 'kzz' in \[mass\]; did you mean "
+                                                  r"'k_zz'\? valid keys are I_zz, J_zz, k_zz,"):
+        load_ship(str(path))

@@ -123,18 +123,26 @@ def _check_physics(particulars: Particulars, servo: Servo | None, source: str,
         )
 
 
+def _refuse_unknown_keys(table: dict, names: set[str], section: str, source: str) -> None:
+    """Refuse the first key of ``table`` not in ``names``, naming a close valid one."""
+    import difflib
+
+    unknown = sorted(set(table) - names)
+    if unknown:
+        close = difflib.get_close_matches(unknown[0], sorted(names), n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise SindyshipInputError(
+            f"{source}: unknown key {unknown[0]!r} in [{section}]; {hint}valid keys are "
+            f"{', '.join(sorted(names))}."
+        )
+
+
 def _group(cls: type, table: Any, section: str, source: str) -> Any:
     if not isinstance(table, dict):
         raise SindyshipInputError(
             f"{source}: section [{section}] is missing; copy the layout of the built-in kcs.toml."
         )
-    names = {f.name for f in fields(cls)}
-    unknown = sorted(set(table) - names)
-    if unknown:
-        raise SindyshipInputError(
-            f"{source}: unknown key {unknown[0]!r} in [{section}]; valid keys are "
-            f"{', '.join(sorted(names))}."
-        )
+    _refuse_unknown_keys(table, {f.name for f in fields(cls)}, section, source)
     missing = [f.name for f in fields(cls) if f.name not in table and f.default is MISSING]
     if missing:
         raise SindyshipInputError(
@@ -211,6 +219,9 @@ def _check_top_level(data: dict, source: str) -> None:
 def _mass_properties(data: dict, p: Particulars, source: str) -> MassProperties:
     """[mass] with m from the displacement and I_zz from k_zz when not given (Prime II)."""
     mass_table = dict(data.get("mass") or {})
+    # first: a misspelt k_zz would read as a missing one
+    _refuse_unknown_keys(mass_table, {f.name for f in fields(MassProperties)} | {"k_zz"},
+                         "mass", source)
     k_zz = mass_table.pop("k_zz", None)
     if k_zz is not None:
         k_zz = _finite(k_zz, "[mass] k_zz", source)
