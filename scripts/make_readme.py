@@ -109,13 +109,20 @@ def _marin_default(train, test, ship, settings: dict) -> tuple[dict, dict]:
     ``abkowitz-vr`` (without the cross-flow drag the instantaneous form's library adds): the
     turns' figures (advance, tactical diameter, speed loss) as ``evaluate`` flies and reports
     them (from the rudder execute of the 1 s records ``python3 -m sindyship.marin`` writes),
-    and what the refinement did; and the turns' recorded figures, as ``evaluate`` reports
-    them."""
+    and what the refinement did, with the mean distance over the whole record; and the turns'
+    recorded figures, as ``evaluate`` reports them, with ``pull_out_s``: how long each record
+    goes on after its rudder last stood at half its largest angle or more."""
+    import numpy as np
+
     from sindyship.evaluation import evaluate
     from sindyship.identify import fit, recommended_library
     from sindyship.refine import refine
 
     out, recorded = {}, {}
+    for record in test:  # how long each turn goes on with the rudder back from hard over
+        rudder = np.abs(record["delta"])
+        last = int(np.flatnonzero(rudder >= 0.5 * rudder.max())[-1])
+        recorded.setdefault("pull_out_s", {})[record.name] = float(record.t[-1] - record.t[last])
     for key, library in (("default", recommended_library(ship.speed_reference)),
                          ("abkowitz-vr", "abkowitz-vr")):
         model = refine(fit(train, ship, library=library, optimizer="prior",
@@ -124,6 +131,7 @@ def _marin_default(train, test, ship, settings: dict) -> tuple[dict, dict]:
         for name, errors in evaluate(model, test).items():
             flown = errors["turn"]["flown"] or {}
             turns[name] = {"diverged_at_s": errors["diverged_at_s"],
+                           "mean_distance_L": errors["mean_distance_L"],
                            **{k: flown.get(k) for k in ("advance_L", "tactical_diameter_L",
                                                         "speed_loss")}}
             side = {"tc_35": "port", "tc_-35": "stbd"}[name]
@@ -394,6 +402,15 @@ def _marin_default_text(m: dict) -> str:
     chosen, polynomial = default["default"], default["abkowitz-vr"]
     kept = ("" if chosen["refined"] else
             f" Its refinement by the zig-zags' flights is refused: {chosen['stopped']}.")
+    flown = [chosen["turns"][name] for name, _ in MARIN_TURNS]
+    if all(turn.get("mean_distance_L") is not None for turn in flown):
+        pull_out = " and ".join(f"{measured['pull_out_s'][name]:.0f}"
+                                for name, _ in MARIN_TURNS)
+        kept += (f" Over the whole records, which end with {pull_out} s of pull-out (the "
+                 "rudder back amidships), the flights lie a mean " + " and ".join(
+                     f"{turn['mean_distance_L']:.2f} L" for turn in flown)
+                 + " from the measured tracks (port, starboard; `sindyship evaluate` prints "
+                 "it).")
     return (" The default fit (`sindyship fit --derivative savgol --window 21`: the prior on "
             f"`{chosen['library']}`, the recommended library in the {chosen['speed']} speed "
             "form the `kvlcc2` ship file names, with cross-flow drag) flies, as advance / tactical "

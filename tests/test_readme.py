@@ -320,6 +320,8 @@ def test_the_marin_block_flies_the_turns_the_readme_states(tmp_path, monkeypatch
     measured = NUMBERS["marin"]["measured_turns"]
     for name, side in (("tc_35", "port"), ("tc_-35", "stbd")):
         assert turns[name]["completed"], name
+        assert turns[name]["mean_distance_L"] == pytest.approx(  # over the whole record
+            stated[name]["mean_distance_L"], rel=1e-3)
         figures = turns[name]["turn"]
         for key in ("advance_L", "tactical_diameter_L", "speed_loss"):
             flown, recorded = figures["flown"][key], figures["recorded"][key]
