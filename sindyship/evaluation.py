@@ -202,13 +202,15 @@ def check_recorded_channels(model, records: Sequence[Trajectory]) -> None:
 LISTED_RECORDS = 5
 
 
-#: The figures of a turning circle :func:`evaluate` reports (IMO MSC.137(76) and speed loss).
-TURN_FIGURES = ("advance_L", "tactical_diameter_L", "speed_loss")
+#: The figures of a turning circle :func:`evaluate` reports (IMO MSC.137(76), the steady
+#: diameter, which shows the steady yaw rate, and the speed loss).
+TURN_FIGURES = ("advance_L", "tactical_diameter_L", "steady_diameter_L", "speed_loss")
 
 
 def turn_figures(flown: Trajectory, recorded: Trajectory, L: float) -> dict:
-    """A turn's side, advance and tactical diameter [L] and speed loss (1 - steady U /
-    approach U), flown and recorded, both from the flight's first sample, the rudder execute
+    """A turn's side, advance, tactical and steady diameter [L] (the steady one needs a turn
+    and a half with the rudder held) and speed loss (1 - steady U / approach U), flown and
+    recorded, both from the flight's first sample, the rudder execute
     (:func:`sindyship.manoeuvres.turning_figures`); None where the flight diverged or the
     turn never reached the heading change a figure needs.  A flight that turns to the other
     side than the record has no figures to compare (``"flown"`` holds its side alone).

@@ -79,7 +79,7 @@ def _turn_line(turn: dict) -> str:
     side = sides[1] or sides[0]
     return _figures_line("turn" + (f" to {side}" if side else ""), turn, (
         ("advance", "advance_L", " L", 2), ("tactical diameter", "tactical_diameter_L", " L", 2),
-        ("speed loss", "speed_loss", "", 2)))
+        ("steady diameter", "steady_diameter_L", " L", 2), ("speed loss", "speed_loss", "", 2)))
 
 
 def _figures_line(what: str, figures: dict, rows) -> str:

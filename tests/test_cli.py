@@ -147,12 +147,15 @@ def test_fit_then_evaluate_json(records, tmp_path):
     assert errors["zz20"]["diverged_at_s"] is None
     # a turn's figures, flown and recorded: a training record's agree closely
     turn = errors["tc35"]["turn"]
-    assert set(turn["flown"]) == {"side", "advance_L", "tactical_diameter_L", "speed_loss"}
+    assert set(turn["flown"]) == {"side", "advance_L", "tactical_diameter_L",
+                                  "steady_diameter_L", "speed_loss"}
     assert turn["flown"]["side"] == turn["recorded"]["side"] == "starboard"
     for key, recorded in turn["recorded"].items():
         if key != "side":
             assert turn["flown"][key] == pytest.approx(recorded, abs=0.05), key
     assert 2.5 < turn["recorded"]["tactical_diameter_L"] < 4.0
+    # the steady circle is smaller than the tactical diameter (the turn tightens as it slows)
+    assert 2.0 < turn["recorded"]["steady_diameter_L"] < turn["recorded"]["tactical_diameter_L"]
     assert "turn" not in errors["zz20"]
     # a zig-zag's overshoots and period, flown and recorded: a training record's agree closely
     zigzag = errors["zz20"]["zigzag"]
@@ -268,7 +271,7 @@ def test_the_evaluation_report_names_where_a_flight_started_and_a_divergence():
         "tc_35: mean 0.2500 L, max 1.5000 L (replaying its commanded rudder through the servo "
         "from its execute at t = 214.2 s)",
         "  turn to port flown: advance 3.01 L (recorded 3.02 L), tactical diameter 3.28 L "
-        "(recorded n/a), speed loss 0.56 (recorded 0.64)",
+        "(recorded n/a), steady diameter n/a (recorded n/a), speed loss 0.56 (recorded 0.64)",
         "tc_-35: mean 4.0000 L, max 8.0000 L (replaying its recorded rudder angle from t = 3 s)",
         "  turn flown to port, recorded to starboard: no figures to compare",
         "zz_20: FAILED: diverged at 401 s; before it mean 3.0000 L, max 9.0000 L (flown closed "
