@@ -157,8 +157,9 @@ def _refused_validation(check: dict) -> str:
     flight cover only the time before it, and can read as closer), else the distances."""
     if check.get("half_refused"):
         return (f"refined on every other record ({', '.join(check['refined_on'])}), the "
-                f"refinement was refused there ({check['half_refused']}), so it cannot be shown "
-                "to carry over to the others; the fitted coefficients are kept")
+                f"refinement kept the fitted coefficients there ({check['half_refused']}), so "
+                "it cannot be shown to carry over to the others; the fitted coefficients are "
+                "kept")
     if check["diverged"]:
         return ("refined on half of the records, the model diverged on "
                 f"{', '.join(check['diverged'])} of the other half, which the fit flies longer "

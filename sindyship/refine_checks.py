@@ -102,8 +102,9 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
     :func:`sindyship.evaluation.evaluate` flies them, on the refinement's grid:
     :func:`flown_whole`) closer than its fit on them alone does (geometric mean of the mean
     distances over the windows both cover below :data:`VALIDATION_RATIO`, and no new
-    divergence).  Where the refinement on every other record is itself refused or moves
-    nothing (``half_refused`` says why), it cannot be shown to carry over: not accepted."""
+    divergence).  Where the refinement on every other record keeps the fitted coefficients
+    (refused there, or no step lowered the cost: ``half_refused`` says why), it cannot be
+    shown to carry over: not accepted."""
     ordered = sorted(records, key=lambda record: record.name)
     fitted_on, flown = ordered[0::2], ordered[1::2]
     half_fit = fitted_again(model, fitted_on)
