@@ -480,10 +480,12 @@ def zigzag_events(traj: Trajectory) -> dict:
     """Rudder reversals, heading peaks and overshoots of a zig-zag record.
 
     The overshoot is the heading excursion beyond the heading at each rudder reversal (the
-    check angle), up to the next reversal; after the last reversal, up to the end of the
-    record once the heading has turned back from its peak there (by
-    :data:`OVERSHOOT_TURN_BACK_DEG` and a tenth of the excursion: a trial that ends the
-    zig-zag with the rudder held, as the MARIN 10/10 zig-zags do, keeps its second overshoot).
+    check angle), up to the next reversal; after the last reversal to the other side, up to
+    the end of the record once the heading has gone on past the reversal's heading and turned
+    back from its peak (each by more than :data:`OVERSHOOT_TURN_BACK_DEG`, the turn back also
+    by a tenth of the excursion): a record that ends before the next reversal, as the MARIN
+    10/10 zig-zags do, keeps its second overshoot, and one whose rudder goes back amidships
+    gets none there.
 
     Returns
     -------
@@ -505,9 +507,10 @@ def zigzag_events(traj: Trajectory) -> dict:
         turning = psi[a:b] if sign[a - 1] > 0 else -psi[a:b]  # the overshoot's way up
         peak = int(np.argmax(turning))
         excursion = float(turning[peak] - turning[0])
-        if b == len(psi) and turning[peak] - turning[-1] < max(OVERSHOOT_TURN_BACK_DEG,
-                                                                0.1 * excursion):
-            break  # the record ends before the heading turns back: no overshoot yet
+        if b == len(psi) and (sign[a] == 0 or excursion <= OVERSHOOT_TURN_BACK_DEG
+                              or turning[peak] - turning[-1] < max(OVERSHOOT_TURN_BACK_DEG,
+                                                                   0.1 * excursion)):
+            break  # the rudder back amidships, or the record ends before the heading turns
         peaks.append(a + peak)
         overshoots.append(excursion)
     return {"reversals": reversals, "peaks": np.array(peaks, dtype=int),

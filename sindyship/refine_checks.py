@@ -113,7 +113,7 @@ def carries_over(model: AbkowitzModel, records, refined_on) -> dict:
     done = half.info.get("refined", {})
     if done.get("largest_change", True) is None:  # it kept the fitted coefficients
         reason = str(done.get("stopped", "")).removesuffix("; the fitted coefficients are kept")
-        return {**names, "ratio": 1.0, "accepted": False, "why": "not refined there",
+        return {**names, "ratio": None, "accepted": False, "why": "not refined there",
                 "diverged": [], "half_refused": reason}
     ratios, worse = [], []
     for (b, record), (a, _) in zip(*flown_whole([half_fit, half], flown), strict=True):

@@ -159,7 +159,9 @@ class ShootingProblem:
         differences: u and v over U0, r over U0/L, x and y over L, psi in radians)."""
         stage = "whole flights" if self.segment_s is None else f"{self.segment_s:.4g} s segments"
         last, self.reported_cost = self.reported_cost, cost
-        fall = "" if not last else f" ({100.0 * (last - cost) / last:.2g} % lower)"
+        percent = 100.0 * (last - cost) / last if last else None
+        fall = "" if percent is None else (f" ({percent:.2f} % lower)" if percent >= 0.01
+                                            else f" ({percent:.1e} % lower)")
         print(f"{label} ({stage}): step {step}, cost {cost:.6g}{fall}, flight error "
               f"{self.flight_rms:.4g} (rms, non-dimensional)", file=sys.stderr, flush=True)
 

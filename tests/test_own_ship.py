@@ -276,6 +276,9 @@ def test_a_ship_file_named_without_its_suffix_is_pointed_at(tmp_path, monkeypatc
         load_ship("mine")
     with pytest.raises(SindyshipInputError, match="use a built-in ship"):
         load_ship("other")  # nothing close: the general advice
+    for folder in (".", "/"):  # a path without a name has no .toml beside it
+        with pytest.raises(SindyshipInputError, match="no such ship file; use a built-in"):
+            load_ship(folder)
     assert load_ship("mine.toml").L == load_ship("kcs").L
 
 

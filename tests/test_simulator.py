@@ -89,6 +89,27 @@ def test_a_record_without_a_rudder_reversal_has_no_overshoot(protocol_runs):
     assert all(math.isnan(value) for value in figures.values())
 
 
+def test_no_overshoot_is_counted_after_the_rudder_goes_back_amidships(protocol_runs):
+    """A zig-zag whose rudder goes to 0 at its second reversal has no second overshoot (the
+    heading then runs on with no rudder), and a leg whose heading never passes the heading
+    at its reversal has none either."""
+    from sindyship.manoeuvres import zigzag_events
+    from sindyship.trajectory import Trajectory
+
+    run = by_name(protocol_runs)["zz10_10"]
+    second = zigzag_events(run)["reversals"][1]
+    data = run.data.iloc[:second + 400].copy()
+    for column in ("delta", "delta_c"):
+        data.loc[data.index[second:], column] = 0.0
+    figures = zigzag_figures(Trajectory(data, name="amidships"))
+    assert math.isfinite(figures["first_overshoot_deg"])
+    assert math.isnan(figures["second_overshoot_deg"])
+    turn = by_name(protocol_runs)["tc35_stbd"].data.copy()  # a small counter-rudder first
+    turn.loc[turn.index[:3], ["delta", "delta_c"]] = -0.01
+    turn.loc[turn.index[3:20], ["delta", "delta_c"]] = 0.0
+    assert math.isnan(zigzag_figures(Trajectory(turn, name="turn"))["first_overshoot_deg"])
+
+
 def test_zigzag_reverses_rudder_at_check_angle(protocol_runs):
     run = by_name(protocol_runs)["zz20_20"]
     cmd = np.sign(run["delta_c"])

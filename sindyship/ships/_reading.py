@@ -579,7 +579,7 @@ def load_ship(name_or_path: str | Path) -> Ship:
             if text_name.lower() in BUILTIN_SHIPS:
                 raise SindyshipInputError(f"there is no ship named {text_name!r}; the built-in "
                                           f"ship is {text_name.lower()!r} (lower case).")
-            if path.suffix == "" and path.with_suffix(".toml").is_file():
+            if path.name and path.suffix == "" and path.with_suffix(".toml").is_file():
                 raise SindyshipInputError(f"{text_name}: no such ship file; did you mean "
                                           f"{path.with_suffix('.toml')}?")
             raise SindyshipInputError(
