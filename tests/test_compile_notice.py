@@ -62,4 +62,3 @@ def test_reproduce_says_it_compiles_before_its_first_step(monkeypatch):
     reproduce.run(None, methods=("ls",), figures=False, diagnose_rounds=0,
                   refine_evaluations=0, progress=lines.append)
     assert not any("compiles" in line for line in lines)
-
