@@ -507,7 +507,8 @@ def zigzag_events(traj: Trajectory) -> dict:
         turning = psi[a:b] if sign[a - 1] > 0 else -psi[a:b]  # the overshoot's way up
         peak = int(np.argmax(turning))
         excursion = float(turning[peak] - turning[0])
-        if b == len(psi) and (sign[a] == 0 or excursion <= OVERSHOOT_TURN_BACK_DEG
+        if b == len(psi) and (not np.any(sign[a:b] == -sign[a - 1])  # never to the other side
+                              or excursion <= OVERSHOOT_TURN_BACK_DEG
                               or turning[peak] - turning[-1] < max(OVERSHOOT_TURN_BACK_DEG,
                                                                    0.1 * excursion)):
             break  # the rudder back amidships, or the record ends before the heading turns

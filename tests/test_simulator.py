@@ -104,6 +104,12 @@ def test_no_overshoot_is_counted_after_the_rudder_goes_back_amidships(protocol_r
     figures = zigzag_figures(Trajectory(data, name="amidships"))
     assert math.isfinite(figures["first_overshoot_deg"])
     assert math.isnan(figures["second_overshoot_deg"])
+    # a rudder that passes through exactly 0 on its way to the other side still reverses
+    third = zigzag_events(run)["reversals"][2]
+    data = run.data.iloc[:third].copy()
+    data.loc[data.index[second], ["delta", "delta_c"]] = 0.0
+    passed = zigzag_figures(Trajectory(data, name="through zero"))["second_overshoot_deg"]
+    assert passed == pytest.approx(zigzag_figures(run)["second_overshoot_deg"], abs=0.2)
     turn = by_name(protocol_runs)["tc35_stbd"].data.copy()  # a small counter-rudder first
     turn.loc[turn.index[:3], ["delta", "delta_c"]] = -0.01
     turn.loc[turn.index[3:20], ["delta", "delta_c"]] = 0.0
