@@ -89,6 +89,22 @@ def best(f, repeat):
     return times
 """
 
+#: ``diagnose`` on the protocol's training records with OPTIONS (a checkout without an option
+#: runs its default).
+_DIAGNOSE_PROTOCOL = _BEST_OF + """
+import inspect
+from sindyship.diagnose import diagnose
+from sindyship.manoeuvres import fly, protocol_manoeuvres
+from sindyship.mmg import MMGModel
+from sindyship.ships import load_ship
+ship = load_ship("kcs")
+train = fly(MMGModel(ship), protocol_manoeuvres()["train"])
+known = inspect.signature(diagnose).parameters
+options = {key: value for key, value in OPTIONS.items() if key in known}
+print(json.dumps({"times": best(lambda: diagnose(train, ship, **options), int(sys.argv[1])),
+                  "samples": sum(r.n_samples for r in train), "options": options}))
+"""
+
 SNIPPETS = {
     "protocol_flights": _BEST_OF + """
 from sindyship.manoeuvres import fly, protocol_manoeuvres
@@ -115,29 +131,9 @@ apart = max(float(np.nanmax(np.hypot(a["x"] - b["x"], a["y"] - b["y"]))) / ship.
             for a, b in zip(fly(mmg, manoeuvres), [fly_scalar(mmg, m) for m in manoeuvres]))
 print(json.dumps({"times": times, "rtol": RTOL, "largest_distance_L": apart}))
 """,
-    "diagnose_protocol": _BEST_OF + """
-from sindyship.diagnose import diagnose
-from sindyship.manoeuvres import fly, protocol_manoeuvres
-from sindyship.mmg import MMGModel
-from sindyship.ships import load_ship
-ship = load_ship("kcs")
-train = fly(MMGModel(ship), protocol_manoeuvres()["train"])
-print(json.dumps({"times": best(lambda: diagnose(train, ship), int(sys.argv[1])),
-                  "samples": sum(r.n_samples for r in train)}))
-""",
-    "diagnose_protocol_unchecked": _BEST_OF + """
-import inspect
-from sindyship.diagnose import diagnose
-from sindyship.manoeuvres import fly, protocol_manoeuvres
-from sindyship.mmg import MMGModel
-from sindyship.ships import load_ship
-ship = load_ship("kcs")
-train = fly(MMGModel(ship), protocol_manoeuvres()["train"])
-options = {"check_command": False} if "check_command" in inspect.signature(diagnose).parameters \
-    else {}
-print(json.dumps({"times": best(lambda: diagnose(train, ship, **options), int(sys.argv[1])),
-                  "samples": sum(r.n_samples for r in train), "options": options}))
-""",
+    "diagnose_protocol": _DIAGNOSE_PROTOCOL.replace("OPTIONS", "{}"),
+    "diagnose_protocol_unchecked": _DIAGNOSE_PROTOCOL.replace("OPTIONS",
+                                                              '{"check_command": False}'),
     "diagnose_10hz": _BEST_OF + """
 from sindyship.diagnose import diagnose
 from sindyship.marin import MARIN_FILES, default_marin_dir, read_marin

@@ -360,13 +360,13 @@ def _refined(model, records, args, n_jobs=1):
             and not done.get("refused_turning") and not done.get("refused_validation"):
         progress(f"note: the refinement stopped before it converged ({done['stopped']}); a "
                  "larger --refine lets it finish.")
-    if not done["straight_run_stable"] and done["largest_change"] is not None \
-            and "straight_run" in refined.info:  # a prior fit its prior could not make stable
+    moved_unstable = not done["straight_run_stable"] and done["largest_change"] is not None
+    if moved_unstable and "straight_run" in refined.info:  # a prior fit its prior left unstable
         progress("warning: the refined model is unstable in straight running, as the prior fit "
                  "it started from is, so a disturbance grows in its flights (as it does for a "
                  "course-unstable ship, which large tankers often are); fly it on records it was "
                  "not refined on.")
-    elif not done["straight_run_stable"] and done["largest_change"] is not None:
+    elif moved_unstable:
         progress("warning: the refined model is unstable in straight running, so a disturbance "
                  "grows in its flights; refine a --optimizer prior fit, which starts stable, "
                  "and fly it on records it was not refined on.")

@@ -125,8 +125,6 @@ def _check_physics(particulars: Particulars, servo: Servo | None, source: str,
 
 def _refuse_unknown_keys(table: dict, names: set[str], section: str, source: str) -> None:
     """Refuse the first key of ``table`` not in ``names``, naming a close valid one."""
-    import difflib
-
     unknown = sorted(set(table) - names)
     if unknown:
         close = difflib.get_close_matches(unknown[0], sorted(names), n=1)
