@@ -15,6 +15,15 @@ Prints and saves ``benchmarks/results/plausibility.json``:
     The same KCS records (noise level 1) spoiled one way each (psi in degrees under a bare
     header, psi negated, earth-fixed u and v, time in milliseconds, knots under a m/s header,
     v negated): how many are refused, by which check, and the statistic's range.
+``jumps``
+    The ``jumps`` note (a note, never a refusal): the good records above it would name
+    (``false_notes``, each group with its ship), with the protocol also sampled every 0.25, 0.5
+    and 0.95 L/U0 and the simulated campaign of trials from rest
+    (:func:`sindyship.campaign.campaign_trials`, ``counted``); the MARIN records it names with
+    the full-scale ship of :func:`sindyship.marin.full_scale_ship`, on their own grid and on
+    the README's 1 s grid (``tc_-35`` ends with v changing 2.4 m/s in 2 s); and how many of the KCS
+    records at noise level 1 it finds spoilt with one sample of v moved by 0.3 U0 (``spike``)
+    or with v ramped by 0.3 U0 over 0.05 L/U0 from the middle on (``ramp``).
 
 ``python benchmarks/bench_plausibility.py --quick`` runs one seed and two noise levels.
 """
@@ -31,17 +40,20 @@ from pathlib import Path
 
 import numpy as np
 
+from sindyship.campaign import campaign_trials, fly_trials
 from sindyship.effects import add_noise, parse_effects, simulate_with_effects
 from sindyship.errors import SindyshipInputError
 from sindyship.manoeuvres import fly, protocol_manoeuvres
-from sindyship.marin import MARIN_FILES, default_marin_dir, read_marin
+from sindyship.marin import MARIN_FILES, default_marin_dir, full_scale_ship, read_marin
 from sindyship.measurements import trajectory_from_frame
 from sindyship.mmg import MMGModel
-from sindyship.plausibility import CHECKS, frame_misfit, heading_gain
+from sindyship.plausibility import CHECKS, frame_misfit, heading_gain, sample_jumps
 from sindyship.ships import load_ship
 from sindyship.trajectory import Trajectory
 
 RESULTS = Path(__file__).resolve().parent / "results" / "plausibility.json"
+#: The coarser grids [L/U0] the protocol is sampled on for the ``jumps`` note.
+COARSE = (0.25, 0.5, 0.95)
 
 
 def noisy(record: Trajectory, level: float, seed: int) -> Trajectory:
@@ -98,6 +110,24 @@ def summarise(name: str, records, ship) -> dict:
     return out
 
 
+def noted(records, ship) -> list[str]:
+    """The names of the records the ``jumps`` note would name samples of."""
+    return [record.name for record in records if sample_jumps(record.data, ship)]
+
+
+def glitched(record: Trajectory, ship, kind: str) -> Trajectory:
+    """The record with one sample of v moved by 0.3 U0 (``spike``), or v ramped by 0.3 U0
+    over 0.05 L/U0 from the middle on (``ramp``)."""
+    t, v = record.t, record["v"].copy()
+    middle = len(t) // 2
+    if kind == "spike":
+        v[middle] += 0.3 * ship.U0
+    else:
+        v[middle:] += 0.3 * ship.U0 * np.clip((t[middle:] - t[middle])
+                                              / (0.05 * ship.time_scale), 0.0, 1.0)
+    return Trajectory(record.data.assign(v=v), record.name)
+
+
 def spoilt(record: Trajectory) -> dict[str, object]:
     """The spoiled copies of a record, each as a frame with the headers a user would write."""
     data = record.data
@@ -142,6 +172,27 @@ def main() -> None:
     if folder is not None:
         marin = [read_marin(folder / name) for name in MARIN_FILES.values()]
         good["marin_full_scale"] = summarise("marin_full_scale", marin, None)
+    coarse = [Trajectory(r.data.iloc[::max(1, int(share * kcs.time_scale // r.dt))]
+                         .reset_index(drop=True), f"{r.name} every {share} L/U0")
+              for r in clean for share in COARSE]
+    trials = fly_trials(kvlcc2, [trial for runs in campaign_trials(0).values() for trial in runs])
+    jumps = {"false_notes": {
+        "kcs_protocol_noise": noted(grid, kcs), "kcs_current_1m_s": noted(current, kcs),
+        "kcs_protocol_coarse": noted(coarse, kcs), "kvlcc2_model": noted(model, kvlcc2),
+        "kvlcc2_campaign": noted(trials, kvlcc2)},
+        "counted": {"kcs_protocol_coarse": len(coarse), "kvlcc2_campaign": len(trials)}}
+    if folder is not None:
+        full_scale = full_scale_ship()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the reader's notes: counted here
+            by_second = [trajectory_from_frame(r.data, r.name, resample=1.0) for r in marin]
+        jumps["marin_noted"] = {"own_grid": noted(marin, full_scale),
+                                "1_s_grid": noted(by_second, full_scale)}
+    base_noise = [noisy(r, 1.0, seed) for r in clean for seed in seeds]
+    jumps["found"] = {kind: sum(bool(sample_jumps(glitched(r, kcs, kind).data, kcs))
+                                for r in base_noise) for kind in ("spike", "ramp")}
+    jumps["records"] = len(base_noise)
+    print(f"{'jumps':>22}: {jumps}")
     bad: dict[str, dict] = {}
     base = [noisy(r, 1.0, seed) for r in clean for seed in seeds]
     for kind in spoilt(base[0]):
@@ -163,7 +214,7 @@ def main() -> None:
                      if not np.all(np.isnan(deviations)) else None,
                      "turning_records_min_frame_misfit": float(np.nanmin(misfits))}
         print(f"{kind:>22}: {bad[kind]}")
-    result = {"good": good, "bad": bad, "seeds": seeds, "noise_levels": levels,
+    result = {"good": good, "bad": bad, "jumps": jumps, "seeds": seeds, "noise_levels": levels,
               "seconds": round(time.perf_counter() - began, 1)}
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     RESULTS.write_text(json.dumps(result, indent=2) + "\n")

@@ -77,6 +77,19 @@ The checks, in the order they run, with their thresholds (module constants) and 
     r' = 0.33 to both sides).  A ship turning to one side is not judged (a turning circle, or
     an unstable ship in its loop with a small rudder), nor a pull-out with the rudder
     amidships, which the yaw does not follow.
+``jumps`` (only with a ship; a note, never a refusal)
+    Notes samples of u or v that change faster than a ship accelerates: a sample whose distance
+    from the running median of ``2 JUMP_NEIGHBOURS + 1`` = 7 samples (mirrored at the ends)
+    exceeds ``JUMP_NOISE`` = 10 times the channel's noise (the robust spread of its steps) and
+    ``JUMP_SPEED`` = 0.1 U0 plus the change an acceleration of ``JUMP_ACCELERATION`` =
+    1 U0^2/L makes in one sample interval; or a change over at most ``JUMP_WINDOW`` = 0.1 L/U0
+    (a ramp) beyond the same bounds over its own time.  Ships accelerate far more slowly: the
+    KCS and KVLCC2 protocols and the simulated trials from rest reach 0.12 to 0.25 U0^2/L, and
+    no good record of ``benchmarks/bench_plausibility.py`` is noted (5 % noise, a current,
+    the protocol sampled every 0.25 to 0.95 L/U0, the simulated trials from rest).  The MARIN
+    35 deg turn to starboard (``tc_-35``) ends with v ramping from -0.1 to -2.48 m/s in its
+    last 2 s (6.6 U0^2/L), which the 1 s grid makes one sample leaping away by 0.28 U0.  The
+    samples are used as recorded, so the note names them and how to leave them out.
 
 Decimal-comma files are recognised by the reader itself (:mod:`sindyship.measurements`).
 """
@@ -89,6 +102,17 @@ from collections.abc import Callable, Iterable, Mapping
 import numpy as np
 
 from sindyship.errors import SindyshipInputError
+from sindyship.jump_checks import (
+    JUMP_ACCELERATION,
+    JUMP_MOST_LAGS,
+    JUMP_NEIGHBOURS,
+    JUMP_NOISE,
+    JUMP_SPEED,
+    JUMP_WINDOW,
+    JumpNote,
+    jump_notes,
+    sample_jumps,
+)
 from sindyship.kinematics_checks import (
     _KNOT,
     FRAME_SEGMENTS,
@@ -111,6 +135,13 @@ __all__ = [
     "CHECKS",
     "FRAME_SEGMENTS",
     "GAP_STEPS",
+    "JUMP_ACCELERATION",
+    "JUMP_MOST_LAGS",
+    "JUMP_NEIGHBOURS",
+    "JUMP_NOISE",
+    "JUMP_SPEED",
+    "JUMP_WINDOW",
+    "JumpNote",
     "FRAME_TOLERANCE",
     "HEADING_GAIN_TOLERANCE",
     "HEADING_MAX_DRIFT",
@@ -131,11 +162,12 @@ __all__ = [
     "heading_gain",
     "resampling_gap_note",
     "resolve_skip",
+    "sample_jumps",
 ]
 
 #: Names of the checks, in the order they run.
 CHECKS = ("motion", "sampling", "heading", "frame", "speed", "revolutions", "forward-speed",
-          "rudder-sign", "rudder-size")
+          "rudder-sign", "rudder-size", "jumps")
 
 MOTION_TOLERANCE = 1e-9
 MAX_STEP = 1.0  # L/U0
@@ -245,6 +277,8 @@ def check_record(
         _check_rudder_sign(data, context)
     if ship is not None and "rudder-size" not in skip:
         _check_rudder_size(data, ship, context)
+    if ship is not None and "jumps" not in skip:
+        notes += jump_notes(data, ship, context)
     return data, notes
 
 

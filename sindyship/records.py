@@ -234,7 +234,17 @@ def read_record(path: str | os.PathLike, *, name: str | None = None, ship=None,
             )
     if ship is not None:
         _check_length(record, ship, path, cut)
-    return record, notes, cut
+    return record, _notes_kept(notes, record), cut
+
+
+def _notes_kept(notes: list[str], record: Trajectory) -> list[str]:
+    """The notes, less those on samples the time range left out (a ``jumps`` note whose
+    samples all lie outside the record kept)."""
+    from .plausibility import JumpNote
+
+    first, last = float(record.t[0]), float(record.t[-1])
+    return [note for note in notes if not isinstance(note, JumpNote)
+            or any(first <= t <= last for t in note.times)]
 
 
 def _check_length(record: Trajectory, ship, path: Path, cut) -> None:

@@ -126,7 +126,7 @@ def test_unknown_check_name_is_refused(zigzag):
     with pytest.raises(SindyshipInputError, match="unknown plausibility check 'speeed'"):
         trajectory_from_frame(zigzag.data, skip_checks=["speeed"])
     assert set(CHECKS) == {"motion", "sampling", "heading", "frame", "speed", "revolutions",
-                           "forward-speed", "rudder-sign", "rudder-size"}
+                           "forward-speed", "rudder-sign", "rudder-size", "jumps"}
 
 
 def test_a_flipped_rudder_sign_is_refused(protocol_runs):
@@ -252,6 +252,98 @@ def test_wrapped_heading_is_unwrapped_with_a_note(protocol_runs, tmp_path):
         record = read_csv(path, ship="kcs")
     np.testing.assert_allclose(record["psi"], turn["psi"], atol=1e-9)
     assert len(record.meta["notes"]) == 1 and "unwrapped" in record.meta["notes"][0]
+
+
+def with_glitch(record: Trajectory, index: int, channel: str = "v",
+                by: float = -5.0) -> Trajectory:
+    """The record with one sample of ``channel`` moved by ``by`` [m/s]."""
+    values = record[channel].copy()
+    values[index] += by
+    return Trajectory(record.data.assign(**{channel: values}), record.name)
+
+
+def test_a_sample_leaping_away_at_the_end_is_noted_with_its_row_and_the_time_to_keep(
+        protocol_runs, tmp_path):
+    """A logging glitch in the last sample (as the MARIN turn to starboard ends): a note that
+    names the row, its time, the size and the time range before it; the record loads as it
+    was."""
+    turn = protocol_runs["train"][1]  # tc35_stbd, sampled every second
+    path = write_csv(with_glitch(turn, -1), tmp_path / "tc.csv")
+    with pytest.warns(PlausibilityNote) as caught:
+        record = read_csv(path, ship="kcs")
+    (note,) = [str(w.message) for w in caught]
+    last = turn.t[-1]
+    assert note.startswith(f"{path}: 'v' at row {turn.n_samples + 1} (counting the header as "
+                           f"row 1), t = {last:.6g} s, changes faster than a ship accelerates, "
+                           "by 5 m/s (0.40 U0) against the neighbouring samples")
+    assert note.endswith(f"so delete that row, or keep the time before it (--time-range "
+                         f"0:{turn.t[-2]:.6g} on the command line); --skip-check jumps "
+                         "(skip_checks=['jumps'] in Python) silences this note.")
+    assert record.meta["notes"] == [note]
+    assert record["v"][-1] == pytest.approx(turn["v"][-1] - 5.0)  # used as recorded
+
+
+def test_leaps_in_the_middle_are_counted_and_a_skipped_check_says_nothing(protocol_runs):
+    zigzag = next(r for r in protocol_runs["train"] if r.name == "zz20_20")
+    record = with_glitch(with_glitch(zigzag, 1000, "u", 4.0), 1500, "v", -3.5)
+    with pytest.warns(PlausibilityNote) as caught:
+        trajectory_from_frame(record.data, "zz", source="zz.csv", ship="kcs")
+    (note,) = [str(w.message) for w in caught]
+    t = zigzag.t
+    assert (f"'u' and 'v' at 2 samples from the row with index label 1000, t = {t[1000]:.6g} "
+            f"s, to the row with index label 1500, t = {t[1500]:.6g} s, change faster than a "
+            "ship accelerates, 'u' by up to 3.98 m/s (0.32 U0)") in note
+    assert "delete those rows; --skip-check" in note  # no time range keeps the others
+    assert loads(Trajectory(record.data, "zz"), ship=None).meta["notes"] == []  # needs a ship
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        skipped = trajectory_from_frame(record.data, "zz", ship="kcs", skip_checks=["jumps"])
+    assert skipped.meta["notes"] == []
+
+
+def test_a_ramp_too_steep_for_a_ship_is_named_from_its_first_sample_to_its_last(protocol_runs,
+                                                                                 kcs):
+    """v ramped by 0.3 U0 over 1.5 s, 0.08 L/U0 (no sample away from its running median: the
+    median follows the ramp), as the MARIN turn to starboard ends on its own grid: 0.2 U0 in
+    the first second, more than the 0.154 U0 allowed."""
+    turn = protocol_runs["train"][1]
+    v = turn["v"].copy()
+    v[2000:] += 0.3 * kcs.U0 * np.clip((turn.t[2000:] - turn.t[2000]) / 1.5, 0.0, 1.0)
+    with pytest.warns(PlausibilityNote) as caught:
+        trajectory_from_frame(turn.data.assign(v=v), "tc", source="tc.csv", ship=kcs,
+                              skip_checks=["frame"])  # v stays moved, off the track
+    (note,) = [str(w.message) for w in caught]
+    t = turn.t
+    assert (f"'v' at 2 samples from the row with index label 2001, t = {t[2001]:.6g} s, to the "
+            f"row with index label 2002, t = {t[2002]:.6g} s, changes faster than a ship "
+            "accelerates, by up to 3.7 m/s (0.30 U0)") in note
+
+
+def test_a_leap_smaller_than_the_noise_or_than_a_ship_accelerates_is_no_glitch(protocol_runs,
+                                                                              kcs):
+    """A leap within JUMP_SPEED and the change a ship's acceleration allows (0.154 U0 sampled
+    every second) is not noted, nor a turn logged every L/U0 (the speed changes 0.1 U0 and more
+    between samples at its start), nor 5 % noise."""
+    turn = protocol_runs["train"][1]
+    loads(with_glitch(turn, -1, by=-0.14 * kcs.U0), ship=kcs)
+    step = int(kcs.time_scale // np.median(np.diff(turn.t)))  # 18 s, under L/U0
+    coarse = Trajectory(turn.data.iloc[::step].reset_index(drop=True), "coarse")
+    assert np.max(np.abs(np.diff(coarse["u"]))) > 0.1 * kcs.U0
+    loads(coarse, ship=kcs)
+    noise = {c: 0.05 * float(np.sqrt(np.mean(turn[c] ** 2))) for c in ("u", "v")}
+    loads(add_noise(turn, noise, seed=3), ship=kcs)
+
+
+def test_a_time_range_that_leaves_the_leap_out_leaves_the_note_out(protocol_runs, kcs,
+                                                                  tmp_path):
+    from sindyship.records import read_record
+
+    turn = protocol_runs["train"][1]
+    path = write_csv(with_glitch(turn, -1), tmp_path / "tc.csv")
+    _, notes, _ = read_record(path, ship=kcs, time_range="all")
+    assert len(notes) == 1 and "faster than a ship accelerates" in notes[0]
+    _, notes, _ = read_record(path, ship=kcs, time_range=(0.0, float(turn.t[-2])))
+    assert notes == []
 
 
 def test_resampling_across_missing_rows_is_noted_once_on_the_command_line(protocol_runs,
