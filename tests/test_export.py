@@ -36,7 +36,7 @@ from sindyship.export import (
     generate_python,
     model_equations,
 )
-from sindyship.flights import flown_part, fly_like_batch
+from sindyship.flights import flown_as, flown_part, fly_like_batch
 from sindyship.library import TermLibrary, load_library
 from sindyship.manoeuvres import Manoeuvre, fly, protocol_manoeuvres
 from sindyship.mmg import MMGModel
@@ -822,3 +822,38 @@ def test_a_delayed_rudder_flies_as_sindyship_flies_it_from_the_state_its_docstri
     leading = TermLibrary("paper-early-rudder", "prime-I", "", terms, delays={"delta_c": -2.0})
     text = equations_text(AbkowitzModel(kcs, leading, base.coefficients), width=400)
     assert "the recorded delta_c leads the physics by 2 s (read 2 s earlier)" in text
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_replay_flies_a_record_of_the_actual_rudder_as_sindyship_flies_it(kcs, tmp_path,
+                                                                          compiled):
+    """A record that holds only the actual rudder (as the MARIN trials) is flown by sindyship
+    with that angle prescribed, bypassing the servo; ``replay`` flies it the same, also where
+    the library delays the rudder (read that much later), and passing the record's rudder to
+    ``simulate`` as a command flies it elsewhere (through the servo's lag)."""
+    if compiled and importlib.util.find_spec("numba") is None:
+        pytest.skip("numba is not installed: the compiled path does not run")
+    base = paper_model(kcs)
+    terms = {dof: [t.text for t in base.library.terms[dof]] for dof in DOFS}
+    (run,) = fly(MMGModel(kcs), [Manoeuvre("random", rudder=20, duration=300, seed=3)])
+    actual_only = Trajectory(run.data.drop(columns="delta_c"), name=run.name)
+    for delays in ({}, {"delta": 3.0}):
+        library = TermLibrary("paper-replayed", "prime-I", "", terms, delays=delays)
+        model = AbkowitzModel(kcs, library, base.coefficients, rudder_signal="actual")
+        sim = load_module(generate_python(model, compiled=compiled),
+                          tmp_path / f"sim_replay{int(compiled)}{len(delays)}.py")
+        (ours,) = fly_like_batch(model, [actual_only])
+        assert flown_as(actual_only)["flown_as"] == "replay-actual"
+        part = flown_part(actual_only)
+        theirs = sim.replay(part.t, part["delta"], part.state()[:, 0])
+        assert theirs.diverged_at is None
+        gap = np.hypot(ours["x"] - theirs.states[3], ours["y"] - theirs.states[4]) / kcs.L
+        assert np.max(gap) < 1e-9, delays
+        late = np.interp(part.t + delays.get("delta", 0.0), part.t, part["delta"])
+        np.testing.assert_allclose(theirs.states[6], late, atol=1e-12)  # the angle, no servo
+    commanded = sim.simulate(part.t, part["delta"], part.state()[:, 0])
+    assert np.max(np.abs(commanded.states[6] - theirs.states[6])) > math.radians(1.0)
+    with pytest.raises(ValueError, match="delta reaches 20 rad, more than a quarter turn"):
+        sim.replay(part.t, np.full(part.t.shape, 20.0))
+    with pytest.raises(ValueError, match=r"delta has shape \(3,\); give one angle per output"):
+        sim.replay(part.t, [0.0, 0.1, 0.2])

@@ -50,8 +50,8 @@ _SECTION = Template('''
 # ---------------------------------------------------------------------------------------------
 # The compiled right-hand side (numba): the arithmetic above as scalar loops over a batch
 # ---------------------------------------------------------------------------------------------
-#: Whether rhs(), simulate() and zigzag() run the numba-compiled functions below; without numba
-#: they run the numpy functions above, which give the same numbers more slowly.
+#: Whether rhs(), simulate(), replay() and zigzag() run the numba-compiled functions below;
+#: without numba they run the numpy functions above, which give the same numbers more slowly.
 COMPILED = numba is not None
 if not COMPILED:
     warnings.warn("numba is not installed: this simulator runs its numpy right-hand side "

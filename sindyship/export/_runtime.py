@@ -186,20 +186,54 @@ def simulate(t, delta_c, state0=None, channels=None, *, step=None, check_diverge
     t = np.asarray(t, dtype=float)
     if callable(delta_c):
         return _fly(FeedbackCommand(delta_c), t, state0, step, check_divergence, channels)
-    angles = np.asarray(delta_c, dtype=float)
+    angles = _read_late(t, {"delta_c": _angles("delta_c", delta_c, t)})["delta_c"]
+    return _fly(StepCommand(t, angles), t, state0, step, check_divergence, channels)
+
+
+def replay(t, delta, state0=None, channels=None, *, step=None, check_divergence=True):
+    \"\"\"Fly the model with its rudder angle prescribed, bypassing the servo: a record's
+    actual rudder angle replayed, as sindyship evaluate flies a record that holds no commanded
+    rudder (a turn from its execute).
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Increasing output times [s]; the first is the initial time.
+    delta : float or array_like of shape (N,)
+        Rudder angle [rad], one value per output time, linear between them (read
+        ``DELAYS["delta"]`` seconds later where the library delays it, as recorded); or a
+        constant.
+    state0 : array_like, shape (7,), optional
+        Initial ``[u, v, r, x, y, psi, delta]`` (SI); default straight ahead at U0.  Its
+        rudder angle is the replayed one at ``t[0]``, whatever it holds.
+    channels, step, check_divergence
+        As for ``simulate``.
+
+    Returns
+    -------
+    Flight
+        Its ``delta_c`` holds the replayed angle at each output time.
+    \"\"\"
+    t = np.asarray(t, dtype=float)
+    angles = _read_late(t, {"delta": _angles("delta", delta, t)})["delta"]
+    return _fly(PrescribedRudder(t, angles), t, state0, step, check_divergence, channels)
+
+
+def _angles(name, values, t):
+    \"\"\"Rudder angles [rad], one per output time (a constant repeated), checked.\"\"\"
+    angles = np.asarray(values, dtype=float)
     if angles.ndim == 0:
         angles = np.full(t.shape, float(angles))
     if angles.shape != t.shape:
         raise ValueError(
-            f"delta_c has shape {angles.shape}; give one angle per output time {t.shape}"
+            f"{name} has shape {angles.shape}; give one angle per output time {t.shape}"
         )
     if not np.all(np.isfinite(angles)):
-        raise ValueError("delta_c must be finite")
+        raise ValueError(f"{name} must be finite")
     if np.max(np.abs(angles), initial=0.0) > 0.5 * math.pi:
-        raise ValueError(f"delta_c reaches {np.max(np.abs(angles)):g} rad, more than a quarter "
+        raise ValueError(f"{name} reaches {np.max(np.abs(angles)):g} rad, more than a quarter "
                          "turn: give the rudder angle in radians (np.radians(degrees))")
-    angles = _read_late(t, {"delta_c": angles})["delta_c"]
-    return _fly(StepCommand(t, angles), t, state0, step, check_divergence, channels)
+    return angles
 
 
 def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, channels=None, *, step=None,
@@ -222,17 +256,18 @@ def zigzag(t, rudder_deg, check_deg, state0=None, first_sign=1, channels=None, *
     channels : mapping of str to array_like of shape (N,), optional
         As for ``simulate``.
 
-    Raises
-    ------
-    ValueError
-        For a rudder angle outside 1 deg to the rudder limit ``DELTA_MAX``, a check angle
-        outside 1 to 180 deg, or a first side other than +1 and -1.
     step, check_divergence
         As for ``simulate``.
 
     Returns
     -------
     Flight
+
+    Raises
+    ------
+    ValueError
+        For a rudder angle outside 1 deg to the rudder limit ``DELTA_MAX``, a check angle
+        outside 1 to 180 deg, or a first side other than +1 and -1.
     \"\"\"
     if first_sign not in (1, -1):
         raise ValueError(f"first_sign is {first_sign!r}; give +1 (first rudder to starboard) "

@@ -243,9 +243,9 @@ def _provenance(model: AbkowitzModel) -> list[str]:
 def _delays_note(delays) -> str:
     """The module docstring's note on the channels a library delays: what ``simulate`` and
     ``zigzag`` do with them, and, for a delayed rudder, which angle ``state0`` takes."""
-    note = (f"Delayed channels (DELAYS): {_delays_words(delays)}.  simulate and zigzag read "
-            "each channel given to them (and simulate a delta_c array) so; rhs takes the "
-            "channels' values at the physics' time.")
+    note = (f"Delayed channels (DELAYS): {_delays_words(delays)}.  simulate, replay and zigzag "
+            "read each channel given to them (and simulate a delta_c array, replay a delta "
+            "array) so; rhs takes the channels' values at the physics' time.")
     if "delta" in delays:  # sindyship starts a flight from the record's state, read so
         note += (f"  Give state0's rudder angle as the record's delta {delays['delta']:g} s "
                  "after t[0].")
@@ -264,7 +264,9 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     15, Prime I, built with sympy's common-subexpression elimination), ``rhs(t, state,
     delta_c)`` (eq. 14 with the protocol's Coriolis terms, the rudder servo of eq. 12-13 and the
     kinematics; state ``[u, v, r, x, y, psi, delta]`` SI, shape (7,) or (7, N)), ``simulate(t,
-    delta_c, state0)`` and ``zigzag(t, rudder_deg, check_deg, state0, first_sign=1)``. The
+    delta_c, state0)``, ``replay(t, delta, state0)`` (the rudder angle itself prescribed, as a
+    record's actual rudder is replayed) and ``zigzag(t, rudder_deg, check_deg, state0,
+    first_sign=1)``. The
     integrator is the one of :mod:`sindyship.simulation` (fixed-step classical RK4 with step
     ``min(0.1, 0.25 T'_R) L / U0``, cubic Hermite outputs, steps split at command changes and at
     zig-zag check-angle crossings, the protocol's divergence rule), so the module flies a model
@@ -273,7 +275,8 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
     With ``compiled=True`` the module also holds the right-hand side and the RK4 step as
     scalar loops over the batch, compiled by numba (``numba.njit``, cached beside the module
     file) where numba can be imported when the module runs, and ``rhs``, ``simulate`` and
-    ``zigzag`` run them (module constant ``COMPILED``); where it cannot, the module warns
+    ``zigzag`` run them (``replay`` runs the compiled right-hand side in the kernel's step;
+    module constant ``COMPILED``); where it cannot, the module warns
     once and runs its numpy functions, which give the same numbers more slowly.
 
     Parameters
@@ -353,7 +356,8 @@ def generate_python(model: AbkowitzModel, *, source_note: str = "",
         "Equations (Deogaonkar et al., eq. 12-15; Prime I with the design speed U0): the mass",
         "matrix times (du'/dt', dv'/dt', dr'/dt') equals the hydrodynamic forces of eq. 15 plus",
         "the Coriolis terms (rigid body plus added mass, with the Munk moment).  The rudder",
-        "follows its command through a first-order servo with rate and angle limits.",
+        "follows its command through a first-order servo with rate and angle limits (replay",
+        "prescribes the rudder angle itself, as a record's actual rudder is replayed).",
         *(["In the library's instantaneous speed form, v and r (and the channels' speeds and",
            "rates, OVER_SPEED) are taken over the instantaneous speed U = sqrt(u^2 + v^2), at",
            "least SPEED_FLOOR U0, and the forces of eq. 15 are multiplied by (U/U0)^2."]
