@@ -42,6 +42,7 @@ _EXPORTS = {
     "refine": "sindyship.refine",
     "make_optimizer": "sindyship.optimizers",
     "evaluate": "sindyship.evaluation",
+    "evaluate_with_flights": "sindyship.evaluation",
     "evaluation_report": "sindyship.flight_reports",
     "compare": "sindyship.diagnose",
     "diagnose": "sindyship.diagnose",

@@ -145,6 +145,14 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
     zig-zag flown closed loop ``zigzag``: its overshoots and period flown and recorded
     (:func:`zigzag_overshoots`).
     """
+    return evaluate_with_flights(model, records, step=step)[0]
+
+
+def evaluate_with_flights(model, records: Sequence[Trajectory], *, step: float | None = None
+                          ) -> tuple[dict, dict[str, tuple[Trajectory, Trajectory]]]:
+    """:func:`evaluate`'s report, and the flights it scored by record name, each beside the
+    part of its record it was flown like and scored on (from its flight start):
+    ``{name: (part, flown)}``, as :func:`sindyship.plotting.plot_comparison` draws them."""
     from .arguments import as_records, check_distinct_names, check_records
     from .model import AbkowitzModel
 
@@ -158,14 +166,15 @@ def evaluate(model, records: Sequence[Trajectory], *, step: float | None = None)
     check_recorded_channels(model, records)
     cut = [flown_part(record) for record in records]
     flown = fly_like_batch(model, cut, step=step)
-    out = {}
+    out, flights = {}, {}
     for rec, short, f in zip(records, cut, flown, strict=True):
         out[rec.name] = {**distance_errors(f, short, model.ship.L), **flown_as(rec)}
         if flight_start(short).kind == "turn":  # read from the part's meta
             out[rec.name]["turn"] = turn_figures(f, short, model.ship.L)
         elif out[rec.name]["flown_as"] == "zigzag":
             out[rec.name]["zigzag"] = zigzag_overshoots(f, short)
-    return out
+        flights[rec.name] = (short, f)
+    return out, flights
 
 
 def check_recorded_channels(model, records: Sequence[Trajectory]) -> None:

@@ -172,6 +172,37 @@ def test_fit_then_evaluate_json(records, tmp_path):
     assert out.strip().splitlines()[-1].startswith("  zig-zag flown: first overshoot ")
 
 
+def test_evaluate_writes_its_report_and_a_figure_per_record_to_a_folder(records, tmp_path):
+    """--out: evaluate.json (the --json document) and compare-<name>.png of the flight against
+    its record; a folder holding anything else is refused before any work, a previous output
+    is replaced."""
+    from PIL import Image
+
+    model = tmp_path / "model.json"
+    assert run_sindyship("fit", records["zz20"], records["tc35"], "--ship", "kcs",
+                         "--optimizer", "ls", "--out", model)[0] == 0
+    out = tmp_path / "evaluation"
+    code, text, err = run_sindyship("evaluate", model, records["zz20"], records["tc35"],
+                                    "--out", out)
+    assert code == 0, err
+    assert f"wrote evaluate.json and 2 figures (compare-<record>.png) to {out}/" in err
+    code, document, _ = run_sindyship("evaluate", model, records["zz20"], records["tc35"],
+                                      "--json")
+    assert json.loads((out / "evaluate.json").read_text()) == json.loads(document)
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [
+        "compare-tc35.png", "compare-zz20.png", "evaluate.json"]
+    with Image.open(out / "compare-tc35.png") as image:
+        assert image.size[0] > 1000 and image.size[1] > 500
+    code, _, _ = run_sindyship("evaluate", model, records["zz20"], "--out", out)
+    assert code == 0 and not (out / "compare-tc35.png").exists()  # replaced as a whole
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "notes.txt").write_text("mine")
+    code, _, err = run_sindyship("evaluate", model, records["zz20"], "--out", other)
+    assert code == 2 and "--out" in err and err.count("\n") == 1
+    assert (other / "notes.txt").read_text() == "mine"
+
+
 def test_evaluate_with_a_record_where_the_model_belongs_says_the_model_comes_first(records):
     code, out, err = run_sindyship("evaluate", records["zz20"], records["tc35"])
     assert code == 2 and out == ""

@@ -14,6 +14,7 @@ from ._common import (
     check_inputs,
     check_simulation_cost,
     emit,
+    progress,
     ship_file,
 )
 from ._records import read_records
@@ -37,10 +38,16 @@ def add_parser(sub) -> None:
     add_resample(p)
     add_record_options(p)
     add_json(p)
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="folder for evaluate.json and a figure per record "
+                   "(compare-<name>.png: track, u, v, r, psi and delta flown against "
+                   "recorded), written aside and put in place at the end; an existing folder "
+                   "is replaced only if it holds an evaluate.json (default: none)")
 
 
 def run(args) -> int:
-    from ..evaluation import evaluate
+    from .._io import check_output
+    from ..evaluation import evaluate_with_flights
     from ..flight_reports import evaluation_report
     from ..model import AbkowitzModel
     from ..records import PARQUET_SUFFIXES, expand_paths
@@ -52,13 +59,18 @@ def run(args) -> int:
             "evaluate MODEL.json DATA.csv...")
     args.data = expand_paths(args.data)
     check_inputs([args.model, *args.data, *ship_file(args.ship)])
+    if args.out is not None:
+        check_output(args.out, inputs=[args.model, *args.data], kind="folder",
+                     label=f"--out {args.out}", replaceable="evaluate.json")
     ship = load_cli_ship(args.ship) if args.ship else None
     model = AbkowitzModel.load(args.model, ship=ship)
     records = read_records(args.data, args.resample, ship=model.ship,
                            skip_checks=args.skip_check, time_range=args.time_range)
     check_simulation_cost(model.ship, max(record.duration for record in records))
-    errors = evaluate(model, records)
+    errors, flights = evaluate_with_flights(model, records)
     _note_speeds(records, errors, model.ship)
+    if args.out is not None:
+        _write_out(args.out, errors, flights, model)
     if args.json:
         emit({"errors": errors})
     else:
@@ -66,13 +78,32 @@ def run(args) -> int:
     return 0
 
 
+def _write_out(out, errors: dict, flights: dict, model) -> None:
+    """evaluate.json and a comparison figure per record, into the folder ``out``."""
+    import json
+
+    from .._io import clean_json, output_folder, save_figure, write_text_atomic
+    from ..evaluation import error_summary
+    from ..plotting import plot_comparison
+    from ..plotting.diagnosis import figure_name
+
+    label = f"{model.library.name} ({model.optimizer['name']})"
+    with output_folder(out) as folder:
+        write_text_atomic(folder / "evaluate.json",
+                          json.dumps(clean_json({"errors": errors}), indent=2) + "\n")
+        for name, (part, flown) in flights.items():
+            summary = error_summary(flown, part, model.ship.L)
+            save_figure(plot_comparison(part, {label: flown}, L=model.ship.L, errors=summary),
+                        folder / figure_name("compare", name))
+    progress(f"wrote evaluate.json and {len(flights)} figure{'s' if len(flights) > 1 else ''} "
+             f"(compare-<record>.png) to {out}/")
+
+
 def _note_speeds(records, errors, ship) -> None:
     """A note on stderr for each record whose flight starts far from the model ship's design
     speed: the model is identified around it, and a record of another ship or at another
     speed is flown without complaint."""
     import numpy as np
-
-    from ._common import progress
 
     for record in records:
         start = errors[record.name].get("start_s")

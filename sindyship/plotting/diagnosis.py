@@ -252,6 +252,17 @@ def _safe(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.+-]+", "_", name) or "record"
 
 
+def figure_name(kind: str, name: str) -> str:
+    """The file name of a record's figure of a kind, as ``diagnose`` and ``evaluate`` write it.
+
+    Examples
+    --------
+    >>> figure_name("compare", "trials/tc 35")
+    'compare-trials_tc_35.png'
+    """
+    return f"{kind}-{_safe(name)}.png"
+
+
 def diagnosis_figures(diagnosis) -> list[tuple[str, Callable[[], Figure]]]:
     """The figures of a diagnosis by file name, each drawn only when called.
 
@@ -272,7 +283,7 @@ def diagnosis_figures(diagnosis) -> list[tuple[str, Callable[[], Figure]]]:
     for c in diagnosis.comparisons:
         tasks.append(
             (
-                f"compare-{_safe(c.name)}.png",
+                figure_name("compare", c.name),
                 lambda c=c: plot_comparison(
                     c.record, {diagnosis.library.name: c.flown}, L=diagnosis.ship.L,
                     errors=c.errors,
@@ -282,7 +293,7 @@ def diagnosis_figures(diagnosis) -> list[tuple[str, Callable[[], Figure]]]:
     for name in diagnosis.residuals.names:
         tasks.append(
             (
-                f"residuals-{_safe(name)}.png",
+                figure_name("residuals", name),
                 lambda name=name: plot_residual_time_series(diagnosis.residuals, name),
             )
         )
