@@ -1,7 +1,7 @@
 """The ``jumps`` note of a record's plausibility (:mod:`sindyship.plausibility`, whose
 docstring gives its thresholds and reasons): samples of u or v that change faster than a ship
 accelerates, a logging glitch that every other check passes.  A note, never a refusal: the
-samples are used as recorded, and the note names them and how to leave them out.
+samples are used as recorded, and the note names them and what to do with them.
 """
 
 from __future__ import annotations
@@ -24,8 +24,9 @@ JUMP_NOISE = 10.0
 JUMP_ACCELERATION = 1.0
 #: Longest interval [L/U0] a change spread over several samples (a ramp) is judged over.
 JUMP_WINDOW = 0.1
-#: Most sample intervals a ramp is judged over (bounds the work on records sampled fast).
-JUMP_MOST_LAGS = 200
+#: Most intervals a ramp is judged over: a record sampled faster is judged over intervals
+#: spread evenly across the window (bounds the work on records logged at kHz).
+JUMP_MOST_LAGS = 50
 
 
 class JumpNote(str):
@@ -35,13 +36,29 @@ class JumpNote(str):
     times: tuple[float, ...] = ()
 
 
-def sample_jumps(data: Mapping[str, np.ndarray], ship) -> dict[str, tuple]:
+def sample_jumps(data: Mapping[str, np.ndarray], ship) -> dict[str, tuple[np.ndarray, float]]:
     """The samples of u and v that change faster than a ship accelerates (the ``jumps``
-    check): for each channel with any, their indices and the largest change [m/s].
+    check).
 
     A sample that leaps away from the running median of its neighbours is named alone; a
-    change spread over a few samples (a ramp) that exceeds the same bound within
-    ``JUMP_WINDOW`` L/U0 is named from its first sample to its last.
+    change over at most ``JUMP_WINDOW`` L/U0 (a ramp, or a plateau too wide for the median)
+    beyond the same bounds over its own time is named from the sample it starts at to the
+    last it reaches; samples named within that window of the record's start or end are named
+    to it (there a plateau of glitches has no good samples on its far side).
+
+    Parameters
+    ----------
+    data : mapping of str to ndarray
+        The record's ``t`` [s], ``u`` and ``v`` [m/s].
+    ship : Ship
+        Gives U0 and the time scale L/U0.
+
+    Returns
+    -------
+    dict of str to (ndarray, float)
+        For u and v where any sample changes too fast: the indices of the samples named, and
+        the largest change [m/s].  Empty for a record of fewer than ``2 JUMP_NEIGHBOURS + 1``
+        samples, which is not judged.
 
     Examples
     --------
@@ -60,26 +77,30 @@ def sample_jumps(data: Mapping[str, np.ndarray], ship) -> dict[str, tuple]:
     if t.size < size:
         return {}
     step = float(np.median(np.diff(t)))
-    lags = min(max(1, math.ceil(JUMP_WINDOW * ship.time_scale / step)), JUMP_MOST_LAGS)
+    widest = max(1, math.ceil(JUMP_WINDOW * ship.time_scale / step))
+    lags = np.unique(np.round(np.linspace(1, widest, min(widest, JUMP_MOST_LAGS))).astype(int))
     out = {}
     for name in ("u", "v"):
         values = np.asarray(data[name], dtype=float)
         noise = JUMP_NOISE * 1.4826 * float(np.median(np.abs(np.diff(values)))) / math.sqrt(2.0)
         distance = np.abs(values - median_filter(values, size=size, mode="mirror"))
-        allowed = _allowed_change(step, ship)
-        spikes = distance > max(allowed, noise)
+        spikes = distance > max(_allowed_change(step, ship), noise)
         largest = float(np.max(distance[spikes], initial=0.0))
-        spans = np.zeros_like(spikes)
-        for lag in range(1, lags + 1):
+        edges = np.zeros(t.size + 1, dtype=int)  # +1 where a ramp's span begins, -1 after it
+        for lag in lags[lags < t.size]:
             change = np.abs(values[lag:] - values[:-lag])
             ramp = (change > np.maximum(_allowed_change(t[lag:] - t[:-lag], ship), noise)) \
                 & ~spikes[lag:] & ~spikes[:-lag]
-            for start in np.flatnonzero(ramp):
-                spans[start + 1:start + lag + 1] = True
+            starts = np.flatnonzero(ramp)
+            np.add.at(edges, starts, 1)
+            np.add.at(edges, starts + lag + 1, -1)
             largest = max(largest, float(np.max(change[ramp], initial=0.0)))
-        # of a ramp's span, the samples its steps leap into (all of it where none stands out)
-        leaps = spans & np.concatenate([[False], np.abs(np.diff(values)) > noise])
-        found = spikes | (leaps if np.any(leaps) else spans)
+        found = spikes | (np.cumsum(edges)[:-1] > 0)
+        named = np.flatnonzero(found)
+        if named.size and named[0] < widest:
+            found[:named[0]] = True
+        if named.size and named[-1] >= t.size - widest:
+            found[named[-1]:] = True
         if np.any(found):
             out[name] = (np.flatnonzero(found), largest)
     return out
@@ -92,37 +113,41 @@ def _allowed_change(interval, ship):
 
 
 def jump_notes(data, ship, context) -> list[JumpNote]:
-    """The ``jumps`` note (none when no sample leaps), its rows named by the plausibility
-    check's ``context``."""
+    """The ``jumps`` note (none when no sample changes too fast), its rows named by the
+    plausibility check's ``context``."""
     jumps = sample_jumps(data, ship)
     if not jumps:
         return []
-    t = data["t"]
+    t, n = data["t"], len(data["t"])
     found = np.unique(np.concatenate([index for index, _ in jumps.values()]))
+    runs = np.split(found, np.flatnonzero(np.diff(found) > 1) + 1)
     name = max(jumps, key=lambda key: jumps[key][1])
     largest = jumps[name][1]
-    first, last = int(found[0]), int(found[-1])
-    where = (f"at {context.row(first)}, t = {t[first]:.6g} s," if found.size == 1 else
-             f"at {found.size} samples from {context.row(first)}, t = {t[first]:.6g} s, to "
-             f"{context.row(last)}, t = {t[last]:.6g} s,")
+
+    def at(i: int) -> str:
+        return f"{context.row(i)}, t = {t[i]:.10g} s"
+
+    def span(run) -> str:
+        return f"at {at(run[0])}" if len(run) == 1 else f"from {at(run[0])}, to {at(run[-1])}"
+
+    where = span(runs[0]) if len(runs) == 1 else (
+        f"in {len(runs)} places, the first {span(runs[0])}, the last {span(runs[-1])}")
+    start, end = runs[0][0] == 0, runs[-1][-1] == n - 1
+    actions = [*([f"delete its first {_rows(len(runs[0]))}"] if start else []),
+               *([f"delete its last {_rows(n - runs[-1][0])}"] if end else []),
+               *(["correct the samples " + ("in between" if start or end else "named")]
+                 if len(runs) > start + end else [])]
     single = len(jumps) == 1
     columns = " and ".join(f"'{context.header(key)}'" for key in jumps)
-    it = "it" if found.size == 1 else "them"
-    span = t[-1] - t[0]
-    keep = ""
-    if first > 0 and t[first] - t[0] > 0.9 * span:  # at the end: the time before them
-        keep = (f", or keep the time before {it} (--time-range {t[0]:.6g}:{t[first - 1]:.6g} "
-                "on the command line)")
-    elif last < t.size - 1 and t[last] - t[0] < 0.1 * span:  # at the start: the time after
-        keep = (f", or keep the time after {it} (--time-range {t[last + 1]:.6g}:{t[-1]:.6g} "
-                "on the command line)")
     note = JumpNote(
-        f"{context.source}: {columns} {where} change{'s' if single else ''} faster than a ship "
-        f"accelerates, {'' if single else f'{context.header(name)!r} '}by "
-        f"{'' if found.size == 1 else 'up to '}{largest:.3g} m/s ({largest / ship.U0:.2f} U0) "
-        "against the neighbouring samples (a logging glitch?); "
-        f"{'it is' if found.size == 1 else 'they are'} used as recorded, so delete "
-        f"{'that row' if found.size == 1 else 'those rows'}{keep}; --skip-check jumps "
-        "(skip_checks=['jumps'] in Python) silences this note.")
+        f"{context.source}: {columns} change{'s' if single else ''} faster than a ship "
+        f"accelerates {where} ({'' if single else f'{context.header(name)!r} '}by up to "
+        f"{largest:.3g} m/s, {largest / ship.U0:.2f} U0; a logging glitch?); the samples are "
+        f"used as recorded, so {' and '.join(actions)} (--skip-check jumps, skip_checks="
+        "['jumps'] in Python, silences this note).")
     note.times = tuple(float(t[i]) for i in found)
     return [note]
+
+
+def _rows(count: int) -> str:
+    return "row" if count == 1 else f"{count} rows"

@@ -83,13 +83,17 @@ The checks, in the order they run, with their thresholds (module constants) and 
     exceeds ``JUMP_NOISE`` = 10 times the channel's noise (the robust spread of its steps) and
     ``JUMP_SPEED`` = 0.1 U0 plus the change an acceleration of ``JUMP_ACCELERATION`` =
     1 U0^2/L makes in one sample interval; or a change over at most ``JUMP_WINDOW`` = 0.1 L/U0
-    (a ramp) beyond the same bounds over its own time.  Ships accelerate far more slowly: the
+    (a ramp, or a plateau too wide for the median; judged over at most ``JUMP_MOST_LAGS`` = 50
+    intervals spread across the window) beyond the same bounds over its own time.  A record of
+    fewer than 7 samples is not judged.  Ships accelerate far more slowly: the
     KCS and KVLCC2 protocols and the simulated trials from rest reach 0.12 to 0.25 U0^2/L, and
     no good record of ``benchmarks/bench_plausibility.py`` is noted (5 % noise, a current,
     the protocol sampled every 0.25 to 0.95 L/U0, the simulated trials from rest).  The MARIN
     35 deg turn to starboard (``tc_-35``) ends with v ramping from -0.1 to -2.48 m/s in its
     last 2 s (6.6 U0^2/L), which the 1 s grid makes one sample leaping away by 0.28 U0.  The
-    samples are used as recorded, so the note names them and how to leave them out.
+    samples are used as recorded, so the note names them (those within the window of the
+    record's start or end to it) and says to delete the rows at an end, or to correct them
+    in between (a record with rows missing is irregular, refused unless resampled).
 
 Decimal-comma files are recognised by the reader itself (:mod:`sindyship.measurements`).
 """

@@ -262,23 +262,21 @@ def with_glitch(record: Trajectory, index: int, channel: str = "v",
     return Trajectory(record.data.assign(**{channel: values}), record.name)
 
 
-def test_a_sample_leaping_away_at_the_end_is_noted_with_its_row_and_the_time_to_keep(
+def test_a_sample_leaping_away_at_the_end_is_noted_with_its_row_and_what_to_delete(
         protocol_runs, tmp_path):
     """A logging glitch in the last sample (as the MARIN turn to starboard ends): a note that
-    names the row, its time, the size and the time range before it; the record loads as it
-    was."""
+    names the row, its time, the size and the rows to delete; the record loads as it was."""
     turn = protocol_runs["train"][1]  # tc35_stbd, sampled every second
     path = write_csv(with_glitch(turn, -1), tmp_path / "tc.csv")
     with pytest.warns(PlausibilityNote) as caught:
         record = read_csv(path, ship="kcs")
     (note,) = [str(w.message) for w in caught]
     last = turn.t[-1]
-    assert note.startswith(f"{path}: 'v' at row {turn.n_samples + 1} (counting the header as "
-                           f"row 1), t = {last:.6g} s, changes faster than a ship accelerates, "
-                           "by 5 m/s (0.40 U0) against the neighbouring samples")
-    assert note.endswith(f"so delete that row, or keep the time before it (--time-range "
-                         f"0:{turn.t[-2]:.6g} on the command line); --skip-check jumps "
-                         "(skip_checks=['jumps'] in Python) silences this note.")
+    assert note == (f"{path}: 'v' changes faster than a ship accelerates at row "
+                    f"{turn.n_samples + 1} (counting the header as row 1), t = {last:.10g} s (by "
+                    "up to 5 m/s, 0.40 U0; a logging glitch?); the samples are used as "
+                    "recorded, so delete its last row (--skip-check jumps, skip_checks=['jumps'] "
+                    "in Python, silences this note).")
     assert record.meta["notes"] == [note]
     assert record["v"][-1] == pytest.approx(turn["v"][-1] - 5.0)  # used as recorded
 
@@ -290,10 +288,10 @@ def test_leaps_in_the_middle_are_counted_and_a_skipped_check_says_nothing(protoc
         trajectory_from_frame(record.data, "zz", source="zz.csv", ship="kcs")
     (note,) = [str(w.message) for w in caught]
     t = zigzag.t
-    assert (f"'u' and 'v' at 2 samples from the row with index label 1000, t = {t[1000]:.6g} "
-            f"s, to the row with index label 1500, t = {t[1500]:.6g} s, change faster than a "
-            "ship accelerates, 'u' by up to 3.98 m/s (0.32 U0)") in note
-    assert "delete those rows; --skip-check" in note  # no time range keeps the others
+    assert (f"'u' and 'v' change faster than a ship accelerates in 2 places, the first at the "
+            f"row with index label 1000, t = {t[1000]:.10g} s, the last at the row with index "
+            f"label 1500, t = {t[1500]:.10g} s ('u' by up to 3.98 m/s, 0.32 U0; a logging "
+            "glitch?); the samples are used as recorded, so correct the samples named (") in note
     assert loads(Trajectory(record.data, "zz"), ship=None).meta["notes"] == []  # needs a ship
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -314,9 +312,32 @@ def test_a_ramp_too_steep_for_a_ship_is_named_from_its_first_sample_to_its_last(
                               skip_checks=["frame"])  # v stays moved, off the track
     (note,) = [str(w.message) for w in caught]
     t = turn.t
-    assert (f"'v' at 2 samples from the row with index label 2001, t = {t[2001]:.6g} s, to the "
-            f"row with index label 2002, t = {t[2002]:.6g} s, changes faster than a ship "
-            "accelerates, by up to 3.7 m/s (0.30 U0)") in note
+    assert (f"'v' changes faster than a ship accelerates from the row with index label 2000, "
+            f"t = {t[2000]:.10g} s, to the row with index label 2002, t = {t[2002]:.10g} s (by "
+            "up to 3.7 m/s, 0.30 U0; a logging glitch?)") in note
+
+
+def test_a_plateau_and_glitches_at_both_ends_are_named_where_they_are(protocol_runs, kcs):
+    """Four samples of v off by 4 m/s in the middle (too wide for the running median): named
+    with a sample or two on either side; the first three and the last two samples off: the
+    rows to delete at each end (the first three with two good ones: a plateau at the start
+    has no good samples before it to tell it by)."""
+    turn = protocol_runs["train"][1]
+    t = turn.t
+    v = turn["v"].copy()
+    v[602:606] += 4.0
+    v[:3] += 4.0
+    v[-2:] -= 4.0
+    with pytest.warns(PlausibilityNote) as caught:
+        trajectory_from_frame(turn.data.assign(v=v), "tc", source="tc.csv", ship=kcs,
+                              skip_checks=["frame"])
+    (note,) = [str(w.message) for w in caught]
+    assert (f"in 3 places, the first from the row with index label 0, t = {t[0]:.10g} s, to "
+            f"the row with index label 4, t = {t[4]:.10g} s, the last from the row with index "
+            f"label {len(t) - 2}, t = {t[-2]:.10g} s, to the row with index label {len(t) - 1}") \
+        in note  # the last two leap away from the running median: named exactly
+    assert "so delete its first 5 rows and delete its last 2 rows and correct the samples in " \
+        "between (" in note
 
 
 def test_a_leap_smaller_than_the_noise_or_than_a_ship_accelerates_is_no_glitch(protocol_runs,
