@@ -851,9 +851,13 @@ def test_replay_flies_a_record_of_the_actual_rudder_as_sindyship_flies_it(kcs, t
         assert np.max(gap) < 1e-9, delays
         late = np.interp(part.t + delays.get("delta", 0.0), part.t, part["delta"])
         np.testing.assert_allclose(theirs.states[6], late, atol=1e-12)  # the angle, no servo
+        np.testing.assert_array_equal(theirs.delta_c, late)  # at the same output times
     commanded = sim.simulate(part.t, part["delta"], part.state()[:, 0])
     assert np.max(np.abs(commanded.states[6] - theirs.states[6])) > math.radians(1.0)
     with pytest.raises(ValueError, match="delta reaches 20 rad, more than a quarter turn"):
         sim.replay(part.t, np.full(part.t.shape, 20.0))
     with pytest.raises(ValueError, match=r"delta has shape \(3,\); give one angle per output"):
         sim.replay(part.t, [0.0, 0.1, 0.2])
+    with pytest.raises(ValueError, match="replay takes the rudder angle as an array over t or "
+                       "a constant, not a function"):
+        sim.replay(part.t, lambda time, state: 0.1)

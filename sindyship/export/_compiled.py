@@ -237,12 +237,14 @@ class _CompiledIntegrator(_Integrator):
         return _CHANNEL_DEFAULTS
 
     def rhs(self, t, y, delta_c, members, branch, rate_time=None):
-        if self.any_prescribed:
-            return super().rhs(t, y, delta_c, members, branch, rate_time)
         y = np.ascontiguousarray(y, dtype=float)
         out = np.empty_like(y)
         _rhs_columns(y, np.ascontiguousarray(delta_c, dtype=float),
                      self._channels(t, members), out)
+        if self.any_prescribed:  # a prescribed rudder moves at its own rate, not the servo's
+            for j, m in enumerate(members):
+                if self.prescribed[m]:
+                    out[6, j] = self.commands[m].rate(t if rate_time is None else rate_time)
         return out
 
     def step(self, t, y, h, delta_c, members, branch, f0=None):

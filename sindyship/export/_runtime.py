@@ -83,7 +83,8 @@ class Flight(NamedTuple):
     states : ndarray, shape (7, N)
         ``[u, v, r, x, y, psi, delta]`` (SI); NaN after a divergence.
     delta_c : ndarray, shape (N,)
-        Commanded rudder angle held at each output time [rad].
+        Commanded rudder angle held at each output time [rad] (of ``replay``: the angle
+        replayed).
     diverged_at : float or None
         Time of the first output sample where the state left the plausible range.
     \"\"\"
@@ -202,7 +203,7 @@ def replay(t, delta, state0=None, channels=None, *, step=None, check_divergence=
     delta : float or array_like of shape (N,)
         Rudder angle [rad], one value per output time, linear between them (read
         ``DELAYS["delta"]`` seconds later where the library delays it, as recorded); or a
-        constant.
+        constant.  Replayed as given, also beyond the rudder limit ``DELTA_MAX``.
     state0 : array_like, shape (7,), optional
         Initial ``[u, v, r, x, y, psi, delta]`` (SI); default straight ahead at U0.  Its
         rudder angle is the replayed one at ``t[0]``, whatever it holds.
@@ -213,10 +214,21 @@ def replay(t, delta, state0=None, channels=None, *, step=None, check_divergence=
     -------
     Flight
         Its ``delta_c`` holds the replayed angle at each output time.
+
+    Raises
+    ------
+    ValueError
+        For a ``delta`` that is a function (``simulate`` takes one, as a commanded rudder),
+        not one finite angle per output time, or beyond a quarter turn (degrees).
     \"\"\"
+    if callable(delta):
+        raise ValueError("replay takes the rudder angle as an array over t or a constant, not "
+                         "a function; simulate takes a function f(t, state) as the command")
     t = np.asarray(t, dtype=float)
     angles = _read_late(t, {"delta": _angles("delta", delta, t)})["delta"]
-    return _fly(PrescribedRudder(t, angles), t, state0, step, check_divergence, channels)
+    flight = _fly(PrescribedRudder(t, angles), t, state0, step, check_divergence, channels)
+    flown = np.isfinite(flight.states[6])  # the angle at each output time, none after divergence
+    return flight._replace(delta_c=np.where(flown, angles, np.nan))
 
 
 def _angles(name, values, t):
