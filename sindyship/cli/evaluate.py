@@ -79,8 +79,12 @@ def run(args) -> int:
 
 
 def _write_out(out, errors: dict, flights: dict, model) -> None:
-    """evaluate.json and a comparison figure per record, into the folder ``out``."""
+    """evaluate.json and a comparison figure per record, into the folder ``out`` (a progress
+    bar on a terminal: a figure takes about half a second)."""
     import json
+    import sys
+
+    from tqdm.auto import tqdm
 
     from .._io import clean_json, output_folder, save_figure, write_text_atomic
     from ..evaluation import error_summary
@@ -91,7 +95,8 @@ def _write_out(out, errors: dict, flights: dict, model) -> None:
     with output_folder(out) as folder:
         write_text_atomic(folder / "evaluate.json",
                           json.dumps(clean_json({"errors": errors}), indent=2) + "\n")
-        for name, (part, flown) in flights.items():
+        for name, (part, flown) in tqdm(flights.items(), desc="figures", file=sys.stderr,
+                                        disable=not sys.stderr.isatty(), leave=False):
             summary = error_summary(flown, part, model.ship.L)
             save_figure(plot_comparison(part, {label: flown}, L=model.ship.L, errors=summary),
                         folder / figure_name("compare", name))
