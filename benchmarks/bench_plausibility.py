@@ -188,13 +188,12 @@ def main() -> None:
             by_second = [trajectory_from_frame(r.data, r.name, resample=1.0) for r in marin]
         jumps["marin_noted"] = {"own_grid": noted(marin, full_scale),
                                 "1_s_grid": noted(by_second, full_scale)}
-    base_noise = [noisy(r, 1.0, seed) for r in clean for seed in seeds]
+    base = [noisy(r, 1.0, seed) for r in clean for seed in seeds]
     jumps["found"] = {kind: sum(bool(sample_jumps(glitched(r, kcs, kind).data, kcs))
-                                for r in base_noise) for kind in ("spike", "ramp")}
-    jumps["records"] = len(base_noise)
+                                for r in base) for kind in ("spike", "ramp")}
+    jumps["records"] = len(base)
     print(f"{'jumps':>22}: {jumps}")
     bad: dict[str, dict] = {}
-    base = [noisy(r, 1.0, seed) for r in clean for seed in seeds]
     for kind in spoilt(base[0]):
         caught: Counter[str] = Counter()
         missed, deviations, misfits = [], [], []

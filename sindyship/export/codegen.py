@@ -241,8 +241,9 @@ def _provenance(model: AbkowitzModel) -> list[str]:
 
 
 def _delays_note(delays) -> str:
-    """The module docstring's note on the channels a library delays: what ``simulate`` and
-    ``zigzag`` do with them, and, for a delayed rudder, which angle ``state0`` takes."""
+    """The module docstring's note on the channels a library delays: what ``simulate``,
+    ``replay`` and ``zigzag`` do with them, and, for a delayed rudder, which angle ``state0``
+    takes."""
     note = (f"Delayed channels (DELAYS): {_delays_words(delays)}.  simulate, replay and zigzag "
             "read each channel given to them (and simulate a delta_c array, replay a delta "
             "array) so; rhs takes the channels' values at the physics' time.")
