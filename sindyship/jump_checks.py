@@ -133,9 +133,11 @@ def jump_notes(data, ship, context) -> list[JumpNote]:
     where = span(runs[0]) if len(runs) == 1 else (
         f"in {len(runs)} places, the first {span(runs[0])}, the last {span(runs[-1])}")
     start, end = runs[0][0] == 0, runs[-1][-1] == n - 1
-    actions = [*([f"delete its first {_rows(len(runs[0]))}"] if start else []),
-               *([f"delete its last {_rows(n - runs[-1][0])}"] if end else []),
-               *(["correct the samples " + ("in between" if start or end else "named")]
+    end = end and not (start and len(runs) == 1)  # one run over the whole record: its start
+    ends = [*([f"first {_rows(len(runs[0]))}"] if start else []),
+            *([f"last {_rows(n - runs[-1][0])}"] if end else [])]
+    actions = [*([f"delete its {' and its '.join(ends)}"] if ends else []),
+               *(["correct the samples " + ("in between" if ends else "named")]
                  if len(runs) > start + end else [])]
     single = len(jumps) == 1
     columns = " and ".join(f"'{context.header(key)}'" for key in jumps)

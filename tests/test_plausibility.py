@@ -336,8 +336,8 @@ def test_a_plateau_and_glitches_at_both_ends_are_named_where_they_are(protocol_r
             f"the row with index label 4, t = {t[4]:.10g} s, the last from the row with index "
             f"label {len(t) - 2}, t = {t[-2]:.10g} s, to the row with index label {len(t) - 1}") \
         in note  # the last two leap away from the running median: named exactly
-    assert "so delete its first 5 rows and delete its last 2 rows and correct the samples in " \
-        "between (" in note
+    assert "so delete its first 5 rows and its last 2 rows and correct the samples in between (" \
+        in note
 
 
 def test_a_leap_smaller_than_the_noise_or_than_a_ship_accelerates_is_no_glitch(protocol_runs,
