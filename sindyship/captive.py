@@ -56,6 +56,7 @@ from __future__ import annotations
 
 import csv
 import io
+import numbers
 import os
 from pathlib import Path
 
@@ -75,6 +76,7 @@ from .units import parse_headers
 __all__ = [
     "CAPTIVE_COLUMNS",
     "FORCE_COLUMNS",
+    "MAX_REVOLUTION_RATIO",
     "TESTS",
     "captive_tests",
     "check_captive_scale",
@@ -146,10 +148,11 @@ def rigid_body_forces(ship: Ship, u, v, r) -> tuple:
     return (mass * v * r + mass * p.x_G * r * r, -mass * u * r, -mass * p.x_G * u * r)
 
 
-def _mmg_hydrodynamic(ship: Ship, u, v, r, delta) -> tuple:
-    """MMG hydrodynamic forces, SI: all parts of force_components minus rigid-body inertia."""
+def _mmg_hydrodynamic(ship: Ship, u, v, r, delta, n=None) -> tuple:
+    """MMG hydrodynamic forces, SI: all parts of force_components minus rigid-body inertia
+    (propeller revolutions ``n`` [rps], default the ship's)."""
     U0, L = ship.U0, ship.L
-    parts = force_components(ship, u / U0, v / U0, r * L / U0, delta)
+    parts = force_components(ship, u / U0, v / U0, r * L / U0, delta, n=n)
     scale = force_scales(ship, "prime-II")
     total = [scale[i] * sum(np.asarray(p[i], dtype=float) for p in parts.values())
              for i in range(3)]
@@ -190,8 +193,8 @@ def _carriage_speed_of(ship: Ship, speed: float) -> bool:
 
 
 def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: float | None = None,
-                  beta_max: float = 20.0, delta_max: float = 35.0, r_max: float = 0.6
-                  ) -> pd.DataFrame:
+                  beta_max: float = 20.0, delta_max: float = 35.0, r_max: float = 0.6,
+                  revolutions: float | None = None) -> pd.DataFrame:
     """Virtual steady captive tests with the MMG model (paper sections 2.1-2.1.4).
 
     Parameters
@@ -209,13 +212,17 @@ def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: flo
         Largest drift and rudder angles [deg].
     r_max : float
         Largest non-dimensional yaw rate r' = r L / U0.
+    revolutions : float, optional
+        Propeller revolutions [rps] held through the tests, above 0 and at most
+        :data:`MAX_REVOLUTION_RATIO` times the ship's (default the ship's ``n_P``): a model
+        tested at the revolutions of its free-running trials.
 
     Returns
     -------
     pandas.DataFrame
-        Columns ``u``, ``v`` [m/s], ``r`` [rad/s], ``delta`` [rad], ``n`` [rps] (the ship's
-        propeller revolutions) and the hydrodynamic ``X``, ``Y`` [N], ``N`` [N m] in body
-        axes at midship (the reading minus the rigid-body inertia; module docstring).
+        Columns ``u``, ``v`` [m/s], ``r`` [rad/s], ``delta`` [rad], ``n`` [rps] (the propeller
+        revolutions) and the hydrodynamic ``X``, ``Y`` [N], ``N`` [N m] in body axes at
+        midship (the reading minus the rigid-body inertia; module docstring).
 
     Examples
     --------
@@ -228,7 +235,8 @@ def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: flo
     """
     if test == "all":
         return pd.concat([captive_tests(ship, t, points=points, speed=speed, beta_max=beta_max,
-                                        delta_max=delta_max, r_max=r_max) for t in TESTS],
+                                        delta_max=delta_max, r_max=r_max,
+                                        revolutions=revolutions) for t in TESTS],
                          ignore_index=True)
     if test not in TESTS:
         raise SindyshipInputError(
@@ -251,13 +259,32 @@ def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: flo
             f"most {MAX_CARRIAGE_SPEED_RATIO:g} times it ({ship.U0 / SPEED_SCALE_FACTOR:.4g} to "
             f"{MAX_CARRIAGE_SPEED_RATIO * ship.U0:.4g} m/s), not {speed!r} m/s."
         )
+    n = _revolutions(ship, revolutions)
     beta, r_nd, delta = _sweep(test, int(points), beta_max, delta_max, r_max)
     u = U * np.cos(beta)
     v = -U * np.sin(beta)
     r = r_nd * ship.U0 / ship.L
-    X, Y, N = _mmg_hydrodynamic(ship, u, v, r, delta)
-    return pd.DataFrame({"u": u, "v": v, "r": r, "delta": delta,
-                         "n": np.full(u.size, ship.propeller.n_P), "X": X, "Y": Y, "N": N})
+    X, Y, N = _mmg_hydrodynamic(ship, u, v, r, delta, n=n)
+    return pd.DataFrame({"u": u, "v": v, "r": r, "delta": delta, "n": np.full(u.size, n),
+                         "X": X, "Y": Y, "N": N})
+
+
+#: Most the revolutions of captive tests may exceed the ship's own (a ratio), as a record's.
+MAX_REVOLUTION_RATIO = 5.0
+
+
+def _revolutions(ship: Ship, revolutions) -> float:
+    """The propeller revolutions [rps] of the tests: the ship's, or those given, checked."""
+    own = ship.propeller.n_P
+    if revolutions is None:
+        return float(own)
+    if isinstance(revolutions, bool) or not isinstance(revolutions, numbers.Real) or not (
+            0.0 < revolutions <= MAX_REVOLUTION_RATIO * own):
+        raise SindyshipInputError(
+            f"the propeller revolutions of captive tests must be above 0 and at most "
+            f"{MAX_REVOLUTION_RATIO:g} times the ship's {own:.4g} rps (rps, not rpm), not "
+            f"{revolutions!r}.")
+    return float(revolutions)
 
 
 def classify_tests(frame: pd.DataFrame, ship: Ship) -> np.ndarray:

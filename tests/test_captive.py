@@ -22,6 +22,7 @@ from sindyship.cli import captive as captive_verb
 from sindyship.cli import forces as forces_verb
 from sindyship.errors import SindyshipInputError
 from sindyship.model import paper_model
+from sindyship.ships import load_ship
 from sindyship.taylor import TaylorSeries, taylor_reference
 
 
@@ -162,6 +163,34 @@ def test_captive_and_forces_commands(kcs, tmp_path, capsys):
     assert capsys.readouterr().out.splitlines()[0].startswith("conditions")
     help_text = parser._subparsers._group_actions[0].choices["captive"].format_help()
     assert "default: 21" in help_text and "[m/s]" in help_text
+
+
+def test_captive_tests_at_the_revolutions_of_the_trials(tmp_path, capsys):
+    """The KVLCC2 model tested at the MARIN trials' 10.3 rps instead of its own 17.95: less
+    thrust ahead (the surge force at straight running falls), a weaker rudder (less race), the
+    hull's forces in pure drift as they were; the revolutions are written in the n column, and
+    revolutions in rpm are refused in one sentence."""
+    from sindyship.cli import main
+
+    kvlcc2 = load_ship("kvlcc2")
+    own = captive_tests(kvlcc2, "rudder", points=5)
+    trials = captive_tests(kvlcc2, "rudder", points=5, revolutions=10.34)
+    assert np.all(own["n"] == kvlcc2.propeller.n_P) and np.all(trials["n"] == 10.34)
+    straight = int(np.flatnonzero(own["delta"] == 0.0)[0])
+    assert trials["X"][straight] < own["X"][straight]  # less thrust against the same resistance
+    assert abs(trials["Y"].iloc[-1]) < 0.8 * abs(own["Y"].iloc[-1])  # less race over the rudder
+    pd.testing.assert_frame_equal(captive_tests(kvlcc2, "rudder", points=5,
+                                                revolutions=kvlcc2.propeller.n_P), own)
+    out = tmp_path / "trials.csv"
+    assert main(["captive", "--ship", "kvlcc2", "--test", "static-drift", "--points", "3",
+                 "--revolutions", "10.34", "--out", str(out)]) == 0
+    assert np.all(read_captive_csv(out)["n"] == 10.34)
+    capsys.readouterr()
+    assert main(["captive", "--ship", "kvlcc2", "--revolutions", "620", "--out",
+                 str(tmp_path / "rpm.csv")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "at most 5 times the ship's 17.95 rps (rps, not rpm)" in err
+    assert not (tmp_path / "rpm.csv").exists()
 
 
 def test_forces_refuses_careless_input_in_one_sentence(kcs, tmp_path, capsys):

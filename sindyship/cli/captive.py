@@ -28,6 +28,11 @@ def add_parser(sub) -> None:
                    help="carriage speed [m/s], more than a third of the ship's design speed "
                    "and at most 1.6 times it "
                    "(default: the ship's design speed U0)")
+    p.add_argument("--revolutions", type=bounded_float(0, 1000, "rps"), default=None,
+                   metavar="RPS",
+                   help="propeller revolutions [rps] held through the tests, above 0 and at "
+                   "most 5 times the ship's (default: the ship's n_P): a model tested at the "
+                   "revolutions of its free-running trials")
     p.add_argument("--out", required=True,
                    help="output captive CSV: u, v [m/s], r [rad/s], delta [rad], n [rps], "
                    "X, Y [N], N [N m]")
@@ -41,7 +46,8 @@ def run(args) -> int:
     check_output(args.out, inputs=ship_file(args.ship), label=f"--out {args.out}",
                  suffixes=(".csv",))
     ship = load_cli_ship(args.ship, simulated=True)
-    frame = captive_tests(ship, args.test, points=args.points, speed=args.speed)
+    frame = captive_tests(ship, args.test, points=args.points, speed=args.speed,
+                          revolutions=args.revolutions)
     write_captive_csv(frame, args.out)
     progress(f"wrote {args.out}: {len(frame)} captive conditions ({args.test}) of {ship.name}")
     return 0
