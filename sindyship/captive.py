@@ -68,6 +68,7 @@ from .errors import SindyshipInputError
 from .library import TermLibrary, record_variables
 from .measurements import UNITS
 from .mmg import force_components
+from .plausibility import MAX_REVOLUTION_RATIO
 from .ships import Ship
 from .terms import CORE_VARIABLES, DERIVED_SOURCES
 from .trajectory import Trajectory
@@ -76,7 +77,6 @@ from .units import parse_headers
 __all__ = [
     "CAPTIVE_COLUMNS",
     "FORCE_COLUMNS",
-    "MAX_REVOLUTION_RATIO",
     "TESTS",
     "captive_tests",
     "check_captive_scale",
@@ -214,8 +214,9 @@ def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: flo
         Largest non-dimensional yaw rate r' = r L / U0.
     revolutions : float, optional
         Propeller revolutions [rps] held through the tests, above 0 and at most
-        :data:`MAX_REVOLUTION_RATIO` times the ship's (default the ship's ``n_P``): a model
-        tested at the revolutions of its free-running trials.
+        :data:`sindyship.plausibility.MAX_REVOLUTION_RATIO` times the ship's, as a record's
+        (default the ship's ``n_P``): a model tested at the revolutions of its free-running
+        trials.
 
     Returns
     -------
@@ -268,9 +269,6 @@ def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: flo
     return pd.DataFrame({"u": u, "v": v, "r": r, "delta": delta, "n": np.full(u.size, n),
                          "X": X, "Y": Y, "N": N})
 
-
-#: Most the revolutions of captive tests may exceed the ship's own (a ratio), as a record's.
-MAX_REVOLUTION_RATIO = 5.0
 
 
 def _revolutions(ship: Ship, revolutions) -> float:
