@@ -162,9 +162,14 @@ def progress(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
+def json_document(document: dict) -> str:
+    """The text of a JSON document as ``--json`` prints it (and a verb's folder keeps it)."""
+    return json.dumps(clean_json(document), indent=2) + "\n"
+
+
 def emit(document: dict) -> None:
     """Write one JSON document on stdout."""
-    sys.stdout.write(json.dumps(clean_json(document), indent=2) + "\n")
+    sys.stdout.write(json_document(document))
 
 
 def split_names(text: str) -> list[str]:

@@ -14,6 +14,7 @@ from ._common import (
     check_inputs,
     check_simulation_cost,
     emit,
+    json_document,
     progress,
     ship_file,
 )
@@ -81,20 +82,18 @@ def run(args) -> int:
 def _write_out(out, errors: dict, flights: dict, model) -> None:
     """evaluate.json and a comparison figure per record, into the folder ``out`` (a progress
     bar on a terminal: a figure takes about half a second)."""
-    import json
     import sys
 
     from tqdm.auto import tqdm
 
-    from .._io import clean_json, output_folder, save_figure, write_text_atomic
+    from .._io import output_folder, save_figure, write_text_atomic
     from ..evaluation import error_summary
     from ..plotting import plot_comparison
     from ..plotting.diagnosis import figure_name
 
     label = f"{model.library.name} ({model.optimizer['name']})"
     with output_folder(out) as folder:
-        write_text_atomic(folder / "evaluate.json",
-                          json.dumps(clean_json({"errors": errors}), indent=2) + "\n")
+        write_text_atomic(folder / "evaluate.json", json_document({"errors": errors}))
         for name, (part, flown) in tqdm(flights.items(), desc="figures", file=sys.stderr,
                                         disable=not sys.stderr.isatty(), leave=False):
             summary = error_summary(flown, part, model.ship.L)
