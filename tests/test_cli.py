@@ -644,6 +644,33 @@ def test_fit_flies_its_training_records_and_names_those_it_misses(tmp_path, reco
     assert code == 0 and "note: the model diverges on" not in err, err  # the prior flies them
 
 
+def test_a_refinement_refused_for_a_lost_hard_over_turn_names_the_way_out(tmp_path,
+                                                                          protocol_runs):
+    """Refined by the flights of the three KCS zig-zags alone, the default fit loses the
+    hard-over turn to starboard (its symmetric library cannot hold the KCS's asymmetric
+    rudder inflow, so the flights pull other terms) and the refinement is refused; the note
+    names the ways out, and one of them, the effect diagnose ranks first on the same records,
+    makes the refinement kept."""
+    from sindyship.measurements import write_csv
+
+    zigzags = [write_csv(run, tmp_path / f"{run.name}.csv") for run in protocol_runs["train"]
+               if run.name.startswith("zz")]
+    assert len(zigzags) == 3
+    code, out, err = run_sindyship("diagnose", *zigzags, "--ship", "kcs", "--json")
+    assert code == 0, err
+    first = json.loads(out)["ranking"][0]["effect"]
+    assert first == "asymmetry"
+    code, _, err = run_sindyship("fit", *zigzags, "--ship", "kcs", "--out", tmp_path / "m.json")
+    assert code == 0, err
+    assert ("not refined: the refined model diverges in a hard-over turn to starboard, which "
+            "the fit it started from flies") in err
+    assert "fit with the effect sindyship diagnose names on the same records" in err
+    code, _, err = run_sindyship("fit", *zigzags, "--ship", "kcs", "--effects", first,
+                                 "--out", tmp_path / "a.json")
+    assert code == 0, err
+    assert "refined: flight error" in err and "not refined:" not in err
+
+
 def test_an_unstable_refined_prior_fit_is_not_told_to_refine_a_prior_fit(monkeypatch, capsys):
     """A prior fit that its prior could not make stable in straight running (a course-unstable
     ship) and whose refinement is kept: the warning says it started unstable, and does not

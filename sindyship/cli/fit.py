@@ -337,8 +337,10 @@ def _refined(model, records, args, n_jobs=1):
                  "terms they do not pin down.")
     elif done.get("refused_turning"):
         progress(f"not refined: {done['stopped']}: the records do not span those turns, and "
-                 "their flights pulled terms they do not pin down (add turning circles to the "
-                 "records, or fly the fitted model).")
+                 "their flights pulled terms they do not pin down, or terms standing in for an "
+                 "effect the library lacks (add turning circles to the records, fit with the "
+                 "effect sindyship diagnose names on the same records, or fly the fitted "
+                 "model).")
     elif done["cost_after"] < done["cost_before"]:
         change, moved = done["largest_change"], done["force_change"]
         progress(f"refined: flight error (rms over the compared samples) "
