@@ -35,6 +35,13 @@ prior's forces while it fixes its flights.  Two more fits there say what limits 
   records*, a reference for what the library's forces fitted on the turns fly, never a
   workflow.
 
+``prior 1e-05 + <effect>`` (and ``... refined``) is the workflow the README recommends on
+those records: the effect ``sindyship diagnose`` ranks first on the zig-zags (all of its
+terms) added to the default fit.  ``prior 1e-05 refined, prior weight W`` refines the default
+fit with a stronger pull toward the fit's own objective (``fit --refine-weight W``, default
+0.01; :data:`PRIOR_WEIGHTS`): whether the refinement it refuses for losing a hard-over turn
+is kept, and flies better, when it is held closer to the fit.
+
 And ``prior 1e-05 + captive programme`` (and ``... refined``) is the hybrid fit (``fit
 --captive``, :func:`sindyship.hybrid.fit_hybrid`) of the zig-zags and a small towing-tank
 programme of the MMG's virtual captive tests (:data:`CAPTIVE_PROGRAMME`: static drift, rudder
@@ -80,6 +87,7 @@ from bench_campaign import checkout_cli, checkout_commit
 
 from sindyship._io import clean_json, write_text_atomic
 from sindyship.captive import captive_tests
+from sindyship.diagnose import diagnose
 from sindyship.evaluation import distance_errors
 from sindyship.flights import fly_like_batch
 from sindyship.hybrid import fit_hybrid
@@ -121,6 +129,9 @@ STEADY_SHARE = 0.25
 #: The towing-tank programme of the hybrid fit on the zig-zags, and its conditions per test.
 CAPTIVE_PROGRAMME = ("static-drift", "rudder", "pure-yaw")
 PROGRAMME_POINTS = 5
+#: The stronger pulls toward the fit's objective inside the refinement of the default fit on
+#: the zig-zags (the default is 0.01).
+PRIOR_WEIGHTS = (0.1, 1.0)
 #: The most trial steps (``--refine N``) another checkout's refinement is given (--against).
 AGAINST_EVALUATIONS = (10, 20, 40, 60, 90)
 
@@ -257,11 +268,23 @@ def run(against: Path | None = None) -> dict:
             rows[instantaneous] = evaluate(fitted[instantaneous], test, ship)
             out["held_out_turns"] = {r.name: float(abs(r["psi"][-1] - r["psi"][0]) / (2 * np.pi))
                                      for r in test if is_turning_circle(r)}
+            first = diagnose(records, ship).ranking[0].effect.name
+            diagnosed = f"{prior} + {first}"
+            fitted[diagnosed] = fit(records, ship, library=library, effects=[first],
+                                    optimizer="prior")
+            rows[diagnosed] = {**evaluate(fitted[diagnosed], test, ship),
+                               "ranked_first": first}
+            out["diagnosed_first"] = first
             # each fit refined by the error of its training flights
-            for key in ("ls", prior, inflow, instantaneous, hybrid):
+            for key in ("ls", prior, inflow, instantaneous, hybrid, diagnosed):
                 refined = refine(fitted[key], records, max_evaluations=REFINE_EVALUATIONS)
                 rows[f"{key} refined"] = {**evaluate(refined, test, ship),
                                           "refinement": refined.info["refined"]}
+            for weight in PRIOR_WEIGHTS:
+                refined = refine(fitted[prior], records, max_evaluations=REFINE_EVALUATIONS,
+                                 prior_weight=weight)
+                rows[f"{prior} refined, prior weight {weight:g}"] = {
+                    **evaluate(refined, test, ship), "refinement": refined.info["refined"]}
             refined = refine(fitted[inflow], records, max_evaluations=REFINE_EVALUATIONS,
                              segment_s="whole")
             rows[f"{inflow} refined whole"] = {**evaluate(refined, test, ship),

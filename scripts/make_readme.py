@@ -43,6 +43,8 @@ INSTANTANEOUS_FIT = "instantaneous + asymmetry abs(v) abs(r)"
 #: The zig-zag fit of benchmarks/bench_captive.py with a small captive programme beside the
 #: records (the hybrid fit, ``fit --captive``).
 HYBRID_FIT = "+ captive programme"
+#: The stronger pulls toward the fit inside the refinement of benchmarks/bench_captive.py.
+PRIOR_WEIGHTS = (0.1, 1.0)
 #: The lowest captive correlation, in X, Y and N of every test, that a model must keep to be
 #: physically right (the recommended model keeps it on the protocol).
 CAPTIVE_REQUIREMENT = 0.95
@@ -194,8 +196,12 @@ def _saved_captive_bench() -> dict | None:
             f"{default} {INFLOW_FIT}", f"{default} {INFLOW_FIT} refined",
             f"{default} {INFLOW_FIT} refined whole", f"{default} {INSTANTANEOUS_FIT}",
             f"{default} {INSTANTANEOUS_FIT} refined", f"{default} {REFERENCE_FIT}",
-            f"{default} {HYBRID_FIT}", f"{default} {HYBRID_FIT} refined")
+            f"{default} {HYBRID_FIT}", f"{default} {HYBRID_FIT} refined",
+            f"{default} + {result['diagnosed_first']}",
+            f"{default} + {result['diagnosed_first']} refined",
+            *(f"{default} refined, prior weight {w:g}" for w in PRIOR_WEIGHTS))
     return {"default_strength": result["default_strength"],
+            "diagnosed_first": result["diagnosed_first"],
             "held_out_turns": result["held_out_turns"],
             "sets": {"zigzags": {"fits": {k: fits[k] for k in keys}}}}
 
@@ -516,6 +522,8 @@ def _captive(n: dict) -> str:
                   "better estimates from main dimensions alone do not fix them. "
                   + _refined_on_zigzags(prior_refined, flights(prior_refined),
                                         low(prior_refined, "XYN"))
+                  + _ways_out_on_zigzags(zz, f"prior {bench['default_strength']:.0e}",
+                                         bench["diagnosed_first"], flights, low)
                   + " Least squares refined the same way "
                   + ("keeps the refinement and" if ls_kept else "keeps its fitted coefficients and")
                   + f" flies {flights(ls_refined)} (fitted: {flights(ls)}; lowest Y or N "
@@ -591,6 +599,36 @@ def _closest_to_the_turns(zz: dict, key: str, flights, low) -> str:
             f"hold, among them); {refinement}. Of all these zig-zag fits, those "
             f"whose lowest X, Y or N correlation is {CAPTIVE_REQUIREMENT} or more (the default "
             f"fit's requirement on the protocol) {best}.")
+
+
+def _ways_out_on_zigzags(zz: dict, key: str, first: str, flights, low) -> str:
+    """The refused refinement's ways out on the zig-zags: the effect the diagnosis ranks first
+    added (the recommended workflow), and a stronger pull toward the fit inside the
+    refinement."""
+    fitted, refined = zz[f"{key} + {first}"], zz[f"{key} + {first} refined"]
+    sweeps = ("static-drift", "pure-yaw", "drift-yaw")
+    value, force, test = min((refined["captive"][t][f]["correlation"], f, t)
+                             for t in sweeps for f in "XYN")
+
+    def outcome(row) -> str:
+        done = row.get("refinement", {})
+        if done.get("largest_change") is None:
+            return f"is refused ({done.get('stopped')}) and flies {flights(row)}"
+        return (f"is kept and flies {flights(row)} (lowest X, Y or N correlation "
+                f"{low(row, 'XYN'):+.2f})")
+
+    weights = [(w, zz[f"{key} refined, prior weight {w:g}"]) for w in PRIOR_WEIGHTS]
+    kept = refined.get("refinement", {}).get("largest_change") is not None
+    return (f" With the effect `sindyship diagnose` ranks first on the same records, `{first}`, "
+            f"added (the recommended workflow), the `prior` fit flies {flights(fitted)}; "
+            + (f"refined by its zig-zag flights (the refinement kept) it flies "
+               f"{flights(refined)}, with Y and N correlating {low(refined):+.2f} or more and "
+               f"{force} in {CAPTIVE_LABELS[test]} {value:+.2f} (the effect's surge terms odd "
+               "in v, r and delta, which the zig-zags do not pin down, take part of the surge "
+               "force)." if kept else f"its refinement by the zig-zag flights {outcome(refined)}.")
+            + " Held closer to the fit inside the refinement "
+            "(`--refine-weight`, default 0.01), the default fit's refinement "
+            + "; ".join(f"at {w:g} {outcome(row)}" for w, row in weights) + ".")
 
 
 def _refined_on_zigzags(row: dict, flown: str, lowest: float) -> str:
