@@ -43,8 +43,9 @@ INSTANTANEOUS_FIT = "instantaneous + asymmetry abs(v) abs(r)"
 #: The zig-zag fit of benchmarks/bench_captive.py with a small captive programme beside the
 #: records (the hybrid fit, ``fit --captive``).
 HYBRID_FIT = "+ captive programme"
-#: The stronger pulls toward the fit inside the refinement of benchmarks/bench_captive.py.
-PRIOR_WEIGHTS = (0.1, 1.0)
+#: The zig-zag fits of benchmarks/bench_captive.py refined with a stronger pull toward the
+#: fit (``--refine-weight``): this, then the weight.
+WEIGHTED_REFINEMENT = "refined, prior weight "
 #: The lowest captive correlation, in X, Y and N of every test, that a model must keep to be
 #: physically right (the recommended model keeps it on the protocol).
 CAPTIVE_REQUIREMENT = 0.95
@@ -199,7 +200,7 @@ def _saved_captive_bench() -> dict | None:
             f"{default} {HYBRID_FIT}", f"{default} {HYBRID_FIT} refined",
             f"{default} + {result['diagnosed_first']}",
             f"{default} + {result['diagnosed_first']} refined",
-            *(f"{default} refined, prior weight {w:g}" for w in PRIOR_WEIGHTS))
+            *(k for k in fits if k.startswith(f"{default} {WEIGHTED_REFINEMENT}")))
     return {"default_strength": result["default_strength"],
             "diagnosed_first": result["diagnosed_first"],
             "held_out_turns": result["held_out_turns"],
@@ -617,7 +618,8 @@ def _ways_out_on_zigzags(zz: dict, key: str, first: str, flights, low) -> str:
         return (f"is kept and flies {flights(row)} (lowest X, Y or N correlation "
                 f"{low(row, 'XYN'):+.2f})")
 
-    weights = [(w, zz[f"{key} refined, prior weight {w:g}"]) for w in PRIOR_WEIGHTS]
+    marker = f"{key} {WEIGHTED_REFINEMENT}"
+    weights = [(name[len(marker):], row) for name, row in zz.items() if name.startswith(marker)]
     kept = refined.get("refinement", {}).get("largest_change") is not None
     return (f" With the effect `sindyship diagnose` ranks first on the same records, `{first}`, "
             f"added (the recommended workflow), the `prior` fit flies {flights(fitted)}; "
@@ -628,7 +630,7 @@ def _ways_out_on_zigzags(zz: dict, key: str, first: str, flights, low) -> str:
                "force)." if kept else f"its refinement by the zig-zag flights {outcome(refined)}.")
             + " Held closer to the fit inside the refinement "
             "(`--refine-weight`, default 0.01), the default fit's refinement "
-            + "; ".join(f"at {w:g} {outcome(row)}" for w, row in weights) + ".")
+            + "; ".join(f"at {w} {outcome(row)}" for w, row in weights) + ".")
 
 
 def _refined_on_zigzags(row: dict, flown: str, lowest: float) -> str:
