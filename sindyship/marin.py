@@ -110,6 +110,8 @@ MARIN_FILES: dict[str, str] = {
     "zz_20": "MARIN_FREE_KVLCC2_zz_20_m.dat",
     "zz_-20": "MARIN_FREE_KVLCC2_zz_-20_m.dat",
 }
+#: The names of the MARIN files, as a pattern.
+MARIN_PATTERN = "MARIN_FREE_KVLCC2_*_m.dat"
 
 MARIN_DT = 0.1353  #: sample interval of the files [s], full scale
 MARIN_LPP = 320.0  #: length between perpendiculars of the full-scale ship [m]
@@ -411,7 +413,10 @@ def full_scale_ship() -> Ship:
 
 def write_records(out: str | os.PathLike[str], folder: str | os.PathLike[str] | None = None,
                   *, resample: float = 1.0) -> list[Path]:
-    """Write the six records as measurement CSVs and their ship as a ship file.
+    """Write the records as measurement CSVs and their ship as a ship file.
+
+    The six MARIN files (:data:`MARIN_FILES`) that are in ``folder`` are converted, the
+    others left out (``main`` names them): a user with the zig-zags alone can fit on them.
 
     Parameters
     ----------
@@ -428,6 +433,12 @@ def write_records(out: str | os.PathLike[str], folder: str | os.PathLike[str] | 
     -------
     list of pathlib.Path
         The files written, the ship file last.
+
+    Raises
+    ------
+    SindyshipInputError
+        When the folder does not exist or holds none of the files, ``out`` is a file, or a
+        file cannot be read (nothing is written then).
     """
     source = default_marin_dir() if folder is None else Path(folder)
     if source is None:
@@ -438,9 +449,18 @@ def write_records(out: str | os.PathLike[str], folder: str | os.PathLike[str] | 
     if target.exists() and not target.is_dir():
         raise SindyshipInputError(f"{target}: exists and is not a folder; name a folder to "
                                   "write the records into.")
-    records = {short: trajectory_from_frame(read_marin(source / name).data, short,
-                                            source=str(source / name), resample=resample)
-               for short, name in MARIN_FILES.items()}  # all read before any is written
+    if not source.is_dir():
+        raise SindyshipInputError(f"{source}: no such folder; name the folder of the MARIN "
+                                  f"files (--data DIR on the command line, or {_ENVIRONMENT}).")
+    present = {short: source / name for short, name in MARIN_FILES.items()
+               if (source / name).is_file()}
+    if not present:
+        raise SindyshipInputError(
+            f"{source}: none of the MARIN files ({MARIN_PATTERN}) is there; name the folder "
+            f"that holds them (--data DIR on the command line, or {_ENVIRONMENT}).")
+    records = {short: trajectory_from_frame(read_marin(path).data, short, source=str(path),
+                                            resample=resample)
+               for short, path in present.items()}  # all read before any is written
     written = [write_csv(record, target / f"{short}.csv") for short, record in records.items()]
     ship = target / FULL_SCALE_SHIP_FILE
     write_text_atomic(ship, ship_to_toml(full_scale_ship()))
@@ -458,8 +478,8 @@ def main(argv: list[str] | None = None) -> int:
         description="Write the MARIN KVLCC2 records as measurement CSVs (full scale) and "
                     f"their full-scale ship file ({FULL_SCALE_SHIP_FILE}) into OUT.")
     parser.add_argument("out", help="folder to write into")
-    parser.add_argument("--data", default=None, help="folder of the MARIN_FREE_KVLCC2_*_m.dat "
-                        f"files (default: ${_ENVIRONMENT})")
+    parser.add_argument("--data", default=None, help=f"folder of the {MARIN_PATTERN} files "
+                        f"(default: ${_ENVIRONMENT})")
     parser.add_argument("--resample", type=float, default=1.0,
                         help="sample interval of the CSVs [s] (default 1)")
     args = parser.parse_args(argv)
@@ -470,6 +490,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     print(f"wrote {len(written) - 1} records and {written[-1].name} to {args.out}/",
           file=sys.stderr)
+    missing = [name for short, name in MARIN_FILES.items()
+               if short not in {path.stem for path in written[:-1]}]
+    if missing:
+        print(f"note: {', '.join(missing)} not found, so left out; add the missing files to the "
+              "folder and run this again to convert them too.", file=sys.stderr)
     return 0
 
 

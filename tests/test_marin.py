@@ -155,12 +155,32 @@ def test_writing_the_records_refuses_a_missing_folder_or_an_output_file(tmp_path
 
     assert main([str(tmp_path / "out"), "--data", str(tmp_path / "nowhere")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "file not found; check the path" in err
+    assert err.count("\n") == 1 and "nowhere: no such folder; name the folder" in err
+    assert main([str(tmp_path / "out"), "--data", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "none of the MARIN files (MARIN_FREE_KVLCC2_*_m.dat)" in err
     (tmp_path / "file").write_text("x")
     assert main([str(tmp_path / "file"), "--data", str(tmp_path)]) == 2
     assert "is not a folder" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
 
+
+def test_the_files_present_are_written_and_the_missing_ones_named(tmp_path, capsys):
+    """A folder with two of the six files: both are converted (a user with the zig-zags alone
+    can fit on them), the ship file written, and the four missing files named."""
+    from sindyship.marin import main
+
+    data = tmp_path / "data"
+    data.mkdir()
+    for name in ("zz_10", "zz_-10"):
+        write(data, marin_text(straight_rows(60)), MARIN_FILES[name])
+    assert main([str(tmp_path / "out"), "--data", str(data)]) == 0
+    err = capsys.readouterr().err
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [
+        "kvlcc2-full-scale.toml", "zz_-10.csv", "zz_10.csv"]
+    assert "wrote 2 records and kvlcc2-full-scale.toml" in err
+    missing = [MARIN_FILES[n] for n in ("tc_35", "tc_-35", "zz_20", "zz_-20")]
+    assert f"note: {', '.join(missing)} not found, so left out;" in err
 
 def test_model_scale_is_froude_scaled(tmp_path):
     record = read_marin(write(tmp_path, marin_text(straight_rows(3))))
