@@ -270,7 +270,6 @@ def captive_tests(ship: Ship, test: str = "all", *, points: int = 21, speed: flo
                          "X": X, "Y": Y, "N": N})
 
 
-
 def _revolutions(ship: Ship, revolutions) -> float:
     """The propeller revolutions [rps] of the tests: the ship's, or those given, checked."""
     own = ship.propeller.n_P
